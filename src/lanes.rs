@@ -1,0 +1,243 @@
+//! The lane vocabulary: the only module that knows the SIMD width.
+//!
+//! Kernels are written over [`Vec3x8`] (eight 3-vectors in three `f32x8` registers) and read
+//! like the math. Particle arrays are padded to a multiple of [`LANES`] so that hot loops have
+//! no scalar tail. Gather and scatter are the only places that index particle arrays through
+//! constraint indices; they are here so that the `unsafe` they need lives in one file.
+//!
+//! No kernel uses fused multiply-add: `a * b + c` rounds twice in both the SIMD kernels and
+//! their scalar twins, so the two agree bit for bit whatever target features the build enables.
+
+use wide::f32x8;
+
+/// Number of `f32` lanes a kernel processes at once.
+pub const LANES: usize = 8;
+
+/// The lane type.
+pub type F32s = f32x8;
+
+/// Rounds `n` up to a multiple of [`LANES`].
+#[inline]
+pub const fn round_up(n: usize) -> usize {
+    n.div_ceil(LANES) * LANES
+}
+
+/// Loads eight consecutive values starting at `i` (which must be a multiple of the lane width
+/// for aligned use, though any `i` with `i + 8 <= s.len()` works).
+#[inline(always)]
+pub fn load(s: &[f32], i: usize) -> F32s {
+    let a: [f32; LANES] = s[i..i + LANES].try_into().expect("slice of lane width");
+    F32s::from(a)
+}
+
+/// Stores eight values at `i..i + 8`.
+#[inline(always)]
+pub fn store(s: &mut [f32], i: usize, v: F32s) {
+    s[i..i + LANES].copy_from_slice(&v.to_array());
+}
+
+/// Eight 3-vectors, one per lane.
+#[derive(Clone, Copy, Debug)]
+pub struct Vec3x8 {
+    pub x: F32s,
+    pub y: F32s,
+    pub z: F32s,
+}
+
+impl Vec3x8 {
+    #[inline(always)]
+    pub fn splat(v: [f32; 3]) -> Self {
+        Self { x: F32s::splat(v[0]), y: F32s::splat(v[1]), z: F32s::splat(v[2]) }
+    }
+    #[inline(always)]
+    pub fn load(x: &[f32], y: &[f32], z: &[f32], i: usize) -> Self {
+        Self { x: load(x, i), y: load(y, i), z: load(z, i) }
+    }
+    #[inline(always)]
+    pub fn store(self, x: &mut [f32], y: &mut [f32], z: &mut [f32], i: usize) {
+        store(x, i, self.x);
+        store(y, i, self.y);
+        store(z, i, self.z);
+    }
+    #[inline(always)]
+    pub fn dot(self, o: Self) -> F32s {
+        self.x * o.x + self.y * o.y + self.z * o.z
+    }
+    #[inline(always)]
+    pub fn length_sq(self) -> F32s {
+        self.dot(self)
+    }
+    #[inline(always)]
+    pub fn scale(self, s: F32s) -> Self {
+        Self { x: self.x * s, y: self.y * s, z: self.z * s }
+    }
+    /// Per-lane choice: `mask ? a : b`.
+    #[inline(always)]
+    pub fn select(mask: F32s, a: Self, b: Self) -> Self {
+        Self { x: mask.blend(a.x, b.x), y: mask.blend(a.y, b.y), z: mask.blend(a.z, b.z) }
+    }
+}
+
+impl std::ops::Add for Vec3x8 {
+    type Output = Self;
+    #[inline(always)]
+    fn add(self, o: Self) -> Self {
+        Self { x: self.x + o.x, y: self.y + o.y, z: self.z + o.z }
+    }
+}
+
+impl std::ops::Sub for Vec3x8 {
+    type Output = Self;
+    #[inline(always)]
+    fn sub(self, o: Self) -> Self {
+        Self { x: self.x - o.x, y: self.y - o.y, z: self.z - o.z }
+    }
+}
+
+/// Eight indices into particle arrays, one per lane.
+pub type Idx8 = [u32; LANES];
+
+/// Reads `idx` from the first `LANES` entries of `s` starting at `i`.
+#[inline(always)]
+pub fn load_idx(s: &[u32], i: usize) -> Idx8 {
+    s[i..i + LANES].try_into().expect("slice of lane width")
+}
+
+/// A raw view of three particle arrays (`x`, `y`, `z`) that parallel tasks may gather from and
+/// scatter into at indices that no other task touches at the same time.
+///
+/// Constraint colouring guarantees that within one colour no particle appears twice, so the
+/// tasks solving one colour write disjoint elements. That guarantee is what makes the `unsafe`
+/// below sound; every caller states it.
+#[derive(Clone, Copy)]
+pub struct SharedVec3 {
+    x: *mut f32,
+    y: *mut f32,
+    z: *mut f32,
+    len: usize,
+}
+
+// SAFETY: `SharedVec3` is only a pointer triple; the methods that dereference it are `unsafe`
+// and their callers guarantee disjoint access (see the type docs).
+unsafe impl Send for SharedVec3 {}
+// SAFETY: as above.
+unsafe impl Sync for SharedVec3 {}
+
+impl SharedVec3 {
+    /// Captures the three arrays, which must have equal length.
+    pub fn new(x: &mut [f32], y: &mut [f32], z: &mut [f32]) -> Self {
+        assert!(x.len() == y.len() && y.len() == z.len());
+        Self { x: x.as_mut_ptr(), y: y.as_mut_ptr(), z: z.as_mut_ptr(), len: x.len() }
+    }
+
+    /// Number of elements in each array.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Whether the arrays are empty.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Gathers eight 3-vectors.
+    ///
+    /// # Safety
+    /// Every index must be `< len`, and no other thread may be writing these elements.
+    #[inline(always)]
+    pub unsafe fn gather(&self, idx: &Idx8) -> Vec3x8 {
+        let mut x = [0.0f32; LANES];
+        let mut y = [0.0f32; LANES];
+        let mut z = [0.0f32; LANES];
+        for l in 0..LANES {
+            let i = idx[l] as usize;
+            debug_assert!(i < self.len);
+            // SAFETY: the caller guarantees `i < len` and no concurrent writer.
+            unsafe {
+                x[l] = *self.x.add(i);
+                y[l] = *self.y.add(i);
+                z[l] = *self.z.add(i);
+            }
+        }
+        Vec3x8 { x: F32s::from(x), y: F32s::from(y), z: F32s::from(z) }
+    }
+
+    /// Scatters eight 3-vectors, lane 0 first. When an index repeats, the later lane wins.
+    ///
+    /// # Safety
+    /// Every index must be `< len`, and no other thread may read or write these elements.
+    #[inline(always)]
+    pub unsafe fn scatter(&self, idx: &Idx8, v: Vec3x8) {
+        let x = v.x.to_array();
+        let y = v.y.to_array();
+        let z = v.z.to_array();
+        for l in 0..LANES {
+            let i = idx[l] as usize;
+            debug_assert!(i < self.len);
+            // SAFETY: the caller guarantees `i < len` and exclusive access.
+            unsafe {
+                *self.x.add(i) = x[l];
+                *self.y.add(i) = y[l];
+                *self.z.add(i) = z[l];
+            }
+        }
+    }
+
+    /// Reads one 3-vector.
+    ///
+    /// # Safety
+    /// `i < len`, and no other thread may be writing element `i`.
+    #[inline(always)]
+    pub unsafe fn get(&self, i: usize) -> [f32; 3] {
+        debug_assert!(i < self.len);
+        // SAFETY: guaranteed by the caller.
+        unsafe { [*self.x.add(i), *self.y.add(i), *self.z.add(i)] }
+    }
+
+    /// Writes one 3-vector.
+    ///
+    /// # Safety
+    /// `i < len`, and no other thread may read or write element `i`.
+    #[inline(always)]
+    pub unsafe fn set(&self, i: usize, v: [f32; 3]) {
+        debug_assert!(i < self.len);
+        // SAFETY: guaranteed by the caller.
+        unsafe {
+            *self.x.add(i) = v[0];
+            *self.y.add(i) = v[1];
+            *self.z.add(i) = v[2];
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn round_up_pads_to_lanes() {
+        assert_eq!(round_up(0), 0);
+        assert_eq!(round_up(1), 8);
+        assert_eq!(round_up(8), 8);
+        assert_eq!(round_up(9), 16);
+    }
+
+    #[test]
+    fn gather_scatter_roundtrip() {
+        let mut x: Vec<f32> = (0..16).map(|i| i as f32).collect();
+        let mut y: Vec<f32> = (0..16).map(|i| 100.0 + i as f32).collect();
+        let mut z: Vec<f32> = (0..16).map(|i| -(i as f32)).collect();
+        let s = SharedVec3::new(&mut x, &mut y, &mut z);
+        let idx: Idx8 = [15, 3, 7, 0, 9, 1, 2, 11];
+        // SAFETY: single thread, indices in range.
+        let v = unsafe { s.gather(&idx) };
+        assert_eq!(v.x.to_array(), [15.0, 3.0, 7.0, 0.0, 9.0, 1.0, 2.0, 11.0]);
+        let w = v + Vec3x8::splat([1.0, 1.0, 1.0]);
+        // SAFETY: as above.
+        unsafe { s.scatter(&idx, w) };
+        assert_eq!(x[15], 16.0);
+        assert_eq!(y[0], 101.0);
+        assert_eq!(z[11], -10.0);
+        assert_eq!(x[4], 4.0);
+    }
+}

@@ -1,0 +1,2 @@
+//! weft: cloth and hair as particles, fast.
+pub mod lanes;
