@@ -8,6 +8,7 @@
 //! No kernel uses fused multiply-add: `a * b + c` rounds twice in both the SIMD kernels and
 //! their scalar twins, so the two agree bit for bit whatever target features the build enables.
 
+pub use wide::{CmpGe, CmpGt, CmpLe, CmpLt, Select};
 use wide::f32x8;
 
 /// Number of `f32` lanes a kernel processes at once.
@@ -74,7 +75,7 @@ impl Vec3x8 {
     /// Per-lane choice: `mask ? a : b`.
     #[inline(always)]
     pub fn select(mask: F32s, a: Self, b: Self) -> Self {
-        Self { x: mask.blend(a.x, b.x), y: mask.blend(a.y, b.y), z: mask.blend(a.z, b.z) }
+        Self { x: mask.select(a.x, b.x), y: mask.select(a.y, b.y), z: mask.select(a.z, b.z) }
     }
 }
 
