@@ -8,7 +8,7 @@
 //! No kernel uses fused multiply-add: `a * b + c` rounds twice in both the SIMD kernels and
 //! their scalar twins, so the two agree bit for bit whatever target features the build enables.
 
-pub use wide::{CmpGe, CmpGt, CmpLe, CmpLt, Select};
+pub use wide::Select;
 use wide::f32x8;
 
 /// Number of `f32` lanes a kernel processes at once.
