@@ -8,8 +8,8 @@
 //! No kernel uses fused multiply-add: `a * b + c` rounds twice in both the SIMD kernels and
 //! their scalar twins, so the two agree bit for bit whatever target features the build enables.
 
-pub use wide::Select;
 use wide::f32x8;
+pub use wide::Select;
 
 /// Number of `f32` lanes a kernel processes at once.
 pub const LANES: usize = 8;
@@ -48,11 +48,19 @@ pub struct Vec3x8 {
 impl Vec3x8 {
     #[inline(always)]
     pub fn splat(v: [f32; 3]) -> Self {
-        Self { x: F32s::splat(v[0]), y: F32s::splat(v[1]), z: F32s::splat(v[2]) }
+        Self {
+            x: F32s::splat(v[0]),
+            y: F32s::splat(v[1]),
+            z: F32s::splat(v[2]),
+        }
     }
     #[inline(always)]
     pub fn load(x: &[f32], y: &[f32], z: &[f32], i: usize) -> Self {
-        Self { x: load(x, i), y: load(y, i), z: load(z, i) }
+        Self {
+            x: load(x, i),
+            y: load(y, i),
+            z: load(z, i),
+        }
     }
     #[inline(always)]
     pub fn store(self, x: &mut [f32], y: &mut [f32], z: &mut [f32], i: usize) {
@@ -70,12 +78,20 @@ impl Vec3x8 {
     }
     #[inline(always)]
     pub fn scale(self, s: F32s) -> Self {
-        Self { x: self.x * s, y: self.y * s, z: self.z * s }
+        Self {
+            x: self.x * s,
+            y: self.y * s,
+            z: self.z * s,
+        }
     }
     /// Per-lane choice: `mask ? a : b`.
     #[inline(always)]
     pub fn select(mask: F32s, a: Self, b: Self) -> Self {
-        Self { x: mask.select(a.x, b.x), y: mask.select(a.y, b.y), z: mask.select(a.z, b.z) }
+        Self {
+            x: mask.select(a.x, b.x),
+            y: mask.select(a.y, b.y),
+            z: mask.select(a.z, b.z),
+        }
     }
 }
 
@@ -83,7 +99,11 @@ impl std::ops::Add for Vec3x8 {
     type Output = Self;
     #[inline(always)]
     fn add(self, o: Self) -> Self {
-        Self { x: self.x + o.x, y: self.y + o.y, z: self.z + o.z }
+        Self {
+            x: self.x + o.x,
+            y: self.y + o.y,
+            z: self.z + o.z,
+        }
     }
 }
 
@@ -91,7 +111,11 @@ impl std::ops::Sub for Vec3x8 {
     type Output = Self;
     #[inline(always)]
     fn sub(self, o: Self) -> Self {
-        Self { x: self.x - o.x, y: self.y - o.y, z: self.z - o.z }
+        Self {
+            x: self.x - o.x,
+            y: self.y - o.y,
+            z: self.z - o.z,
+        }
     }
 }
 
@@ -128,7 +152,12 @@ impl SharedVec3 {
     /// Captures the three arrays, which must have equal length.
     pub fn new(x: &mut [f32], y: &mut [f32], z: &mut [f32]) -> Self {
         assert!(x.len() == y.len() && y.len() == z.len());
-        Self { x: x.as_mut_ptr(), y: y.as_mut_ptr(), z: z.as_mut_ptr(), len: x.len() }
+        Self {
+            x: x.as_mut_ptr(),
+            y: y.as_mut_ptr(),
+            z: z.as_mut_ptr(),
+            len: x.len(),
+        }
     }
 
     /// Number of elements in each array.
@@ -160,7 +189,11 @@ impl SharedVec3 {
                 z[l] = *self.z.add(i);
             }
         }
-        Vec3x8 { x: F32s::from(x), y: F32s::from(y), z: F32s::from(z) }
+        Vec3x8 {
+            x: F32s::from(x),
+            y: F32s::from(y),
+            z: F32s::from(z),
+        }
     }
 
     /// Scatters eight 3-vectors, lane 0 first. When an index repeats, the later lane wins.

@@ -1,2 +1,5 @@
 //! weft: cloth and hair as particles, fast.
+pub mod error;
 pub mod lanes;
+
+pub use error::{Result, WeftError};
