@@ -69,11 +69,7 @@ pub enum WeftError {
 
 impl WeftError {
     /// Shorthand for [`WeftError::InvalidParameter`].
-    pub fn param(
-        name: impl Into<String>,
-        value: impl std::fmt::Display,
-        reason: impl Into<String>,
-    ) -> Self {
+    pub fn param(name: impl Into<String>, value: impl std::fmt::Display, reason: impl Into<String>) -> Self {
         WeftError::InvalidParameter {
             name: name.into(),
             value: value.to_string(),
@@ -104,11 +100,7 @@ pub fn positive(name: &str, v: f32) -> Result<f32> {
     if v.is_finite() && v > 0.0 {
         Ok(v)
     } else {
-        Err(WeftError::param(
-            name,
-            v,
-            "must be a finite number greater than zero",
-        ))
+        Err(WeftError::param(name, v, "must be a finite number greater than zero"))
     }
 }
 
@@ -117,11 +109,7 @@ pub fn non_negative(name: &str, v: f32) -> Result<f32> {
     if v.is_finite() && v >= 0.0 {
         Ok(v)
     } else {
-        Err(WeftError::param(
-            name,
-            v,
-            "must be a finite number, zero or greater",
-        ))
+        Err(WeftError::param(name, v, "must be a finite number, zero or greater"))
     }
 }
 
@@ -130,10 +118,6 @@ pub fn finite3(name: &str, v: [f32; 3]) -> Result<[f32; 3]> {
     if v.iter().all(|c| c.is_finite()) {
         Ok(v)
     } else {
-        Err(WeftError::param(
-            name,
-            format!("{v:?}"),
-            "every component must be a finite number",
-        ))
+        Err(WeftError::param(name, format!("{v:?}"), "every component must be a finite number"))
     }
 }

@@ -9,7 +9,6 @@
 //! their scalar twins, so the two agree bit for bit whatever target features the build enables.
 
 use wide::f32x8;
-pub use wide::Select;
 
 /// Number of `f32` lanes a kernel processes at once.
 pub const LANES: usize = 8;
@@ -126,6 +125,16 @@ pub type Idx8 = [u32; LANES];
 #[inline(always)]
 pub fn load_idx(s: &[u32], i: usize) -> Idx8 {
     s[i..i + LANES].try_into().expect("slice of lane width")
+}
+
+/// Gathers eight values of a read-only array (bounds-checked).
+#[inline(always)]
+pub fn gather1(s: &[f32], idx: &Idx8) -> F32s {
+    let mut v = [0.0f32; LANES];
+    for l in 0..LANES {
+        v[l] = s[idx[l] as usize];
+    }
+    F32s::from(v)
 }
 
 /// A raw view of three particle arrays (`x`, `y`, `z`) that parallel tasks may gather from and

@@ -1,5 +1,18 @@
 //! weft: cloth and hair as particles, fast.
+pub mod cloth;
+pub mod constraints;
+pub mod effects;
 pub mod error;
+pub mod fabric;
+pub mod integrate;
 pub mod lanes;
+pub mod params;
+pub mod particles;
+pub mod world;
 
+pub use cloth::{ClothDesc, PinSpec};
+pub use effects::{Effects, Wind};
 pub use error::{Result, WeftError};
+pub use fabric::Fabric;
+pub use params::{Backend, SolverParams};
+pub use world::World;

@@ -1,0 +1,292 @@
+//! External effects: gravity, wind and linear drag — each present only when the scene names it.
+//!
+//! Gravity and drag are folded into the predict kernel (see [`crate::integrate`]); a kernel
+//! variant is compiled per combination, so an effect not named costs nothing in the loop.
+//! Wind is an aerodynamic force per triangle from the air's velocity relative to the triangle
+//! (so a flag flaps rather than translating):
+//!
+//! ```text
+//! v_rel = v_wind(t) - (v_a + v_b + v_c) / 3,   n = unit normal,   A = area
+//! F     = ½ ρ C_d A (n·v_rel) |n·v_rel| n      (a third to each corner)
+//! v_wind(t) = v_wind (1 + gust sin(2π f t))
+//! ```
+//!
+//! Wind forces are computed in parallel per triangle, then gathered per particle through a
+//! particle→triangle adjacency in a fixed order, so the sum does not depend on threads. Its
+//! serial path is the scalar twin.
+
+use rayon::prelude::*;
+
+use crate::error::{finite3, non_negative, positive, Result};
+
+/// Wind as an effect.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Wind {
+    /// Mean air velocity, m/s.
+    pub velocity: [f32; 3],
+    /// Air density, kg/m³.
+    #[serde(default = "default_density")]
+    pub air_density: f32,
+    /// Drag coefficient of the fabric (dimensionless).
+    #[serde(default = "default_cd")]
+    pub drag_coefficient: f32,
+    /// Relative gust amplitude (0 = steady).
+    #[serde(default)]
+    pub gust: f32,
+    /// Gust frequency, Hz.
+    #[serde(default = "default_gust_frequency")]
+    pub gust_frequency: f32,
+}
+
+fn default_density() -> f32 {
+    1.2
+}
+fn default_cd() -> f32 {
+    1.0
+}
+fn default_gust_frequency() -> f32 {
+    0.5
+}
+
+impl Default for Wind {
+    fn default() -> Self {
+        Wind {
+            velocity: [5.0, 0.0, 0.0],
+            air_density: 1.2,
+            drag_coefficient: 1.0,
+            gust: 0.0,
+            gust_frequency: 0.5,
+        }
+    }
+}
+
+/// The effects a scene names. `None` means absent: no pass, no allocation, no branch in a loop.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Effects {
+    /// Gravitational acceleration, m/s².
+    pub gravity: Option<[f32; 3]>,
+    /// Wind.
+    pub wind: Option<Wind>,
+    /// Linear drag coefficient, kg/s (force `-c v` on every particle).
+    pub drag: Option<f32>,
+}
+
+impl Effects {
+    /// Earth gravity along -y and nothing else.
+    pub fn gravity() -> Self {
+        Effects {
+            gravity: Some([0.0, -9.81, 0.0]),
+            ..Default::default()
+        }
+    }
+
+    /// Checks every named effect.
+    pub fn validate(&self) -> Result<()> {
+        if let Some(g) = self.gravity {
+            finite3("effects.gravity", g)?;
+        }
+        if let Some(d) = self.drag {
+            non_negative("effects.drag", d)?;
+        }
+        if let Some(w) = &self.wind {
+            finite3("effects.wind.velocity", w.velocity)?;
+            positive("effects.wind.air_density", w.air_density)?;
+            non_negative("effects.wind.drag_coefficient", w.drag_coefficient)?;
+            non_negative("effects.wind.gust", w.gust)?;
+            non_negative("effects.wind.gust_frequency", w.gust_frequency)?;
+        }
+        Ok(())
+    }
+
+    /// Names of the effects that are on.
+    pub fn named(&self) -> Vec<&'static str> {
+        let mut v = Vec::new();
+        if self.gravity.is_some() {
+            v.push("gravity");
+        }
+        if self.wind.is_some() {
+            v.push("wind");
+        }
+        if self.drag.is_some() {
+            v.push("drag");
+        }
+        v
+    }
+}
+
+/// Scratch for the wind force: per-triangle forces, adjacency, per-particle forces.
+#[derive(Clone, Debug, Default)]
+pub struct WindState {
+    tri_force: Vec<[f32; 3]>,
+    adj_first: Vec<u32>,
+    adj_tri: Vec<u32>,
+    /// Per-particle force, N (padded length).
+    pub fx: Vec<f32>,
+    /// Per-particle force, N.
+    pub fy: Vec<f32>,
+    /// Per-particle force, N.
+    pub fz: Vec<f32>,
+}
+
+impl WindState {
+    /// Builds the adjacency for `triangles` over `padded_len` particles.
+    pub fn new(triangles: &[[u32; 3]], padded_len: usize) -> Self {
+        let mut count = vec![0u32; padded_len + 1];
+        for t in triangles {
+            for &i in t {
+                count[i as usize + 1] += 1;
+            }
+        }
+        for i in 0..padded_len {
+            count[i + 1] += count[i];
+        }
+        let mut fill = count.clone();
+        let mut adj = vec![0u32; triangles.len() * 3];
+        for (k, t) in triangles.iter().enumerate() {
+            for &i in t {
+                adj[fill[i as usize] as usize] = k as u32;
+                fill[i as usize] += 1;
+            }
+        }
+        WindState {
+            tri_force: vec![[0.0; 3]; triangles.len()],
+            adj_first: count,
+            adj_tri: adj,
+            fx: vec![0.0; padded_len],
+            fy: vec![0.0; padded_len],
+            fz: vec![0.0; padded_len],
+        }
+    }
+
+    /// Computes per-particle wind forces from positions and velocities at time `t`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn compute(&mut self, wind: &Wind, t: f64, tris: &[[u32; 3]], x: [&[f32]; 3], v: [&[f32]; 3], parallel: bool) {
+        let s = 1.0 + wind.gust * (2.0 * std::f64::consts::PI * wind.gust_frequency as f64 * t).sin() as f32;
+        let air = [wind.velocity[0] * s, wind.velocity[1] * s, wind.velocity[2] * s];
+        let k = 0.5 * wind.air_density * wind.drag_coefficient;
+        let one = |t: &[u32; 3]| triangle_force(t, x, v, air, k);
+        if parallel {
+            self.tri_force
+                .par_iter_mut()
+                .zip(tris.par_iter())
+                .with_min_len(1024)
+                .for_each(|(f, t)| *f = one(t));
+        } else {
+            for (f, t) in self.tri_force.iter_mut().zip(tris) {
+                *f = one(t);
+            }
+        }
+        let (first, adj, tf) = (&self.adj_first, &self.adj_tri, &self.tri_force);
+        let gather = |i: usize| {
+            let mut f = [0.0f32; 3];
+            for &k in &adj[first[i] as usize..first[i + 1] as usize] {
+                let g = tf[k as usize];
+                f[0] += g[0];
+                f[1] += g[1];
+                f[2] += g[2];
+            }
+            f
+        };
+        if parallel {
+            (self.fx.par_iter_mut(), self.fy.par_iter_mut(), self.fz.par_iter_mut())
+                .into_par_iter()
+                .enumerate()
+                .with_min_len(4096)
+                .for_each(|(i, (fx, fy, fz))| {
+                    let f = gather(i);
+                    (*fx, *fy, *fz) = (f[0], f[1], f[2]);
+                });
+        } else {
+            for i in 0..self.fx.len() {
+                let f = gather(i);
+                (self.fx[i], self.fy[i], self.fz[i]) = (f[0], f[1], f[2]);
+            }
+        }
+    }
+}
+
+/// Force on each corner of one triangle (a third of the triangle's force).
+#[inline]
+fn triangle_force(t: &[u32; 3], x: [&[f32]; 3], v: [&[f32]; 3], air: [f32; 3], k: f32) -> [f32; 3] {
+    let [a, b, c] = [t[0] as usize, t[1] as usize, t[2] as usize];
+    let e1 = [x[0][b] - x[0][a], x[1][b] - x[1][a], x[2][b] - x[2][a]];
+    let e2 = [x[0][c] - x[0][a], x[1][c] - x[1][a], x[2][c] - x[2][a]];
+    let n = [
+        e1[1] * e2[2] - e1[2] * e2[1],
+        e1[2] * e2[0] - e1[0] * e2[2],
+        e1[0] * e2[1] - e1[1] * e2[0],
+    ];
+    let n2 = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+    if n2 <= 1e-20 || !n2.is_finite() {
+        return [0.0; 3];
+    }
+    let area = 0.5 * n2;
+    let nh = [n[0] / n2, n[1] / n2, n[2] / n2];
+    let third = 1.0 / 3.0;
+    let vt = [
+        (v[0][a] + v[0][b] + v[0][c]) * third,
+        (v[1][a] + v[1][b] + v[1][c]) * third,
+        (v[2][a] + v[2][b] + v[2][c]) * third,
+    ];
+    let rel = [air[0] - vt[0], air[1] - vt[1], air[2] - vt[2]];
+    let vn = nh[0] * rel[0] + nh[1] * rel[1] + nh[2] * rel[2];
+    let m = k * area * vn * vn.abs() * third;
+    [nh[0] * m, nh[1] * m, nh[2] * m]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn wind_pushes_a_facing_triangle_along_its_normal() {
+        let tris = [[0u32, 1, 2]];
+        let x = [
+            vec![0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+            vec![0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+            vec![0.0; 8],
+        ];
+        let v = [vec![0.0; 8], vec![0.0; 8], vec![0.0; 8]];
+        let mut s = WindState::new(&tris, 8);
+        let wind = Wind {
+            velocity: [0.0, 0.0, 10.0],
+            ..Wind::default()
+        };
+        s.compute(&wind, 0.0, &tris, [&x[0], &x[1], &x[2]], [&v[0], &v[1], &v[2]], false);
+        // Area 0.5, F = 0.5 * 1.2 * 1 * 0.5 * 100 = 30 N, 10 N per corner, along +z.
+        for i in 0..3 {
+            assert!((s.fz[i] - 10.0).abs() < 1e-4, "{}", s.fz[i]);
+            assert_eq!(s.fx[i], 0.0);
+        }
+        assert_eq!(s.fz[3], 0.0);
+        // Edge-on wind gives no force.
+        let wind = Wind {
+            velocity: [10.0, 0.0, 0.0],
+            ..Wind::default()
+        };
+        s.compute(&wind, 0.0, &tris, [&x[0], &x[1], &x[2]], [&v[0], &v[1], &v[2]], true);
+        assert!(s.fz[0].abs() < 1e-6 && s.fx[0].abs() < 1e-6);
+    }
+
+    #[test]
+    fn validation_names_the_key() {
+        let e = Effects {
+            drag: Some(-1.0),
+            ..Default::default()
+        }
+        .validate()
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("effects.drag"), "{e}");
+        let e = Effects {
+            gravity: Some([0.0, f32::NAN, 0.0]),
+            ..Default::default()
+        }
+        .validate()
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("effects.gravity"), "{e}");
+    }
+}

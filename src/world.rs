@@ -1,0 +1,374 @@
+//! The world: particles, constraints and effects, and the step that advances them.
+//!
+//! One step of length `dt` runs `substeps` substeps of `h = dt / substeps`; each substep:
+//! wind forces (if named) → predict (gravity, drag, forces) → `iterations` sweeps of the
+//! coloured distance constraints and the tethers → update velocities and positions (with
+//! fabric damping if any). See the crate README's Architecture section for the file of each
+//! stage and its scalar twin.
+
+use std::sync::Arc;
+
+use crate::cloth::{ClothDesc, ConstraintKind};
+use crate::constraints::distance::DistanceInput;
+use crate::constraints::{DistanceSet, TetherSet};
+use crate::effects::{Effects, WindState};
+use crate::error::{positive, Result, WeftError};
+use crate::integrate::{predict, update, PredictParams};
+use crate::params::{Backend, SolverParams};
+use crate::particles::Particles;
+
+/// Where one cloth lives in the world's particle arrays.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ClothInfo {
+    /// Index of the cloth's first particle.
+    pub first: u32,
+    /// Rows of the grid.
+    pub rows: u32,
+    /// Columns of the grid.
+    pub cols: u32,
+    /// First triangle of the cloth in [`World::triangles`].
+    pub first_triangle: u32,
+    /// Number of triangles.
+    pub triangle_count: u32,
+    /// Thickness, m.
+    pub thickness: f32,
+}
+
+/// A simulated world.
+pub struct World {
+    pub(crate) particles: Particles,
+    pub(crate) distance: DistanceSet,
+    pub(crate) distance_inputs: Vec<DistanceInput>,
+    pub(crate) stretch: Vec<(u32, u32, f32)>,
+    pub(crate) tethers: TetherSet,
+    pub(crate) tether_inputs: Vec<crate::cloth::Tether>,
+    pub(crate) triangles: Vec<[u32; 3]>,
+    pub(crate) cloths: Vec<ClothInfo>,
+    pub(crate) damping_rate: Vec<f32>,
+    has_damping: bool,
+    damp_factor: Vec<f32>,
+    damp_h: f32,
+    pub(crate) params: SolverParams,
+    pub(crate) effects: Effects,
+    wind: Option<WindState>,
+    pool: Option<Arc<rayon::ThreadPool>>,
+    backup: [Vec<f32>; 6],
+    pub(crate) time: f64,
+    pub(crate) steps: u64,
+}
+
+impl World {
+    /// An empty world.
+    pub fn new(params: SolverParams, effects: Effects) -> Result<World> {
+        params.validate()?;
+        effects.validate()?;
+        let pool = make_pool(params.threads)?;
+        Ok(World {
+            particles: Particles::new(),
+            distance: DistanceSet::default(),
+            distance_inputs: Vec::new(),
+            stretch: Vec::new(),
+            tethers: TetherSet::default(),
+            tether_inputs: Vec::new(),
+            triangles: Vec::new(),
+            cloths: Vec::new(),
+            damping_rate: Vec::new(),
+            has_damping: false,
+            damp_factor: Vec::new(),
+            damp_h: f32::NAN,
+            params,
+            effects,
+            wind: None,
+            pool,
+            backup: Default::default(),
+            time: 0.0,
+            steps: 0,
+        })
+    }
+
+    /// Builds a cloth and adds it; returns its index in [`cloths`](Self::cloths).
+    pub fn add_cloth(&mut self, desc: &ClothDesc) -> Result<usize> {
+        let b = desc.build()?;
+        let first = self.particles.extend(&b.positions, &b.inv_mass);
+        if (self.particles.padded_len() as u64) >= u32::MAX as u64 {
+            return Err(WeftError::param(
+                "particles",
+                self.particles.count(),
+                "too many particles for u32 indices",
+            ));
+        }
+        let first_triangle = self.triangles.len() as u32;
+        for e in &b.edges {
+            let (a, bb) = (first + e.a, first + e.b);
+            self.distance_inputs.push(DistanceInput {
+                a,
+                b: bb,
+                rest: e.rest,
+                compliance: e.compliance,
+            });
+            if e.kind == ConstraintKind::Stretch {
+                self.stretch.push((a, bb, e.rest));
+            }
+        }
+        for t in &b.tethers {
+            self.tether_inputs.push(crate::cloth::Tether {
+                particle: first + t.particle,
+                anchor: first + t.anchor,
+                max_len: t.max_len,
+            });
+        }
+        self.triangles
+            .extend(b.triangles.iter().map(|t| [first + t[0], first + t[1], first + t[2]]));
+        self.damping_rate.resize(self.particles.count(), desc.fabric.damping);
+        self.has_damping |= desc.fabric.damping > 0.0;
+        self.cloths.push(ClothInfo {
+            first,
+            rows: desc.rows,
+            cols: desc.cols,
+            first_triangle,
+            triangle_count: b.triangles.len() as u32,
+            thickness: desc.fabric.thickness,
+        });
+        self.rebuild_topology();
+        Ok(self.cloths.len() - 1)
+    }
+
+    /// Re-lays out constraints and scratch after the particle count changed.
+    fn rebuild_topology(&mut self) {
+        let sink = self.particles.sink();
+        let len = self.particles.padded_len();
+        self.distance = DistanceSet::new(&self.distance_inputs, len, sink);
+        self.tethers = TetherSet::new(&self.tether_inputs, sink);
+        self.wind = self.effects.wind.as_ref().map(|_| WindState::new(&self.triangles, len));
+        self.damp_h = f32::NAN;
+        for b in &mut self.backup {
+            b.resize(len, 0.0);
+        }
+    }
+
+    /// Advances the world by `dt` seconds. On a non-finite result (with `guard` on) the state
+    /// before the step is restored and [`WeftError::Diverged`] is returned.
+    pub fn step(&mut self, dt: f32) -> Result<()> {
+        positive("dt", dt)?;
+        if self.params.guard {
+            let p = &self.particles;
+            for (dst, src) in self.backup.iter_mut().zip([&p.x, &p.y, &p.z, &p.vx, &p.vy, &p.vz]) {
+                dst.copy_from_slice(src);
+            }
+        }
+        match self.pool.clone() {
+            Some(pool) => pool.install(|| self.run_substeps(dt)),
+            None => self.run_substeps(dt),
+        }
+        if self.params.guard {
+            if let Some(i) = self.particles.first_non_finite() {
+                let p = &mut self.particles;
+                for (src, dst) in self
+                    .backup
+                    .iter()
+                    .zip([&mut p.x, &mut p.y, &mut p.z, &mut p.vx, &mut p.vy, &mut p.vz])
+                {
+                    dst.copy_from_slice(src);
+                }
+                p.px.copy_from_slice(&p.x);
+                p.py.copy_from_slice(&p.y);
+                p.pz.copy_from_slice(&p.z);
+                return Err(WeftError::Diverged {
+                    particle: i,
+                    stage: "step",
+                });
+            }
+        }
+        self.time += dt as f64;
+        self.steps += 1;
+        Ok(())
+    }
+
+    fn run_substeps(&mut self, dt: f32) {
+        let n_sub = self.params.substeps;
+        let h = dt / n_sub as f32;
+        let simd = self.params.backend == Backend::Simd;
+        let parallel = simd;
+        if self.has_damping && self.damp_h != h {
+            self.damp_factor = self.damping_rate.iter().map(|&c| 1.0 / (1.0 + c * h)).collect();
+            self.damp_factor.resize(self.particles.padded_len(), 1.0);
+            self.damp_h = h;
+        }
+        let inv_h2 = 1.0 / (h * h);
+        for s in 0..n_sub {
+            let t = self.time + (s as f64) * (h as f64);
+            if let (Some(w), Some(state)) = (&self.effects.wind, &mut self.wind) {
+                let p = &self.particles;
+                state.compute(w, t, &self.triangles, [&p.x, &p.y, &p.z], [&p.vx, &p.vy, &p.vz], parallel);
+            }
+            {
+                let force = self.wind.as_ref().map(|w| [&w.fx[..], &w.fy[..], &w.fz[..]]);
+                let pp = PredictParams {
+                    h,
+                    gravity: self.effects.gravity,
+                    drag: self.effects.drag,
+                    force,
+                };
+                self.particles.for_chunks(parallel, |c| predict(c, &pp, simd));
+            }
+            self.distance.reset_lambda();
+            let p = &mut self.particles;
+            for _ in 0..self.params.iterations {
+                if simd {
+                    self.distance.solve_simd(&mut p.px, &mut p.py, &mut p.pz, &p.w, inv_h2, parallel);
+                    if !self.tethers.is_empty() {
+                        self.tethers.solve_simd(&mut p.px, &mut p.py, &mut p.pz, parallel);
+                    }
+                } else {
+                    self.distance.solve_scalar(&mut p.px, &mut p.py, &mut p.pz, &p.w, inv_h2);
+                    if !self.tethers.is_empty() {
+                        self.tethers.solve_scalar(&mut p.px, &mut p.py, &mut p.pz);
+                    }
+                }
+            }
+            let damp = self.has_damping.then_some(&self.damp_factor[..]);
+            self.particles.for_chunks(parallel, |c| update(c, h, damp, simd));
+        }
+    }
+
+    /// The solver parameters.
+    pub fn params(&self) -> &SolverParams {
+        &self.params
+    }
+
+    /// Replaces the solver parameters (takes effect at the next step).
+    pub fn set_params(&mut self, params: SolverParams) -> Result<()> {
+        params.validate()?;
+        if params.threads != self.params.threads {
+            self.pool = make_pool(params.threads)?;
+        }
+        self.params = params;
+        Ok(())
+    }
+
+    /// The effects.
+    pub fn effects(&self) -> &Effects {
+        &self.effects
+    }
+
+    /// Replaces the effects (takes effect at the next step).
+    pub fn set_effects(&mut self, effects: Effects) -> Result<()> {
+        effects.validate()?;
+        self.effects = effects;
+        self.wind = self
+            .effects
+            .wind
+            .as_ref()
+            .map(|_| WindState::new(&self.triangles, self.particles.padded_len()));
+        Ok(())
+    }
+
+    /// Number of real particles.
+    pub fn particle_count(&self) -> usize {
+        self.particles.count()
+    }
+
+    /// Number of distance constraints.
+    pub fn constraint_count(&self) -> usize {
+        self.distance.len()
+    }
+
+    /// Number of tethers.
+    pub fn tether_count(&self) -> usize {
+        self.tethers.len()
+    }
+
+    /// Number of constraint colours.
+    pub fn colour_count(&self) -> usize {
+        self.distance.colours.len()
+    }
+
+    /// The particle arrays (padded; only the first [`particle_count`](Self::particle_count)
+    /// entries are real).
+    pub fn particles(&self) -> &Particles {
+        &self.particles
+    }
+
+    /// Positions as three slices of length `particle_count`.
+    pub fn positions(&self) -> [&[f32]; 3] {
+        let n = self.particles.count();
+        [&self.particles.x[..n], &self.particles.y[..n], &self.particles.z[..n]]
+    }
+
+    /// Velocities as three slices of length `particle_count`.
+    pub fn velocities(&self) -> [&[f32]; 3] {
+        let n = self.particles.count();
+        [&self.particles.vx[..n], &self.particles.vy[..n], &self.particles.vz[..n]]
+    }
+
+    /// Position of one particle as a `mint` point.
+    pub fn position(&self, i: usize) -> Result<mint::Point3<f32>> {
+        if i >= self.particles.count() {
+            return Err(WeftError::IndexOutOfRange {
+                name: "particle",
+                index: i,
+                len: self.particles.count(),
+            });
+        }
+        Ok(self.particles.position(i).into())
+    }
+
+    /// Writes interleaved positions into `out` (resized to `particle_count`).
+    pub fn positions_interleaved(&self, out: &mut Vec<[f32; 3]>) {
+        let n = self.particles.count();
+        out.clear();
+        out.extend((0..n).map(|i| self.particles.position(i)));
+    }
+
+    /// Render/collision triangles (global particle indices).
+    pub fn triangles(&self) -> &[[u32; 3]] {
+        &self.triangles
+    }
+
+    /// The cloths added so far.
+    pub fn cloths(&self) -> &[ClothInfo] {
+        &self.cloths
+    }
+
+    /// Simulated time, s.
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    /// Steps taken.
+    pub fn steps(&self) -> u64 {
+        self.steps
+    }
+
+    /// Sets the velocity of every real particle (e.g. initial conditions in tests).
+    pub fn set_velocities(&mut self, v: [&[f32]; 3]) -> Result<()> {
+        let n = self.particles.count();
+        for (name, s) in [("vx", v[0]), ("vy", v[1]), ("vz", v[2])] {
+            if s.len() != n {
+                return Err(WeftError::BufferLength {
+                    name,
+                    got: s.len(),
+                    expected: n,
+                });
+            }
+            if let Some(bad) = s.iter().find(|f| !f.is_finite()) {
+                return Err(WeftError::param(name, bad, "velocities must be finite"));
+            }
+        }
+        self.particles.vx[..n].copy_from_slice(v[0]);
+        self.particles.vy[..n].copy_from_slice(v[1]);
+        self.particles.vz[..n].copy_from_slice(v[2]);
+        Ok(())
+    }
+}
+
+fn make_pool(threads: usize) -> Result<Option<Arc<rayon::ThreadPool>>> {
+    if threads == 0 {
+        return Ok(None);
+    }
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map(|p| Some(Arc::new(p)))
+        .map_err(|e| WeftError::param("solver.threads", threads, format!("cannot start the thread pool: {e}")))
+}
