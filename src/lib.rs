@@ -6,13 +6,16 @@ pub mod error;
 pub mod fabric;
 pub mod integrate;
 pub mod lanes;
+pub mod metrics;
 pub mod params;
 pub mod particles;
+pub mod reference;
 pub mod world;
 
 pub use cloth::{ClothDesc, PinSpec};
 pub use effects::{Effects, Wind};
 pub use error::{Result, WeftError};
 pub use fabric::Fabric;
+pub use metrics::Metrics;
 pub use params::{Backend, SolverParams};
 pub use world::World;

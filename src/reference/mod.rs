@@ -1,0 +1,191 @@
+//! The scalar reference step: plain loops, `f64`, no SIMD, no threads.
+//!
+//! It follows the same stages as [`World::step`](crate::World::step) — wind, predict, colour by
+//! colour constraint sweeps, tethers, update, damping — on a copy of a world's state and
+//! topology, so the fast kernels can be held to it with a stated tolerance. It is deliberately
+//! naive: a second, independent reading of the method, not a copy of the kernels.
+
+use crate::effects::Effects;
+use crate::world::World;
+
+/// One constraint of the reference (global indices).
+#[derive(Clone, Copy, Debug)]
+struct Dist {
+    a: usize,
+    b: usize,
+    rest: f64,
+    compliance: f64,
+}
+
+/// A world copied into f64.
+#[derive(Clone, Debug)]
+pub struct ReferenceWorld {
+    /// Positions.
+    pub x: Vec<[f64; 3]>,
+    /// Velocities.
+    pub v: Vec<[f64; 3]>,
+    w: Vec<f64>,
+    damping: Vec<f64>,
+    colours: Vec<Vec<Dist>>,
+    tethers: Vec<(usize, usize, f64)>,
+    triangles: Vec<[usize; 3]>,
+    effects: Effects,
+    substeps: u32,
+    iterations: u32,
+    time: f64,
+}
+
+impl ReferenceWorld {
+    /// Copies the state and topology of `world` (constraints in the world's colour order).
+    pub fn from_world(world: &World) -> Self {
+        let p = world.particles();
+        let n = p.count();
+        let colours = world
+            .distance
+            .colours
+            .iter()
+            .map(|c| {
+                (0..c.real)
+                    .map(|k| Dist {
+                        a: c.a[k] as usize,
+                        b: c.b[k] as usize,
+                        rest: c.rest[k] as f64,
+                        compliance: c.compliance[k] as f64,
+                    })
+                    .collect()
+            })
+            .collect();
+        ReferenceWorld {
+            x: (0..n).map(|i| p.position(i).map(f64::from)).collect(),
+            v: (0..n).map(|i| p.velocity(i).map(f64::from)).collect(),
+            w: p.w[..n].iter().map(|&w| w as f64).collect(),
+            damping: world.damping_rate.iter().map(|&d| d as f64).collect(),
+            colours,
+            tethers: world
+                .tether_inputs
+                .iter()
+                .map(|t| (t.particle as usize, t.anchor as usize, t.max_len as f64))
+                .collect(),
+            triangles: world.triangles().iter().map(|t| t.map(|i| i as usize)).collect(),
+            effects: world.effects().clone(),
+            substeps: world.params().substeps,
+            iterations: world.params().iterations,
+            time: world.time(),
+        }
+    }
+
+    /// Advances by `dt` seconds.
+    pub fn step(&mut self, dt: f64) {
+        let h = dt / self.substeps as f64;
+        let n = self.x.len();
+        for s in 0..self.substeps {
+            let t = self.time + s as f64 * h;
+            let force = self.wind_forces(t);
+            let mut p = vec![[0.0f64; 3]; n];
+            for i in 0..n {
+                let w = self.w[i];
+                if let Some(g) = self.effects.gravity {
+                    if w > 0.0 {
+                        for k in 0..3 {
+                            self.v[i][k] += h * g[k] as f64;
+                        }
+                    }
+                }
+                if let Some(f) = &force {
+                    for k in 0..3 {
+                        self.v[i][k] += h * w * f[i][k];
+                    }
+                }
+                if let Some(c) = self.effects.drag {
+                    let kd = 1.0 / (1.0 + h * c as f64 * w);
+                    for k in 0..3 {
+                        self.v[i][k] *= kd;
+                    }
+                }
+                for k in 0..3 {
+                    p[i][k] = self.x[i][k] + h * self.v[i][k];
+                }
+            }
+            let mut lambda: Vec<Vec<f64>> = self.colours.iter().map(|c| vec![0.0; c.len()]).collect();
+            for _ in 0..self.iterations {
+                for (col, lam) in self.colours.iter().zip(lambda.iter_mut()) {
+                    for (c, l) in col.iter().zip(lam.iter_mut()) {
+                        let d = sub(p[c.b], p[c.a]);
+                        let len = norm(d);
+                        let alpha = c.compliance / (h * h);
+                        let denom = self.w[c.a] + self.w[c.b] + alpha;
+                        if len <= crate::constraints::distance::MIN_LENGTH as f64 || denom <= 0.0 {
+                            continue;
+                        }
+                        let dl = (-(len - c.rest) - alpha * *l) / denom;
+                        for k in 0..3 {
+                            let nk = d[k] / len;
+                            p[c.a][k] -= self.w[c.a] * dl * nk;
+                            p[c.b][k] += self.w[c.b] * dl * nk;
+                        }
+                        *l += dl;
+                    }
+                }
+                for &(i, a, max_len) in &self.tethers {
+                    let d = sub(p[i], p[a]);
+                    let len = norm(d);
+                    if len > max_len {
+                        for k in 0..3 {
+                            p[i][k] = p[a][k] + d[k] * max_len / len;
+                        }
+                    }
+                }
+            }
+            for i in 0..n {
+                let kd = if self.damping.is_empty() {
+                    1.0
+                } else {
+                    1.0 / (1.0 + self.damping[i] * h)
+                };
+                for k in 0..3 {
+                    self.v[i][k] = (p[i][k] - self.x[i][k]) / h * kd;
+                    self.x[i][k] = p[i][k];
+                }
+            }
+        }
+        self.time += dt;
+    }
+
+    fn wind_forces(&self, t: f64) -> Option<Vec<[f64; 3]>> {
+        let wind = self.effects.wind.as_ref()?;
+        let s = 1.0 + wind.gust as f64 * (2.0 * std::f64::consts::PI * wind.gust_frequency as f64 * t).sin();
+        let air = wind.velocity.map(|c| c as f64 * s);
+        let k = 0.5 * wind.air_density as f64 * wind.drag_coefficient as f64;
+        let mut f = vec![[0.0f64; 3]; self.x.len()];
+        for &[a, b, c] in &self.triangles {
+            let n = cross(sub(self.x[b], self.x[a]), sub(self.x[c], self.x[a]));
+            let n2 = norm(n);
+            if n2 <= 1e-20 {
+                continue;
+            }
+            let nh = n.map(|c| c / n2);
+            let vt: [f64; 3] = std::array::from_fn(|k| (self.v[a][k] + self.v[b][k] + self.v[c][k]) / 3.0);
+            let rel: [f64; 3] = std::array::from_fn(|k| air[k] - vt[k]);
+            let vn = nh[0] * rel[0] + nh[1] * rel[1] + nh[2] * rel[2];
+            let m = k * 0.5 * n2 * vn * vn.abs() / 3.0;
+            for i in [a, b, c] {
+                for k in 0..3 {
+                    f[i][k] += nh[k] * m;
+                }
+            }
+        }
+        Some(f)
+    }
+}
+
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+fn norm(a: [f64; 3]) -> f64 {
+    (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt()
+}
+
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+}
