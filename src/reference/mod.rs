@@ -5,6 +5,9 @@
 //! topology, so the fast kernels can be held to it with a stated tolerance. It is deliberately
 //! naive: a second, independent reading of the method, not a copy of the kernels.
 
+// Plain index loops are the point of this module: it is the naive reading of the method.
+#![allow(clippy::needless_range_loop)]
+
 use crate::effects::Effects;
 use crate::world::World;
 
