@@ -10,6 +10,7 @@ pub mod metrics;
 pub mod params;
 pub mod particles;
 pub mod reference;
+pub mod scene;
 pub mod world;
 
 pub use cloth::{ClothDesc, PinSpec};

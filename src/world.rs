@@ -278,6 +278,11 @@ impl World {
         self.tethers.len()
     }
 
+    /// The coloured distance constraints.
+    pub fn distance_set(&self) -> &DistanceSet {
+        &self.distance
+    }
+
     /// Number of constraint colours.
     pub fn colour_count(&self) -> usize {
         self.distance.colours.len()

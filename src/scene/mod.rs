@@ -1,0 +1,126 @@
+//! Scene files: a TOML description of what to simulate, read through serde.
+//!
+//! Every table refuses unknown keys; every number is range-checked as it is read, so an error
+//! names the key, the line and the column. Cross-field problems found when the world is built
+//! (a pin outside its grid, say) name the cloth and the line of its `[[cloth]]` table.
+//!
+//! ```toml
+//! [solver]
+//! dt = 0.016666
+//! substeps = 10
+//! iterations = 1
+//!
+//! [effects]
+//! gravity = [0.0, -9.81, 0.0]
+//!
+//! [[cloth]]
+//! rows = 30
+//! cols = 30
+//! spacing = 0.03
+//! origin = [-0.45, 1.6, 0.0]
+//! fabric = "cotton"
+//! pins = ["first-row-corners"]
+//!
+//! [output]
+//! steps = 300
+//! ```
+//!
+//! RON is not supported: TOML covers the format, and one syntax keeps error messages uniform.
+
+pub mod checked;
+mod sections;
+
+pub use sections::{EffectsSection, OutputSection, SceneCloth, SolverSection, WindSection};
+
+use crate::error::{Result, WeftError};
+use crate::world::World;
+
+/// A parsed scene.
+#[derive(Clone, Debug, PartialEq, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    /// Solver settings.
+    #[serde(default)]
+    pub solver: SolverSection,
+    /// External effects; an effect not named is off and costs nothing.
+    #[serde(default)]
+    pub effects: EffectsSection,
+    /// Cloth pieces.
+    #[serde(default)]
+    pub cloth: Vec<toml::Spanned<SceneCloth>>,
+    /// What a run writes.
+    #[serde(default)]
+    pub output: OutputSection,
+}
+
+/// Line and column (1-based) of a byte offset in `text`.
+pub fn line_col(text: &str, offset: usize) -> (usize, usize) {
+    let before = &text[..offset.min(text.len())];
+    let line = before.matches('\n').count() + 1;
+    let col = before.rsplit('\n').next().map(|l| l.chars().count()).unwrap_or(0) + 1;
+    (line, col)
+}
+
+impl Scene {
+    /// Parses scene text; `name` labels error messages (usually the file path).
+    pub fn parse(text: &str, name: &str) -> Result<Scene> {
+        let scene: Scene = toml::from_str(text).map_err(|e| {
+            let at = e.span().map(|s| {
+                let (l, c) = line_col(text, s.start);
+                format!(" at line {l}, column {c}")
+            });
+            WeftError::Scene(format!("{name}{}: {}", at.unwrap_or_default(), e.message()))
+        })?;
+        scene.check(text, name)?;
+        Ok(scene)
+    }
+
+    /// Reads and parses a scene file.
+    pub fn load(path: &std::path::Path) -> Result<(Scene, String)> {
+        let text = std::fs::read_to_string(path).map_err(|e| WeftError::io(path, e))?;
+        let scene = Scene::parse(&text, &path.display().to_string())?;
+        Ok((scene, text))
+    }
+
+    /// Builds the world once to surface cross-field errors with the cloth's location.
+    fn check(&self, text: &str, name: &str) -> Result<()> {
+        self.build_world(Some((text, name))).map(|_| ())
+    }
+
+    /// The world this scene describes.
+    pub fn world(&self) -> Result<World> {
+        self.build_world(None)
+    }
+
+    fn build_world(&self, src: Option<(&str, &str)>) -> Result<World> {
+        let mut world = World::new(self.solver.params(), self.effects.effects())?;
+        for (k, c) in self.cloth.iter().enumerate() {
+            let desc = c.get_ref().desc().and_then(|d| world.add_cloth(&d).map(|_| ()));
+            if let Err(e) = desc {
+                let at = src
+                    .map(|(text, name)| {
+                        let (l, col) = line_col(text, c.span().start);
+                        format!("{name} at line {l}, column {col}: ")
+                    })
+                    .unwrap_or_default();
+                return Err(WeftError::Scene(format!("{at}cloth {k}: {e}")));
+            }
+        }
+        Ok(world)
+    }
+
+    /// Serialises the scene back to TOML.
+    pub fn to_toml(&self) -> Result<String> {
+        toml::to_string(self).map_err(|e| WeftError::Scene(format!("cannot write the scene: {e}")))
+    }
+}
+
+impl World {
+    /// Builds the world a scene describes.
+    pub fn from_scene(scene: &Scene) -> Result<World> {
+        scene.world()
+    }
+}
+
+#[cfg(test)]
+mod tests;
