@@ -1,4 +1,5 @@
 //! weft: cloth and hair as particles, fast.
+pub mod checkpoint;
 pub mod cloth;
 pub mod constraints;
 pub mod effects;
