@@ -4,6 +4,7 @@ pub mod cloth;
 pub mod constraints;
 pub mod effects;
 pub mod error;
+pub mod export;
 pub mod fabric;
 pub mod integrate;
 pub mod lanes;
