@@ -6,7 +6,8 @@
 //! surface nearest the light). A point `p` with normal `n` is lit when
 //! `l·p' + bias >= map(p')`, where `p' = p + n·texel` is pushed off its surface (normal-offset)
 //! and the bias grows with the slope `tan θ = sin θ / cos θ`, `cos θ = n·l`. Averaging that test
-//! over a 4x4 block of texels gives soft shadow edges.
+//! over a 4x4 block of texels gives soft shadow edges (the four corner taps are tried first, and
+//! when they agree the other twelve are skipped).
 //!
 //! The same map gives the floor's contact shadow: background samples whose view ray meets the
 //! ground plane below the scene are darkened where that ground point is in shadow.
@@ -118,20 +119,30 @@ impl ShadowMap {
         let m = self.to_map(q);
         let tan = (1.0 - cos * cos).max(0.0).sqrt() / cos.max(0.05);
         let bias = self.texel * (1.0 + tan.min(8.0));
+        let lit_at = |i: usize, j: usize| {
+            let sx = m[0] + (i as f32 - 1.5) * PCF_STEP;
+            let sy = m[1] + (j as f32 - 1.5) * PCF_STEP;
+            if !(sx >= 0.0 && sy >= 0.0) {
+                return 1.0;
+            }
+            let (x, y) = (sx as usize, sy as usize);
+            if x >= self.size || y >= self.size || m[2] + bias >= self.depth[y * self.size + x] {
+                1.0
+            } else {
+                0.0
+            }
+        };
+        // The four corner taps first: when they agree the block is taken as wholly lit or
+        // wholly shadowed (the penumbra is narrower than the block), which skips 12 taps on
+        // almost every sample.
+        let corners = lit_at(0, 0) + lit_at(3, 0) + lit_at(0, 3) + lit_at(3, 3);
+        if corners == 0.0 || corners == 4.0 {
+            return corners / 4.0;
+        }
         let mut lit = 0.0;
         for j in 0..4 {
             for i in 0..4 {
-                let sx = m[0] + (i as f32 - 1.5) * PCF_STEP;
-                let sy = m[1] + (j as f32 - 1.5) * PCF_STEP;
-                if !(sx >= 0.0 && sy >= 0.0) {
-                    lit += 1.0;
-                    continue;
-                }
-                let (x, y) = (sx as usize, sy as usize);
-                if x >= self.size || y >= self.size || m[2] + bias >= self.depth[y * self.size + x]
-                {
-                    lit += 1.0;
-                }
+                lit += lit_at(i, j);
             }
         }
         lit / 16.0
