@@ -22,6 +22,8 @@
 
 mod anim;
 mod camera;
+#[cfg(test)]
+mod demo_tests;
 mod draw;
 mod image;
 mod math;

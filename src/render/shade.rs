@@ -83,9 +83,9 @@ pub struct Lights {
 }
 
 const KEY: f32 = 0.95;
-const FILL: f32 = 0.28;
-const SKY: f32 = 0.20;
-const GROUND: f32 = 0.07;
+const FILL: f32 = 0.22;
+const SKY: f32 = 0.18;
+const GROUND: f32 = 0.05;
 const RIM: f32 = 0.10;
 const SPEC: f32 = 0.10;
 const SHININESS: f32 = 24.0;
@@ -103,8 +103,8 @@ impl Lights {
     ) -> Lights {
         let toward_camera = scale(forward, -1.0);
         let key = add(
-            add(scale(right, -0.55), scale(up, 0.85)),
-            scale(toward_camera, 0.5),
+            add(scale(right, -0.65), scale(up, 0.8)),
+            scale(toward_camera, 0.45),
         );
         let fill = add(
             add(scale(right, 0.8), scale(up, 0.1)),

@@ -331,69 +331,6 @@ fn shadows_darken_what_lies_under_an_occluder() {
     );
 }
 
-/// A waved 60x60 cloth grid draped over a sphere, with a few strands of hair; writes
-/// /tmp/weft_render_demo.png. Run with `cargo test --lib render::tests::demo -- --ignored`.
-#[test]
-#[ignore]
-fn demo_picture() {
-    let n = 60;
-    let mut positions = Vec::new();
-    for j in 0..n {
-        for i in 0..n {
-            let (u, v) = (
-                i as f32 / (n - 1) as f32 * 2.0 - 1.0,
-                j as f32 / (n - 1) as f32 * 2.0 - 1.0,
-            );
-            let (x, z) = (u * 1.6, v * 1.6);
-            let r = (x * x + z * z).sqrt();
-            // Rest on a unit sphere near the middle, hang down beyond it, with folds.
-            let y = if r < 0.9 {
-                1.0 + (1.0 - r * r).max(0.0).sqrt() * 0.1 + 0.05
-            } else {
-                let angle = z.atan2(x);
-                1.15 - (r - 0.9) * 1.4 + 0.12 * (angle * 7.0).sin() * (r - 0.9)
-            };
-            let fold = 0.06 * (x * 9.0).sin() * (z * 7.0).cos() * (r / 1.6);
-            positions.push([
-                x * (1.0 - 0.25 * (r - 0.9).max(0.0)),
-                y + fold,
-                z * (1.0 - 0.25 * (r - 0.9).max(0.0)),
-            ]);
-        }
-    }
-    let mut triangles = Vec::new();
-    for j in 0..n - 1 {
-        for i in 0..n - 1 {
-            let a = (j * n + i) as u32;
-            let (b, c, d) = (a + 1, a + n as u32, a + n as u32 + 1);
-            triangles.push([a, c, b]);
-            triangles.push([b, c, d]);
-        }
-    }
-    let cloth = MeshItem {
-        positions,
-        triangles,
-        color: [196, 64, 58],
-    };
-    let ball = mesh(
-        shapes::uv_sphere([0.0, 0.35, 0.0], 0.7, 48),
-        [210, 210, 200],
-    );
-    let scene = RenderScene {
-        meshes: vec![cloth, ball],
-        lines: vec![],
-        background: DEFAULT_BACKGROUND,
-    };
-    let opts = RenderOptions {
-        width: 640,
-        height: 480,
-        ..RenderOptions::default()
-    };
-    let img = render(&scene, &opts).unwrap();
-    img.write_png(std::path::Path::new("/tmp/weft_render_demo.png"))
-        .unwrap();
-}
-
 /// Prints the time of a 512x512 render of a 100k-triangle mesh (not a timed assertion:
 /// speed goals live in benches). `cargo test --lib render::tests::perf -- --ignored --nocapture`.
 #[test]
