@@ -12,6 +12,7 @@ pub mod metrics;
 pub mod params;
 pub mod particles;
 pub mod reference;
+pub mod render;
 pub mod scene;
 pub mod world;
 
