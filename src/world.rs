@@ -55,6 +55,7 @@ pub struct World {
     backup: [Vec<f32>; 6],
     pub(crate) time: f64,
     pub(crate) steps: u64,
+    pub(crate) last_h: f32,
 }
 
 impl World {
@@ -83,6 +84,7 @@ impl World {
             backup: Default::default(),
             time: 0.0,
             steps: 0,
+            last_h: 0.0,
         })
     }
 
@@ -195,6 +197,7 @@ impl World {
             self.damp_h = h;
         }
         let inv_h2 = 1.0 / (h * h);
+        self.last_h = h;
         for s in 0..n_sub {
             let t = self.time + (s as f64) * (h as f64);
             if let (Some(w), Some(state)) = (&self.effects.wind, &mut self.wind) {

@@ -15,13 +15,7 @@ pub fn write_gif(path: &Path, frames: &[Image], delay_centiseconds: u16) -> Resu
     let first = frames
         .first()
         .ok_or_else(|| WeftError::param("frames", 0, "need at least one frame"))?;
-    let too_big = |v: u32| {
-        WeftError::param(
-            "gif size",
-            v,
-            "GIF frames are at most 65535 pixels on a side",
-        )
-    };
+    let too_big = |v: u32| WeftError::param("gif size", v, "GIF frames are at most 65535 pixels on a side");
     let w = u16::try_from(first.width).map_err(|_| too_big(first.width))?;
     let h = u16::try_from(first.height).map_err(|_| too_big(first.height))?;
     for (k, f) in frames.iter().enumerate() {
@@ -30,17 +24,13 @@ pub fn write_gif(path: &Path, frames: &[Image], delay_centiseconds: u16) -> Resu
             return Err(WeftError::param(
                 format!("frames[{k}] size"),
                 format!("{}x{}", f.width, f.height),
-                format!(
-                    "every frame must be {}x{} like frames[0]",
-                    first.width, first.height
-                ),
+                format!("every frame must be {}x{} like frames[0]", first.width, first.height),
             ));
         }
     }
     write_atomically(path, |file| {
         let mut enc = gif::Encoder::new(file, w, h, &[]).map_err(|e| e.to_string())?;
-        enc.set_repeat(gif::Repeat::Infinite)
-            .map_err(|e| e.to_string())?;
+        enc.set_repeat(gif::Repeat::Infinite).map_err(|e| e.to_string())?;
         for f in frames {
             let mut frame = gif::Frame::from_rgb_speed(w, h, &f.rgb, QUANTIZE_SPEED);
             frame.delay = delay_centiseconds;
@@ -75,12 +65,7 @@ mod tests {
             assert_eq!(frame.buffer.len(), 16 * 12 * 4);
             // The background colour survives quantization closely.
             let p = &frame.buffer[4 * 20..4 * 20 + 3];
-            assert!(
-                p.iter()
-                    .zip([20u8, 30, 40])
-                    .all(|(a, b)| a.abs_diff(b) <= 8),
-                "{p:?}"
-            );
+            assert!(p.iter().zip([20u8, 30, 40]).all(|(a, b)| a.abs_diff(b) <= 8), "{p:?}");
             count += 1;
         }
         assert_eq!(count, 3);

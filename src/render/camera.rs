@@ -45,11 +45,7 @@ impl Camera {
         } else {
             ([-0.5; 3], [0.5; 3])
         };
-        let aspect = if aspect.is_finite() && aspect > 0.0 {
-            aspect
-        } else {
-            1.0
-        };
+        let aspect = if aspect.is_finite() && aspect > 0.0 { aspect } else { 1.0 };
         let target = scale([min[0] + max[0], min[1] + max[1], min[2] + max[2]], 0.5);
         let extent = length(sub(max, min)).max(1e-3);
         let up = [0.0, 1.0, 0.0];
@@ -75,11 +71,7 @@ impl Camera {
         }
         let dist = dist.max(extent * 0.6);
         Camera {
-            eye: [
-                target[0] + back[0] * dist,
-                target[1] + back[1] * dist,
-                target[2] + back[2] * dist,
-            ],
+            eye: [target[0] + back[0] * dist, target[1] + back[1] * dist, target[2] + back[2] * dist],
             target,
             up,
             fov_y_deg: FRAMING_FOV_DEG,
@@ -88,18 +80,8 @@ impl Camera {
 
     /// Checks the camera and builds its view for an image of `width` x `height` pixels.
     pub(crate) fn view(&self, width: u32, height: u32) -> Result<View> {
-        let bad = |name: &str, v: [f32; 3]| {
-            WeftError::param(
-                name,
-                format!("{v:?}"),
-                "every component must be a finite number",
-            )
-        };
-        for (name, v) in [
-            ("camera.eye", self.eye),
-            ("camera.target", self.target),
-            ("camera.up", self.up),
-        ] {
+        let bad = |name: &str, v: [f32; 3]| WeftError::param(name, format!("{v:?}"), "every component must be a finite number");
+        for (name, v) in [("camera.eye", self.eye), ("camera.target", self.target), ("camera.up", self.up)] {
             if !is_finite3(v) {
                 return Err(bad(name, v));
             }
@@ -113,13 +95,8 @@ impl Camera {
         }
         let to_target = sub(self.target, self.eye);
         let distance = length(to_target);
-        let forward = normalize(to_target).ok_or_else(|| {
-            WeftError::param(
-                "camera.target",
-                format!("{:?}", self.target),
-                "must differ from camera.eye",
-            )
-        })?;
+        let forward = normalize(to_target)
+            .ok_or_else(|| WeftError::param("camera.target", format!("{:?}", self.target), "must differ from camera.eye"))?;
         let right = [self.up, [0.0, 0.0, -1.0], [1.0, 0.0, 0.0]]
             .iter()
             .find_map(|&u| {
@@ -175,11 +152,7 @@ impl View {
     #[inline]
     pub fn project(&self, v: [f32; 3]) -> [f32; 3] {
         let iz = 1.0 / v[2];
-        [
-            self.cx + self.focal * v[0] * iz,
-            self.cy - self.focal * v[1] * iz,
-            iz,
-        ]
+        [self.cx + self.focal * v[0] * iz, self.cy - self.focal * v[1] * iz, iz]
     }
 }
 
@@ -192,9 +165,7 @@ mod tests {
         let (min, max) = ([-2.0, 0.0, -1.0], [3.0, 1.5, 0.5]);
         for aspect in [0.5f32, 1.0, 2.0] {
             let (w, h) = ((200.0 * aspect) as u32, 200u32);
-            let view = Camera::framing_for_aspect(min, max, aspect)
-                .view(w, h)
-                .unwrap();
+            let view = Camera::framing_for_aspect(min, max, aspect).view(w, h).unwrap();
             for k in 0..8 {
                 let c = [
                     if k & 1 == 0 { min[0] } else { max[0] },

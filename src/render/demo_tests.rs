@@ -21,10 +21,7 @@ fn draped_cloth(n: usize, side: f32, radius: f32) -> MeshItem {
             let theta = v.atan2(u);
             let (rho, y) = if r <= cap {
                 let phi = r / radius;
-                (
-                    (radius + lift) * phi.sin(),
-                    radius + (radius + lift) * phi.cos(),
-                )
+                ((radius + lift) * phi.sin(), radius + (radius + lift) * phi.cos())
             } else {
                 let rho_c = (radius + lift) * phi_max.sin();
                 let y_c = radius + (radius + lift) * phi_max.cos();
@@ -93,37 +90,21 @@ fn hair(center: [f32; 3], radius: f32, count: usize, points: usize) -> Vec<LineI
                 if tl < 0.2 {
                     horizontal
                 } else {
-                    [
-                        t[0] / tl + wave * nrm[2],
-                        t[1] / tl,
-                        t[2] / tl - wave * nrm[0],
-                    ]
+                    [t[0] / tl + wave * nrm[2], t[1] / tl, t[2] / tl - wave * nrm[0]]
                 }
             } else {
                 // Below the head: fall, flaring a little outward.
-                [
-                    horizontal[0] * 0.12 + wave * 0.3,
-                    -1.0,
-                    horizontal[2] * 0.12,
-                ]
+                [horizontal[0] * 0.12 + wave * 0.3, -1.0, horizontal[2] * 0.12]
             };
             let l = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-            p = [
-                p[0] + d[0] / l * step,
-                p[1] + d[1] / l * step,
-                p[2] + d[2] / l * step,
-            ];
+            p = [p[0] + d[0] / l * step, p[1] + d[1] / l * step, p[2] + d[2] / l * step];
             // Keep strands resting on the scalp while on the head.
             let rel = [p[0] - center[0], p[1] - center[1], p[2] - center[2]];
             let len = (rel[0] * rel[0] + rel[1] * rel[1] + rel[2] * rel[2]).sqrt();
             let shell = radius * (1.01 + 0.0004 * (k % 50) as f32);
             if rel[1] > -0.15 * radius || len < shell {
                 let f = shell / len.max(1e-6);
-                p = [
-                    center[0] + rel[0] * f,
-                    center[1] + rel[1] * f,
-                    center[2] + rel[2] * f,
-                ];
+                p = [center[0] + rel[0] * f, center[1] + rel[1] * f, center[2] + rel[2] * f];
             }
         }
         let shade = (k % 7) as u8 * 4;
@@ -163,8 +144,7 @@ fn demo_cloth_over_sphere() {
         ..RenderOptions::default()
     };
     let img = render(&scene, &opts).unwrap();
-    img.write_png(std::path::Path::new("/tmp/weft_render_demo.png"))
-        .unwrap();
+    img.write_png(std::path::Path::new("/tmp/weft_render_demo.png")).unwrap();
 }
 
 #[test]
@@ -188,8 +168,7 @@ fn demo_hair_on_head() {
         ..RenderOptions::default()
     };
     let img = render(&scene, &opts).unwrap();
-    img.write_png(std::path::Path::new("/tmp/weft_render_hair.png"))
-        .unwrap();
+    img.write_png(std::path::Path::new("/tmp/weft_render_hair.png")).unwrap();
 }
 
 #[test]
@@ -206,11 +185,7 @@ fn demo_sheet_and_gif() {
     let opts = RenderOptions {
         width: 240,
         height: 180,
-        camera: Some(Camera::framing_for_aspect(
-            [-1.6, 0.0, -1.6],
-            [1.6, 2.4, 1.6],
-            240.0 / 180.0,
-        )),
+        camera: Some(Camera::framing_for_aspect([-1.6, 0.0, -1.6], [1.6, 2.4, 1.6], 240.0 / 180.0)),
         ..RenderOptions::default()
     };
     // Frames of a sheet falling from flat (above the ball) onto it.
@@ -242,13 +217,6 @@ fn demo_sheet_and_gif() {
         })
         .collect();
     let sheet = contact_sheet(&frames, 4, true).unwrap();
-    sheet
-        .write_png(std::path::Path::new("/tmp/weft_render_sheet.png"))
-        .unwrap();
-    write_gif(
-        std::path::Path::new("/tmp/weft_render_anim.gif"),
-        &frames,
-        12,
-    )
-    .unwrap();
+    sheet.write_png(std::path::Path::new("/tmp/weft_render_sheet.png")).unwrap();
+    write_gif(std::path::Path::new("/tmp/weft_render_anim.gif"), &frames, 12).unwrap();
 }

@@ -41,11 +41,7 @@ pub(crate) fn draw_mesh(frame: &mut Frame, ctx: &Context<'_>, mesh: &PreparedMes
     let view = &ctx.view;
     let front = mesh.color;
     let back = back_tint(front);
-    let view_pos: Vec<[f32; 3]> = mesh
-        .positions
-        .iter()
-        .map(|&p| view.view_coords(p))
-        .collect();
+    let view_pos: Vec<[f32; 3]> = mesh.positions.iter().map(|&p| view.view_coords(p)).collect();
     let (w, h) = (frame.width, frame.height);
     for t in &mesh.triangles {
         let [i0, i1, i2] = t.map(|i| i as usize);

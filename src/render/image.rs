@@ -72,9 +72,7 @@ impl Image {
             enc.set_color(png::ColorType::Rgb);
             enc.set_depth(png::BitDepth::Eight);
             let mut writer = enc.write_header().map_err(|e| e.to_string())?;
-            writer
-                .write_image_data(&self.rgb)
-                .map_err(|e| e.to_string())?;
+            writer.write_image_data(&self.rgb).map_err(|e| e.to_string())?;
             writer.finish().map_err(|e| e.to_string())
         })
     }
@@ -89,11 +87,7 @@ impl Image {
         let differs = self
             .rgb
             .chunks_exact(3)
-            .filter(|p| {
-                p.iter()
-                    .zip(background)
-                    .any(|(&a, b)| a.abs_diff(b) > BACKGROUND_TOLERANCE)
-            })
+            .filter(|p| p.iter().zip(background).any(|(&a, b)| a.abs_diff(b) > BACKGROUND_TOLERANCE))
             .count();
         differs as f32 / n as f32
     }

@@ -196,19 +196,13 @@ pub fn render(scene: &RenderScene, opts: &RenderOptions) -> Result<Image> {
 
     let mut frame = raster::Frame::new(sw, sh);
     for y in 0..sh {
-        let bg = shade::color_to_linear(shade::background_row(
-            scene.background,
-            (y / ss) as u32,
-            opts.height,
-        ));
+        let bg = shade::color_to_linear(shade::background_row(scene.background, (y / ss) as u32, opts.height));
         frame.color[y * sw..(y + 1) * sw].fill(bg);
     }
     let shadow_map = match bounds {
         Some((lo, hi)) if opts.shadows => {
             let lines: Vec<&[[f32; 3]]> = scene.lines.iter().map(|l| &l.points[..]).collect();
-            Some(shadow::ShadowMap::build(
-                lights.key, lo, hi, &meshes, &lines,
-            ))
+            Some(shadow::ShadowMap::build(lights.key, lo, hi, &meshes, &lines))
         }
         _ => None,
     };

@@ -64,12 +64,7 @@ mod tests {
     #[test]
     fn normals_are_unit_and_bad_triangles_are_skipped_or_rejected() {
         let mesh = MeshItem {
-            positions: vec![
-                [0.0, 0.0, 0.0],
-                [1.0, 0.0, 0.0],
-                [0.0, 1.0, 0.0],
-                [f32::NAN, 0.0, 0.0],
-            ],
+            positions: vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [f32::NAN, 0.0, 0.0]],
             triangles: vec![[0, 1, 2], [0, 1, 3], [0, 0, 1]],
             color: [255; 3],
         };
@@ -81,9 +76,6 @@ mod tests {
             triangles: vec![[0, 1, 9]],
             ..mesh
         };
-        assert!(matches!(
-            prepare(&bad, 2),
-            Err(WeftError::InvalidMesh { .. })
-        ));
+        assert!(matches!(prepare(&bad, 2), Err(WeftError::InvalidMesh { .. })));
     }
 }

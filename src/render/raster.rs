@@ -59,10 +59,7 @@ fn lerp_vertex<const N: usize>(a: &ClipVertex<N>, b: &ClipVertex<N>, t: f32) -> 
 
 /// Clips a triangle to `z >= near` (Sutherland-Hodgman with one plane). Returns the corners
 /// of the kept polygon (0, 3 or 4) and their count.
-pub(crate) fn clip_triangle<const N: usize>(
-    tri: [ClipVertex<N>; 3],
-    near: f32,
-) -> ([ClipVertex<N>; 4], usize) {
+pub(crate) fn clip_triangle<const N: usize>(tri: [ClipVertex<N>; 3], near: f32) -> ([ClipVertex<N>; 4], usize) {
     let mut out = [tri[0]; 4];
     let mut count = 0;
     for i in 0..3 {
@@ -83,11 +80,7 @@ pub(crate) fn clip_triangle<const N: usize>(
 }
 
 /// Clips a segment to `z >= near`; `None` when it lies wholly behind the plane.
-pub(crate) fn clip_segment<const N: usize>(
-    a: ClipVertex<N>,
-    b: ClipVertex<N>,
-    near: f32,
-) -> Option<(ClipVertex<N>, ClipVertex<N>)> {
+pub(crate) fn clip_segment<const N: usize>(a: ClipVertex<N>, b: ClipVertex<N>, near: f32) -> Option<(ClipVertex<N>, ClipVertex<N>)> {
     match (a.view[2] >= near, b.view[2] >= near) {
         (true, true) => Some((a, b)),
         (false, false) => None,
@@ -113,13 +106,7 @@ fn span(lo: f32, hi: f32, n: usize) -> Option<(usize, usize)> {
 /// that passes the depth test, the depth is written and `on_pixel(index, weights)` is called
 /// with perspective-correct weights of the three corners in their given order.
 #[inline]
-pub(crate) fn raster_triangle(
-    width: usize,
-    height: usize,
-    depth: &mut [f32],
-    s: [[f32; 3]; 3],
-    mut on_pixel: impl FnMut(usize, [f32; 3]),
-) {
+pub(crate) fn raster_triangle(width: usize, height: usize, depth: &mut [f32], s: [[f32; 3]; 3], mut on_pixel: impl FnMut(usize, [f32; 3])) {
     let [a, b0, c0] = s;
     let area = (b0[0] - a[0]) * (c0[1] - a[1]) - (b0[1] - a[1]) * (c0[0] - a[0]);
     if area == 0.0 || !area.is_finite() {
@@ -135,9 +122,7 @@ pub(crate) fn raster_triangle(
         return;
     };
     // E(u, v, p) = (v.x - u.x)(p.y - u.y) - (v.y - u.y)(p.x - u.x); step in x is -(v.y - u.y).
-    let edge = |u: [f32; 3], v: [f32; 3], px: f32, py: f32| {
-        (v[0] - u[0]) * (py - u[1]) - (v[1] - u[1]) * (px - u[0])
-    };
+    let edge = |u: [f32; 3], v: [f32; 3], px: f32, py: f32| (v[0] - u[0]) * (py - u[1]) - (v[1] - u[1]) * (px - u[0]);
     let (dx0, dx1, dx2) = (-(c[1] - b[1]), -(a[1] - c[1]), -(b[1] - a[1]));
     for y in y0..=y1 {
         let py = y as f32 + 0.5;
@@ -247,11 +232,7 @@ mod tests {
         let mut depth = vec![0.0; 100];
         let flat = [[1.0, 1.0, 1.0], [5.0, 5.0, 1.0], [9.0, 9.0, 1.0]];
         raster_triangle(10, 10, &mut depth, flat, |_, _| panic!("flat"));
-        let off = [
-            [-50.0, -50.0, 1.0],
-            [-40.0, -50.0, 1.0],
-            [-50.0, -40.0, 1.0],
-        ];
+        let off = [[-50.0, -50.0, 1.0], [-40.0, -50.0, 1.0], [-50.0, -40.0, 1.0]];
         raster_triangle(10, 10, &mut depth, off, |_, _| panic!("offscreen"));
         let nan = [[f32::NAN, 1.0, 1.0], [5.0, 1.0, 1.0], [1.0, 5.0, 1.0]];
         raster_triangle(10, 10, &mut depth, nan, |_, _| panic!("nan"));
@@ -281,18 +262,10 @@ mod tests {
         let (w, h) = (40, 40);
         let mut depth = vec![0.0; w * h];
         let mut count = 0;
-        raster_segment(
-            w,
-            h,
-            &mut depth,
-            [5.0, 20.0, 1.0],
-            [35.0, 20.0, 1.0],
-            2.0,
-            |_, t| {
-                assert!((0.0..=1.0).contains(&t));
-                count += 1;
-            },
-        );
+        raster_segment(w, h, &mut depth, [5.0, 20.0, 1.0], [35.0, 20.0, 1.0], 2.0, |_, t| {
+            assert!((0.0..=1.0).contains(&t));
+            count += 1;
+        });
         // 30 px long, 4 px wide, plus round caps.
         assert!((110..=150).contains(&count), "{count}");
     }

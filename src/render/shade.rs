@@ -31,11 +31,7 @@ pub fn srgb_to_linear(c: u8) -> f32 {
 
 /// Decodes an sRGB colour to linear light.
 pub fn color_to_linear(c: [u8; 3]) -> [f32; 3] {
-    [
-        srgb_to_linear(c[0]),
-        srgb_to_linear(c[1]),
-        srgb_to_linear(c[2]),
-    ]
+    [srgb_to_linear(c[0]), srgb_to_linear(c[1]), srgb_to_linear(c[2])]
 }
 
 /// Encodes linear light back to sRGB bytes through a table.
@@ -95,21 +91,10 @@ const HAIR_SHININESS: f32 = 60.0;
 impl Lights {
     /// The rig for a camera with basis `right`, `up`, `forward`: key from the upper left and
     /// in front, fill from the right, ambient from above.
-    pub fn for_camera(
-        right: [f32; 3],
-        up: [f32; 3],
-        forward: [f32; 3],
-        world_up: [f32; 3],
-    ) -> Lights {
+    pub fn for_camera(right: [f32; 3], up: [f32; 3], forward: [f32; 3], world_up: [f32; 3]) -> Lights {
         let toward_camera = scale(forward, -1.0);
-        let key = add(
-            add(scale(right, -0.65), scale(up, 0.8)),
-            scale(toward_camera, 0.45),
-        );
-        let fill = add(
-            add(scale(right, 0.8), scale(up, 0.1)),
-            scale(toward_camera, 0.6),
-        );
+        let key = add(add(scale(right, -0.65), scale(up, 0.8)), scale(toward_camera, 0.45));
+        let fill = add(add(scale(right, 0.8), scale(up, 0.1)), scale(toward_camera, 0.6));
         Lights {
             key: normalize_or(key, up),
             fill: normalize_or(fill, toward_camera),
@@ -134,11 +119,7 @@ impl Lights {
         } else {
             0.0
         };
-        [
-            base[0] * diffuse + spec,
-            base[1] * diffuse + spec,
-            base[2] * diffuse + spec,
-        ]
+        [base[0] * diffuse + spec, base[1] * diffuse + spec, base[2] * diffuse + spec]
     }
 
     /// Colour of a hair segment with unit tangent `t`, unit direction to the eye `v`, linear
@@ -169,11 +150,7 @@ pub fn back_tint(base: [f32; 3]) -> [f32; 3] {
 /// `background`, lighter at the top, darker at the bottom, within
 /// [`super::BACKGROUND_TOLERANCE`] of it everywhere.
 pub fn background_row(background: [u8; 3], y: u32, height: u32) -> [u8; 3] {
-    let t = if height > 1 {
-        y as f32 / (height - 1) as f32
-    } else {
-        0.5
-    };
+    let t = if height > 1 { y as f32 / (height - 1) as f32 } else { 0.5 };
     let offset = (8.0 * (1.0 - 2.0 * t)).round() as i32;
     background.map(|c| (c as i32 + offset).clamp(0, 255) as u8)
 }
@@ -200,12 +177,7 @@ mod tests {
 
     #[test]
     fn key_side_is_brighter_and_back_tint_is_darker() {
-        let lights = Lights::for_camera(
-            [1.0, 0.0, 0.0],
-            [0.0, 1.0, 0.0],
-            [0.0, 0.0, -1.0],
-            [0.0, 1.0, 0.0],
-        );
+        let lights = Lights::for_camera([1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]);
         let v = [0.0, 0.0, 1.0];
         let base = [0.5; 3];
         let lit = lights.surface(lights.key, v, base, 1.0);

@@ -38,19 +38,9 @@ const PCF_STEP: f32 = 1.25;
 impl ShadowMap {
     /// Builds the map for light direction `toward_light` (unit) over the box `min..max`, from
     /// the meshes and the polylines (drawn as thin lines).
-    pub fn build(
-        toward_light: [f32; 3],
-        min: [f32; 3],
-        max: [f32; 3],
-        meshes: &[PreparedMesh<'_>],
-        lines: &[&[[f32; 3]]],
-    ) -> ShadowMap {
+    pub fn build(toward_light: [f32; 3], min: [f32; 3], max: [f32; 3], meshes: &[PreparedMesh<'_>], lines: &[&[[f32; 3]]]) -> ShadowMap {
         let dir = toward_light;
-        let helper = if dir[1].abs() < 0.9 {
-            [0.0, 1.0, 0.0]
-        } else {
-            [1.0, 0.0, 0.0]
-        };
+        let helper = if dir[1].abs() < 0.9 { [0.0, 1.0, 0.0] } else { [1.0, 0.0, 0.0] };
         let ax = normalize_or(cross(helper, dir), [1.0, 0.0, 0.0]);
         let ay = cross(dir, ax);
         let (mut lo, mut hi) = ([f32::MAX; 3], [f32::MIN; 3]);
@@ -111,11 +101,7 @@ impl ShadowMap {
             return 1.0; // facing away: the lighting term is zero anyway
         }
         let offset = self.texel * 1.5;
-        let q = [
-            p[0] + n[0] * offset,
-            p[1] + n[1] * offset,
-            p[2] + n[2] * offset,
-        ];
+        let q = [p[0] + n[0] * offset, p[1] + n[1] * offset, p[2] + n[2] * offset];
         let m = self.to_map(q);
         let tan = (1.0 - cos * cos).max(0.0).sqrt() / cos.max(0.05);
         let bias = self.texel * (1.0 + tan.min(8.0));
@@ -154,13 +140,7 @@ const GROUND_SHADOW_STRENGTH: f32 = 0.45;
 
 /// Darkens the background samples (depth still 0) of `frame` whose view ray meets the plane
 /// `up·p = height` (in front of the camera) at a point the key light does not reach.
-pub(crate) fn darken_ground(
-    frame: &mut Frame,
-    view: &View,
-    map: &ShadowMap,
-    up: [f32; 3],
-    height: f32,
-) {
+pub(crate) fn darken_ground(frame: &mut Frame, view: &View, map: &ShadowMap, up: [f32; 3], height: f32) {
     let eye_height = dot(view.eye, up);
     for y in 0..frame.height {
         for x in 0..frame.width {

@@ -13,11 +13,7 @@ pub type Shape = (Vec<[f32; 3]>, Vec<[u32; 3]>);
 
 /// Unit vectors `u, v` with `u × v = n`.
 fn basis(n: [f32; 3]) -> ([f32; 3], [f32; 3]) {
-    let helper = if n[1].abs() < 0.9 {
-        [0.0, 1.0, 0.0]
-    } else {
-        [1.0, 0.0, 0.0]
-    };
+    let helper = if n[1].abs() < 0.9 { [0.0, 1.0, 0.0] } else { [1.0, 0.0, 0.0] };
     let u = normalize_or(cross(n, helper), [1.0, 0.0, 0.0]);
     (u, cross(n, u))
 }
@@ -26,14 +22,7 @@ fn basis(n: [f32; 3]) -> ([f32; 3], [f32; 3]) {
 type Ring = ([f32; 3], f32, f32);
 
 /// Builds a closed surface of revolution from its rings (top to bottom) and two poles.
-fn lathe(
-    axis: [f32; 3],
-    radius: f32,
-    segments: usize,
-    rings: &[Ring],
-    top: [f32; 3],
-    bottom: [f32; 3],
-) -> Shape {
+fn lathe(axis: [f32; 3], radius: f32, segments: usize, rings: &[Ring], top: [f32; 3], bottom: [f32; 3]) -> Shape {
     let (u, v) = basis(axis);
     let mut positions = vec![top];
     for &(c, cos_t, sin_t) in rings {
@@ -152,10 +141,7 @@ mod tests {
             let [a, b, c] = tri.map(|i| p[i as usize]);
             let face = cross(sub(b, a), sub(c, a));
             let centroid = scale(add(add(a, b), c), 1.0 / 3.0);
-            assert!(
-                dot(face, sub(centroid, inside)) >= 0.0,
-                "inward face {tri:?}"
-            );
+            assert!(dot(face, sub(centroid, inside)) >= 0.0, "inward face {tri:?}");
             total = add(total, face);
         }
         assert!(total.iter().all(|c| c.abs() < 1e-3), "{total:?}");
@@ -183,8 +169,6 @@ mod tests {
             let n = normalize(cross(sub(b, a), sub(c, a))).unwrap();
             assert!((n[2] - 1.0).abs() < 1e-6);
         }
-        assert!(p
-            .iter()
-            .all(|q| (q[1] - 1.0).abs() <= 3.0 + 1e-6 && q[2] == 0.0));
+        assert!(p.iter().all(|q| (q[1] - 1.0).abs() <= 3.0 + 1e-6 && q[2] == 0.0));
     }
 }

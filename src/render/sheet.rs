@@ -44,10 +44,7 @@ pub fn contact_sheet(frames: &[Image], columns: u32, labels: bool) -> Result<Ima
             return Err(WeftError::param(
                 format!("frames[{k}] size"),
                 format!("{}x{}", f.width, f.height),
-                format!(
-                    "every frame must be {}x{} like frames[0]",
-                    first.width, first.height
-                ),
+                format!("every frame must be {}x{} like frames[0]", first.width, first.height),
             ));
         }
     }
@@ -72,8 +69,7 @@ pub fn contact_sheet(frames: &[Image], columns: u32, labels: bool) -> Result<Ima
         let row_bytes = 3 * fw as usize;
         for y in 0..fh as usize {
             let dst = 3 * ((y0 + y) * width as usize + x0);
-            sheet.rgb[dst..dst + row_bytes]
-                .copy_from_slice(&f.rgb[y * row_bytes..(y + 1) * row_bytes]);
+            sheet.rgb[dst..dst + row_bytes].copy_from_slice(&f.rgb[y * row_bytes..(y + 1) * row_bytes]);
         }
         if labels {
             let cell = Cell {
@@ -148,18 +144,12 @@ mod tests {
         assert_eq!(s.height, 3 * 20 + 4 * SHEET_GAP);
         assert_eq!(s.rgb.len(), 3 * (s.width * s.height) as usize);
         // Frame 4 sits in column 1, row 1.
-        let (x, y) = (
-            SHEET_GAP + 30 + SHEET_GAP + 5,
-            SHEET_GAP + 20 + SHEET_GAP + 5,
-        );
+        let (x, y) = (SHEET_GAP + 30 + SHEET_GAP + 5, SHEET_GAP + 20 + SHEET_GAP + 5);
         assert_eq!(s.pixel(x, y), Some([120, 0, 0]));
         assert_eq!(s.pixel(1, 1), Some(GUTTER));
         // More columns than frames: one row only as wide as needed.
         let s = contact_sheet(&frames[..2], 5, true).unwrap();
-        assert_eq!(
-            (s.width, s.height),
-            (2 * 30 + 3 * SHEET_GAP, 20 + 2 * SHEET_GAP)
-        );
+        assert_eq!((s.width, s.height), (2 * 30 + 3 * SHEET_GAP, 20 + 2 * SHEET_GAP));
     }
 
     #[test]

@@ -37,9 +37,7 @@ fn luminance(p: [u8; 3]) -> f32 {
 }
 
 fn is_object(p: [u8; 3]) -> bool {
-    p.iter()
-        .zip(BG)
-        .any(|(a, b)| a.abs_diff(b) > BACKGROUND_TOLERANCE)
+    p.iter().zip(BG).any(|(a, b)| a.abs_diff(b) > BACKGROUND_TOLERANCE)
 }
 
 #[test]
@@ -115,19 +113,10 @@ fn quad_seen_from_behind_is_drawn_in_its_back_tint() {
 
 #[test]
 fn near_red_quad_hides_far_blue_quad_in_either_order() {
-    let red = mesh(
-        shapes::plane_quad([0.0, 0.0, 0.5], [0.0, 0.0, 1.0], 0.5),
-        [230, 20, 20],
-    );
-    let blue = mesh(
-        shapes::plane_quad([0.0, 0.0, -0.5], [0.0, 0.0, 1.0], 1.0),
-        [20, 20, 230],
-    );
+    let red = mesh(shapes::plane_quad([0.0, 0.0, 0.5], [0.0, 0.0, 1.0], 0.5), [230, 20, 20]);
+    let blue = mesh(shapes::plane_quad([0.0, 0.0, -0.5], [0.0, 0.0, 1.0], 1.0), [20, 20, 230]);
     let opts = plain(64, 64, Some(front_camera()));
-    for meshes in [
-        vec![red.clone(), blue.clone()],
-        vec![blue.clone(), red.clone()],
-    ] {
+    for meshes in [vec![red.clone(), blue.clone()], vec![blue.clone(), red.clone()]] {
         let scene = RenderScene {
             meshes,
             lines: vec![],
@@ -135,10 +124,7 @@ fn near_red_quad_hides_far_blue_quad_in_either_order() {
         };
         let img = render(&scene, &opts).unwrap();
         let centre = img.pixel(32, 32).unwrap();
-        assert!(
-            centre[0] > 2 * centre[2] as u8 / 2 && centre[0] > centre[2],
-            "{centre:?}"
-        );
+        assert!(centre[0] > 2 * centre[2] as u8 / 2 && centre[0] > centre[2], "{centre:?}");
         // Outside the red quad but inside the blue one, blue shows.
         let side = img.pixel(32, 10).unwrap();
         assert!(side[2] > side[0], "{side:?}");
@@ -149,9 +135,7 @@ fn near_red_quad_hides_far_blue_quad_in_either_order() {
 fn hair_lines_are_drawn_and_depth_tested() {
     let strands: Vec<LineItem> = (0..5)
         .map(|k| LineItem {
-            points: (0..10)
-                .map(|j| [k as f32 * 0.2 - 0.4, 0.8 - j as f32 * 0.16, 0.0])
-                .collect(),
+            points: (0..10).map(|j| [k as f32 * 0.2 - 0.4, 0.8 - j as f32 * 0.16, 0.0]).collect(),
             color: [90, 50, 20],
             width_px: 2.0,
         })
@@ -165,10 +149,9 @@ fn hair_lines_are_drawn_and_depth_tested() {
     let shown = render(&scene, &opts).unwrap().non_background_fraction(BG);
     assert!(shown > 0.03, "{shown}");
     // A quad in front of the strands hides them.
-    scene.meshes.push(mesh(
-        shapes::plane_quad([0.0, 0.0, 0.5], [0.0, 0.0, 1.0], 0.4),
-        [250, 250, 250],
-    ));
+    scene
+        .meshes
+        .push(mesh(shapes::plane_quad([0.0, 0.0, 0.5], [0.0, 0.0, 1.0], 0.4), [250, 250, 250]));
     let img = render(&scene, &opts).unwrap();
     let centre = img.pixel(32, 32).unwrap();
     assert!(luminance(centre) > 150.0, "{centre:?}");
@@ -220,14 +203,8 @@ fn bad_options_and_items_are_errors() {
     for bad in [
         RenderOptions { width: 0, ..ok },
         RenderOptions { height: 0, ..ok },
-        RenderOptions {
-            supersample: 0,
-            ..ok
-        },
-        RenderOptions {
-            supersample: 9,
-            ..ok
-        },
+        RenderOptions { supersample: 0, ..ok },
+        RenderOptions { supersample: 9, ..ok },
         RenderOptions {
             width: 100_000,
             height: 100_000,
@@ -238,14 +215,7 @@ fn bad_options_and_items_are_errors() {
     }
     let mut cam = front_camera();
     cam.eye = [f32::NAN; 3];
-    assert!(render(
-        &scene,
-        &RenderOptions {
-            camera: Some(cam),
-            ..ok
-        }
-    )
-    .is_err());
+    assert!(render(&scene, &RenderOptions { camera: Some(cam), ..ok }).is_err());
     let mut bad_index = scene.clone();
     bad_index.meshes[0].triangles.push([0, 1, 99]);
     assert!(render(&bad_index, &ok).is_err());
@@ -261,10 +231,7 @@ fn bad_options_and_items_are_errors() {
 #[test]
 fn camera_inside_the_scene_clips_instead_of_failing() {
     let scene = RenderScene {
-        meshes: vec![mesh(
-            shapes::plane_quad([0.0; 3], [0.0, 1.0, 0.0], 50.0),
-            [120; 3],
-        )],
+        meshes: vec![mesh(shapes::plane_quad([0.0; 3], [0.0, 1.0, 0.0], 50.0), [120; 3])],
         lines: vec![],
         background: BG,
     };
@@ -308,14 +275,7 @@ fn shadows_darken_what_lies_under_an_occluder() {
         ..opts
     };
     let with = render(&scene, &opts).unwrap();
-    let without = render(
-        &scene,
-        &RenderOptions {
-            shadows: false,
-            ..opts
-        },
-    )
-    .unwrap();
+    let without = render(&scene, &RenderOptions { shadows: false, ..opts }).unwrap();
     dump(&with, "dbg_with", 5);
     dump(&without, "dbg_without", 5);
     // Some pixels get clearly darker (the floor under the ball), none get brighter.
@@ -325,10 +285,7 @@ fn shadows_darken_what_lies_under_an_occluder() {
         darker += usize::from(la < lb - 25.0);
         brighter += usize::from(la > lb + 1.0);
     }
-    assert!(
-        darker > 20 && brighter == 0,
-        "darker {darker} brighter {brighter}"
-    );
+    assert!(darker > 20 && brighter == 0, "darker {darker} brighter {brighter}");
 }
 
 /// Prints the time of a 512x512 render of a 100k-triangle mesh (not a timed assertion:
@@ -378,6 +335,5 @@ fn dump(img: &Image, name: &str, k: u32) {
             big.rgb[i..i + 3].copy_from_slice(&p);
         }
     }
-    big.write_png(&std::env::temp_dir().join(format!("{name}.png")))
-        .unwrap();
+    big.write_png(&std::env::temp_dir().join(format!("{name}.png"))).unwrap();
 }

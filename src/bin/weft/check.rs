@@ -1,0 +1,90 @@
+//! `weft check SCENE`.
+
+use std::path::Path;
+use std::process::ExitCode;
+
+use weft::scene::Scene;
+
+pub fn check(path: &Path) -> weft::Result<ExitCode> {
+    let (scene, _) = Scene::load(path)?;
+    let world = scene.world()?;
+    println!("scene {}: valid", path.display());
+    print!("{}", describe(&scene, &world));
+    Ok(ExitCode::SUCCESS)
+}
+
+/// A human-readable account of what a scene simulates.
+pub fn describe(scene: &Scene, world: &weft::World) -> String {
+    let p = world.params();
+    let mut s = String::new();
+    let n = world.particle_count();
+    let pad = world.particles().padded_len();
+    s += &format!("  cloths        {}\n", world.cloths().len());
+    for (k, c) in world.cloths().iter().enumerate() {
+        s += &format!("    cloth {k}: {} x {} particles, thickness {} m\n", c.rows, c.cols, c.thickness);
+    }
+    s += &format!("  particles     {n} (padded to {pad})\n");
+    s += &format!(
+        "  constraints   {} distance in {} colours, {} tethers\n",
+        world.constraint_count(),
+        world.colour_count(),
+        world.tether_count()
+    );
+    s += &format!("  triangles     {}\n", world.triangles().len());
+    let all = ["gravity", "wind", "drag"];
+    let on = world.effects().named();
+    let off: Vec<_> = all.iter().filter(|e| !on.contains(e)).collect();
+    s += &format!(
+        "  effects on    {}\n",
+        if on.is_empty() { "none".to_string() } else { on.join(", ") }
+    );
+    s += &format!(
+        "  effects off   {}\n",
+        if off.is_empty() {
+            "none".to_string()
+        } else {
+            off.iter().map(|e| e.to_string()).collect::<Vec<_>>().join(", ")
+        }
+    );
+    s += &format!(
+        "  solver        dt {} s, {} substeps x {} iterations, {:?} backend, threads {}\n",
+        p.dt,
+        p.substeps,
+        p.iterations,
+        p.backend,
+        if p.threads == 0 { "all".to_string() } else { p.threads.to_string() }
+    );
+    s += &format!(
+        "  run           {} steps ({:.2} s simulated), {} frames\n",
+        scene.output.steps.0,
+        scene.output.steps.0 as f64 * p.dt as f64,
+        scene.output.frames.0
+    );
+    s += &format!("  memory        ~{} (estimated)\n", human_bytes(estimate_memory(world)));
+    s
+}
+
+/// Bytes the world holds: particle arrays, constraints, tethers, triangles, guard copy, wind.
+pub fn estimate_memory(world: &weft::World) -> u64 {
+    let pad = world.particles().padded_len() as u64;
+    let particles = pad * 10 * 4;
+    let guard = if world.params().guard { pad * 6 * 4 } else { 0 };
+    let constraints = world.constraint_count() as u64 * (5 * 4 + 16);
+    let tethers = world.tether_count() as u64 * 12 * 2;
+    let tris = world.triangles().len() as u64 * 12;
+    let wind = if world.effects().wind.is_some() {
+        tris + pad * 3 * 4 + world.triangles().len() as u64 * 3 * 4
+    } else {
+        0
+    };
+    particles + guard + constraints + tethers + tris + wind
+}
+
+fn human_bytes(b: u64) -> String {
+    match b {
+        b if b >= 1 << 30 => format!("{:.1} GiB", b as f64 / (1u64 << 30) as f64),
+        b if b >= 1 << 20 => format!("{:.1} MiB", b as f64 / (1u64 << 20) as f64),
+        b if b >= 1 << 10 => format!("{:.1} KiB", b as f64 / 1024.0),
+        b => format!("{b} B"),
+    }
+}
