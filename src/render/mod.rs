@@ -132,8 +132,9 @@ impl Default for RenderOptions {
 
 /// Largest supersampling factor.
 pub const MAX_SUPERSAMPLE: u32 = 8;
-/// Largest number of samples (output pixels times `supersample²`) one render may use.
-pub const MAX_SAMPLES: u64 = 1 << 27;
+/// Largest number of samples (output pixels times `supersample²`) one render may use; each
+/// sample takes 16 bytes (colour and depth), so this bounds the working memory at 512 MiB.
+pub const MAX_SAMPLES: u64 = 1 << 25;
 
 /// The background colour the renderer uses by default: a soft blue-grey.
 pub const DEFAULT_BACKGROUND: [u8; 3] = [206, 212, 222];

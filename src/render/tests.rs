@@ -381,3 +381,24 @@ fn dump(img: &Image, name: &str, k: u32) {
     big.write_png(&std::env::temp_dir().join(format!("{name}.png")))
         .unwrap();
 }
+
+#[test]
+fn huge_finite_coordinates_give_a_picture_or_an_error_never_a_panic() {
+    for big in [1e18f32, 1e30, f32::MAX] {
+        let scene = RenderScene {
+            meshes: vec![MeshItem {
+                positions: vec![[0.0; 3], [big, 0.0, 0.0], [0.0, big, -big]],
+                triangles: vec![[0, 1, 2]],
+                color: [100; 3],
+            }],
+            lines: vec![LineItem {
+                points: vec![[0.0; 3], [-big, big, big]],
+                color: [0; 3],
+                width_px: 3.0,
+            }],
+            background: BG,
+        };
+        let _ = render(&scene, &plain(32, 24, None));
+        let _ = render(&scene, &plain(32, 24, Some(front_camera())));
+    }
+}
