@@ -55,6 +55,17 @@ pub struct MeshItem {
     pub color: [u8; 3],
 }
 
+impl MeshItem {
+    /// A mesh from a [`shapes`] builder's output.
+    pub fn from_shape((positions, triangles): shapes::Shape, color: [u8; 3]) -> MeshItem {
+        MeshItem {
+            positions,
+            triangles,
+            color,
+        }
+    }
+}
+
 /// A polyline to draw as a strand of hair.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct LineItem {

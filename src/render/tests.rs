@@ -4,12 +4,8 @@ use super::*;
 
 const BG: [u8; 3] = DEFAULT_BACKGROUND;
 
-fn mesh((positions, triangles): shapes::Shape, color: [u8; 3]) -> MeshItem {
-    MeshItem {
-        positions,
-        triangles,
-        color,
-    }
+fn mesh(shape: shapes::Shape, color: [u8; 3]) -> MeshItem {
+    MeshItem::from_shape(shape, color)
 }
 
 fn plain(width: u32, height: u32, camera: Option<Camera>) -> RenderOptions {
@@ -401,4 +397,38 @@ fn huge_finite_coordinates_give_a_picture_or_an_error_never_a_panic() {
         let _ = render(&scene, &plain(32, 24, None));
         let _ = render(&scene, &plain(32, 24, Some(front_camera())));
     }
+}
+
+#[test]
+fn supersampling_blends_edge_pixels() {
+    let (positions, triangles) = shapes::plane_quad([0.0; 3], [0.0, 0.0, 1.0], 0.6);
+    let tilted: Vec<[f32; 3]> = positions
+        .iter()
+        .map(|p| {
+            let (s, c) = 0.35f32.sin_cos();
+            [c * p[0] - s * p[1], s * p[0] + c * p[1], p[2]]
+        })
+        .collect();
+    let scene = RenderScene {
+        meshes: vec![MeshItem {
+            positions: tilted,
+            triangles,
+            color: [0; 3],
+        }],
+        lines: vec![],
+        background: [255; 3],
+    };
+    let mid = |ss: u32| {
+        let opts = RenderOptions {
+            supersample: ss,
+            ..plain(48, 48, Some(front_camera()))
+        };
+        let img = render(&scene, &opts).unwrap();
+        img.rgb
+            .chunks(3)
+            .filter(|p| (80.0..200.0).contains(&luminance([p[0], p[1], p[2]])))
+            .count()
+    };
+    assert_eq!(mid(1), 0);
+    assert!(mid(4) > 20, "{}", mid(4));
 }
