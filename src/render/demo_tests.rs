@@ -220,3 +220,53 @@ fn demo_sheet_and_gif() {
     sheet.write_png(std::path::Path::new("/tmp/weft_render_sheet.png")).unwrap();
     write_gif(std::path::Path::new("/tmp/weft_render_anim.gif"), &frames, 12).unwrap();
 }
+
+/// A sinusoidally waved 60x60 banner, seen so that both of its sides show.
+#[test]
+#[ignore]
+fn demo_waved_banner() {
+    let n = 60;
+    let mut positions = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            let (u, v) = (i as f32 / (n - 1) as f32, j as f32 / (n - 1) as f32);
+            let x = u * 2.0 - 1.0;
+            let z = 0.35 * (u * 2.5 * PI).sin() * (0.4 + 0.6 * u);
+            positions.push([x, 0.2 + v * 1.2, z]);
+        }
+    }
+    let mut triangles = Vec::new();
+    for j in 0..n - 1 {
+        for i in 0..n - 1 {
+            let a = (j * n + i) as u32;
+            let (b, c, d) = (a + 1, a + n as u32, a + n as u32 + 1);
+            triangles.push([a, b, c]);
+            triangles.push([b, d, c]);
+        }
+    }
+    let banner = MeshItem {
+        positions,
+        triangles,
+        color: [52, 110, 190],
+    };
+    let pole = MeshItem::from_shape(shapes::capsule([-1.02, 0.0, 0.0], [-1.02, 1.5, 0.0], 0.025, 16), [120, 110, 100]);
+    let scene = RenderScene {
+        meshes: vec![banner, pole],
+        lines: vec![],
+        background: DEFAULT_BACKGROUND,
+    };
+    let camera = Camera {
+        eye: [2.6, 1.5, 1.3],
+        target: [0.0, 0.75, 0.0],
+        up: [0.0, 1.0, 0.0],
+        fov_y_deg: 40.0,
+    };
+    let opts = RenderOptions {
+        width: 560,
+        height: 420,
+        camera: Some(camera),
+        ..RenderOptions::default()
+    };
+    let img = render(&scene, &opts).unwrap();
+    img.write_png(std::path::Path::new("/tmp/weft_render_banner.png")).unwrap();
+}

@@ -55,6 +55,17 @@ pub struct MeshItem {
     pub color: [u8; 3],
 }
 
+impl MeshItem {
+    /// A mesh from a [`shapes`] builder's output.
+    pub fn from_shape((positions, triangles): shapes::Shape, color: [u8; 3]) -> MeshItem {
+        MeshItem {
+            positions,
+            triangles,
+            color,
+        }
+    }
+}
+
 /// A polyline to draw as a strand of hair.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct LineItem {
@@ -132,8 +143,9 @@ impl Default for RenderOptions {
 
 /// Largest supersampling factor.
 pub const MAX_SUPERSAMPLE: u32 = 8;
-/// Largest number of samples (output pixels times `supersample²`) one render may use.
-pub const MAX_SAMPLES: u64 = 1 << 27;
+/// Largest number of samples (output pixels times `supersample²`) one render may use; each
+/// sample takes 16 bytes (colour and depth), so this bounds the working memory at 512 MiB.
+pub const MAX_SAMPLES: u64 = 1 << 25;
 
 /// The background colour the renderer uses by default: a soft blue-grey.
 pub const DEFAULT_BACKGROUND: [u8; 3] = [206, 212, 222];

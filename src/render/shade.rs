@@ -84,9 +84,9 @@ const SKY: f32 = 0.18;
 const GROUND: f32 = 0.05;
 const RIM: f32 = 0.10;
 const SPEC: f32 = 0.10;
-const SHININESS: f32 = 24.0;
+const SHININESS: i32 = 24;
 const HAIR_SPEC: f32 = 0.45;
-const HAIR_SHININESS: f32 = 60.0;
+const HAIR_SHININESS: i32 = 64;
 
 impl Lights {
     /// The rig for a camera with basis `right`, `up`, `forward`: key from the upper left and
@@ -115,7 +115,7 @@ impl Lights {
         let diffuse = ambient + KEY * shadow * nk + FILL * nf + rim;
         let h = normalize_or(add(self.key, v), n);
         let spec = if nk > 0.0 {
-            SPEC * KEY * shadow * dot(n, h).max(0.0).powf(SHININESS)
+            SPEC * KEY * shadow * dot(n, h).max(0.0).powi(SHININESS)
         } else {
             0.0
         };
@@ -129,7 +129,7 @@ impl Lights {
         let sin = |a: [f32; 3]| (1.0 - dot(t, a) * dot(t, a)).max(0.0).sqrt();
         let diffuse = (SKY + GROUND) * 0.5 + KEY * 0.8 * sin(self.key) + FILL * sin(self.fill);
         let h = normalize_or(add(self.key, v), v);
-        let spec = HAIR_SPEC * sin(h).powf(HAIR_SHININESS);
+        let spec = HAIR_SPEC * sin(h).powi(HAIR_SHININESS);
         let base = scale(base, shade);
         [
             base[0] * diffuse + spec * (0.6 + 0.4 * base[0]),

@@ -31,9 +31,9 @@ pub(crate) struct ShadowMap {
 }
 
 /// Texels per side of the map.
-const SIZE: usize = 1024;
+const SIZE: usize = 512;
 /// PCF sample spacing, in texels.
-const PCF_STEP: f32 = 1.25;
+const PCF_STEP: f32 = 1.0;
 
 impl ShadowMap {
     /// Builds the map for light direction `toward_light` (unit) over the box `min..max`, from

@@ -4,12 +4,8 @@ use super::*;
 
 const BG: [u8; 3] = DEFAULT_BACKGROUND;
 
-fn mesh((positions, triangles): shapes::Shape, color: [u8; 3]) -> MeshItem {
-    MeshItem {
-        positions,
-        triangles,
-        color,
-    }
+fn mesh(shape: shapes::Shape, color: [u8; 3]) -> MeshItem {
+    MeshItem::from_shape(shape, color)
 }
 
 fn plain(width: u32, height: u32, camera: Option<Camera>) -> RenderOptions {
@@ -124,10 +120,10 @@ fn near_red_quad_hides_far_blue_quad_in_either_order() {
         };
         let img = render(&scene, &opts).unwrap();
         let centre = img.pixel(32, 32).unwrap();
-        assert!(centre[0] > 2 * centre[2] as u8 / 2 && centre[0] > centre[2], "{centre:?}");
+        assert!(centre[0] as u32 > 2 * centre[2] as u32, "{centre:?}");
         // Outside the red quad but inside the blue one, blue shows.
         let side = img.pixel(32, 10).unwrap();
-        assert!(side[2] > side[0], "{side:?}");
+        assert!(side[2] as u32 > 2 * side[0] as u32, "{side:?}");
     }
 }
 
@@ -336,4 +332,59 @@ fn dump(img: &Image, name: &str, k: u32) {
         }
     }
     big.write_png(&std::env::temp_dir().join(format!("{name}.png"))).unwrap();
+}
+
+#[test]
+fn huge_finite_coordinates_give_a_picture_or_an_error_never_a_panic() {
+    for big in [1e18f32, 1e30, f32::MAX] {
+        let scene = RenderScene {
+            meshes: vec![MeshItem {
+                positions: vec![[0.0; 3], [big, 0.0, 0.0], [0.0, big, -big]],
+                triangles: vec![[0, 1, 2]],
+                color: [100; 3],
+            }],
+            lines: vec![LineItem {
+                points: vec![[0.0; 3], [-big, big, big]],
+                color: [0; 3],
+                width_px: 3.0,
+            }],
+            background: BG,
+        };
+        let _ = render(&scene, &plain(32, 24, None));
+        let _ = render(&scene, &plain(32, 24, Some(front_camera())));
+    }
+}
+
+#[test]
+fn supersampling_blends_edge_pixels() {
+    let (positions, triangles) = shapes::plane_quad([0.0; 3], [0.0, 0.0, 1.0], 0.6);
+    let tilted: Vec<[f32; 3]> = positions
+        .iter()
+        .map(|p| {
+            let (s, c) = 0.35f32.sin_cos();
+            [c * p[0] - s * p[1], s * p[0] + c * p[1], p[2]]
+        })
+        .collect();
+    let scene = RenderScene {
+        meshes: vec![MeshItem {
+            positions: tilted,
+            triangles,
+            color: [0; 3],
+        }],
+        lines: vec![],
+        background: [255; 3],
+    };
+    let mid = |ss: u32| {
+        let opts = RenderOptions {
+            supersample: ss,
+            ..plain(48, 48, Some(front_camera()))
+        };
+        let img = render(&scene, &opts).unwrap();
+        img.rgb
+            .chunks(3)
+            .filter(|p| (80.0..200.0).contains(&luminance([p[0], p[1], p[2]])))
+            .count()
+    };
+    assert_eq!(mid(1), 0);
+    assert!(mid(4) > 20, "{}", mid(4));
 }
