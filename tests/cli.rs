@@ -1,0 +1,176 @@
+//! The `weft` command end to end: run writes a summary and pictures that are not blank, check
+//! reports bad scenes with their location, and resume equals an uninterrupted run.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+const SMALL: &str = r#"
+[solver]
+dt = 0.016666667
+substeps = 4
+
+[effects]
+gravity = [0.0, -9.81, 0.0]
+
+[[cloth]]
+rows = 12
+cols = 12
+spacing = 0.05
+origin = [-0.3, 1.0, 0.0]
+v = [0.0, 0.0, 1.0]
+fabric = "cotton"
+pins = ["first-row-corners"]
+
+[output]
+steps = 30
+frames = 3
+width = 160
+height = 120
+"#;
+
+fn weft() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_weft"))
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("weft-cli-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn write_scene(dir: &Path, text: &str) -> PathBuf {
+    let p = dir.join("scene.toml");
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+fn non_background_fraction(png_path: &Path) -> f32 {
+    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(png_path).unwrap()));
+    let mut reader = decoder.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    let img = weft::render::Image {
+        width: info.width,
+        height: info.height,
+        rgb: buf[..info.buffer_size()].to_vec(),
+    };
+    img.non_background_fraction(weft::render::DEFAULT_BACKGROUND)
+}
+
+#[test]
+fn run_writes_summary_and_pictures() {
+    let dir = tmp("run");
+    let scene = write_scene(&dir, SMALL);
+    let out = dir.join("out");
+    let st = weft()
+        .args(["run", "--quiet", "--obj", "--gif"])
+        .arg(&scene)
+        .arg("--out")
+        .arg(&out)
+        .status()
+        .unwrap();
+    assert!(st.success());
+    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["particles"], 144);
+    assert_eq!(summary["steps"], 30);
+    assert!(summary["ms_per_step_median"].as_f64().unwrap() > 0.0);
+    assert!(summary["max_strain"].as_f64().unwrap() < 0.5);
+    assert_eq!(summary["interrupted"], false);
+    for f in ["final.png", "frames.png", "run.gif", "frame_000000.obj", "frame_000030.obj"] {
+        assert!(out.join(f).exists(), "{f} missing");
+    }
+    let frac = non_background_fraction(&out.join("final.png"));
+    assert!(frac > 0.02 && frac < 0.9, "final.png foreground fraction {frac}");
+    // No temporary files left behind.
+    for e in std::fs::read_dir(&out).unwrap() {
+        let name = e.unwrap().file_name().to_string_lossy().to_string();
+        assert!(!name.ends_with(".tmp"), "left {name}");
+    }
+}
+
+#[test]
+fn check_reports_counts_and_bad_scenes() {
+    let dir = tmp("check");
+    let scene = write_scene(&dir, SMALL);
+    let o = weft().arg("check").arg(&scene).output().unwrap();
+    assert!(o.status.success());
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("particles     144"), "{text}");
+    assert!(text.contains("effects on    gravity"), "{text}");
+    assert!(text.contains("effects off   wind, drag"), "{text}");
+
+    let bad = write_scene(&dir, &SMALL.replace("substeps = 4", "substeps = -4"));
+    let o = weft().arg("check").arg(&bad).output().unwrap();
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("line 4, column 12") && err.contains("-4"), "{err}");
+
+    let o = weft().arg("check").arg(dir.join("missing.toml")).output().unwrap();
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("missing.toml"));
+}
+
+#[test]
+fn resumed_run_equals_uninterrupted_run() {
+    let dir = tmp("resume");
+    let scene = write_scene(&dir, SMALL);
+    let full = dir.join("full");
+    let part = dir.join("part");
+    let ok = |c: &mut Command| assert!(c.status().unwrap().success());
+    ok(weft()
+        .args(["run", "--quiet", "--no-pictures", "--checkpoint-every", "30"])
+        .arg(&scene)
+        .arg("--out")
+        .arg(&full));
+    ok(weft()
+        .args(["run", "--quiet", "--no-pictures", "--steps", "13", "--checkpoint-every", "13"])
+        .arg(&scene)
+        .arg("--out")
+        .arg(&part));
+    ok(weft()
+        .args(["run", "--quiet", "--no-pictures", "--checkpoint-every", "30", "--resume"])
+        .arg(part.join("checkpoint.bin"))
+        .arg("--out")
+        .arg(&part));
+    let a = std::fs::read(full.join("checkpoint.bin")).unwrap();
+    let b = std::fs::read(part.join("checkpoint.bin")).unwrap();
+    assert_eq!(a, b, "resumed checkpoint differs from the uninterrupted one");
+    let s: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(part.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(s["resumed_from_step"], 13);
+    assert_eq!(s["steps"], 30);
+}
+
+#[cfg(unix)]
+#[test]
+fn ctrl_c_leaves_a_checkpoint_and_a_valid_summary() {
+    let dir = tmp("sigint");
+    let long = SMALL
+        .replace("steps = 30", "steps = 10000000")
+        .replace("rows = 12\ncols = 12", "rows = 60\ncols = 60");
+    let scene = write_scene(&dir, &long);
+    let out = dir.join("out");
+    let mut child = weft()
+        .args(["run", "--quiet", "--no-pictures", "--checkpoint-every", "50"])
+        .arg(&scene)
+        .arg("--out")
+        .arg(&out)
+        .spawn()
+        .unwrap();
+    // Wait until the run has written its first checkpoint, then interrupt it.
+    let ck = out.join("checkpoint.bin");
+    let t0 = std::time::Instant::now();
+    while !ck.exists() && t0.elapsed().as_secs() < 60 {
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    assert!(ck.exists(), "no checkpoint after 60 s");
+    let st = Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap();
+    assert!(st.success());
+    let status = child.wait().unwrap();
+    assert_eq!(status.code(), Some(130), "interrupted runs exit with 130");
+    let s: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(s["interrupted"], true);
+    let c = weft::checkpoint::Checkpoint::load(&ck).unwrap();
+    assert_eq!(c.steps, s["steps"].as_u64().unwrap());
+    assert!(c.steps > 0);
+}
