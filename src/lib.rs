@@ -1,4 +1,4 @@
-//! weft: cloth and hair as particles, fast.
+#![doc = include_str!("../README.md")]
 pub mod checkpoint;
 pub mod cloth;
 pub mod constraints;
