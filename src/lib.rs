@@ -14,6 +14,7 @@ pub mod particles;
 pub mod reference;
 pub mod render;
 pub mod scene;
+pub mod step;
 pub mod world;
 
 pub use cloth::{ClothDesc, PinSpec};

@@ -12,9 +12,8 @@ use crate::cloth::{ClothDesc, ConstraintKind};
 use crate::constraints::distance::DistanceInput;
 use crate::constraints::{DistanceSet, TetherSet};
 use crate::effects::{Effects, WindState};
-use crate::error::{positive, Result, WeftError};
-use crate::integrate::{predict, update, PredictParams};
-use crate::params::{Backend, SolverParams};
+use crate::error::{Result, WeftError};
+use crate::params::SolverParams;
 use crate::particles::Particles;
 
 /// Where one cloth lives in the world's particle arrays.
@@ -45,14 +44,14 @@ pub struct World {
     pub(crate) triangles: Vec<[u32; 3]>,
     pub(crate) cloths: Vec<ClothInfo>,
     pub(crate) damping_rate: Vec<f32>,
-    has_damping: bool,
-    damp_factor: Vec<f32>,
-    damp_h: f32,
+    pub(crate) has_damping: bool,
+    pub(crate) damp_factor: Vec<f32>,
+    pub(crate) damp_h: f32,
     pub(crate) params: SolverParams,
     pub(crate) effects: Effects,
-    wind: Option<WindState>,
-    pool: Option<Arc<rayon::ThreadPool>>,
-    backup: [Vec<f32>; 6],
+    pub(crate) wind: Option<WindState>,
+    pub(crate) pool: Option<Arc<rayon::ThreadPool>>,
+    pub(crate) backup: [Vec<f32>; 6],
     pub(crate) time: f64,
     pub(crate) steps: u64,
     pub(crate) last_h: f32,
@@ -145,92 +144,6 @@ impl World {
         self.damp_h = f32::NAN;
         for b in &mut self.backup {
             b.resize(len, 0.0);
-        }
-    }
-
-    /// Advances the world by `dt` seconds. On a non-finite result (with `guard` on) the state
-    /// before the step is restored and [`WeftError::Diverged`] is returned.
-    pub fn step(&mut self, dt: f32) -> Result<()> {
-        positive("dt", dt)?;
-        if self.params.guard {
-            let p = &self.particles;
-            for (dst, src) in self.backup.iter_mut().zip([&p.x, &p.y, &p.z, &p.vx, &p.vy, &p.vz]) {
-                dst.copy_from_slice(src);
-            }
-        }
-        match self.pool.clone() {
-            Some(pool) => pool.install(|| self.run_substeps(dt)),
-            None => self.run_substeps(dt),
-        }
-        if self.params.guard {
-            if let Some(i) = self.particles.first_non_finite() {
-                let p = &mut self.particles;
-                for (src, dst) in self
-                    .backup
-                    .iter()
-                    .zip([&mut p.x, &mut p.y, &mut p.z, &mut p.vx, &mut p.vy, &mut p.vz])
-                {
-                    dst.copy_from_slice(src);
-                }
-                p.px.copy_from_slice(&p.x);
-                p.py.copy_from_slice(&p.y);
-                p.pz.copy_from_slice(&p.z);
-                return Err(WeftError::Diverged {
-                    particle: i,
-                    stage: "step",
-                });
-            }
-        }
-        self.time += dt as f64;
-        self.steps += 1;
-        Ok(())
-    }
-
-    fn run_substeps(&mut self, dt: f32) {
-        let n_sub = self.params.substeps;
-        let h = dt / n_sub as f32;
-        let simd = self.params.backend == Backend::Simd;
-        let parallel = simd;
-        if self.has_damping && self.damp_h != h {
-            self.damp_factor = self.damping_rate.iter().map(|&c| 1.0 / (1.0 + c * h)).collect();
-            self.damp_factor.resize(self.particles.padded_len(), 1.0);
-            self.damp_h = h;
-        }
-        let inv_h2 = 1.0 / (h * h);
-        self.last_h = h;
-        for s in 0..n_sub {
-            let t = self.time + (s as f64) * (h as f64);
-            if let (Some(w), Some(state)) = (&self.effects.wind, &mut self.wind) {
-                let p = &self.particles;
-                state.compute(w, t, &self.triangles, [&p.x, &p.y, &p.z], [&p.vx, &p.vy, &p.vz], parallel);
-            }
-            {
-                let force = self.wind.as_ref().map(|w| [&w.fx[..], &w.fy[..], &w.fz[..]]);
-                let pp = PredictParams {
-                    h,
-                    gravity: self.effects.gravity,
-                    drag: self.effects.drag,
-                    force,
-                };
-                self.particles.for_chunks(parallel, |c| predict(c, &pp, simd));
-            }
-            self.distance.reset_lambda();
-            let p = &mut self.particles;
-            for _ in 0..self.params.iterations {
-                if simd {
-                    self.distance.solve_simd(&mut p.px, &mut p.py, &mut p.pz, &p.w, inv_h2, parallel);
-                    if !self.tethers.is_empty() {
-                        self.tethers.solve_simd(&mut p.px, &mut p.py, &mut p.pz, parallel);
-                    }
-                } else {
-                    self.distance.solve_scalar(&mut p.px, &mut p.py, &mut p.pz, &p.w, inv_h2);
-                    if !self.tethers.is_empty() {
-                        self.tethers.solve_scalar(&mut p.px, &mut p.py, &mut p.pz);
-                    }
-                }
-            }
-            let damp = self.has_damping.then_some(&self.damp_factor[..]);
-            self.particles.for_chunks(parallel, |c| update(c, h, damp, simd));
         }
     }
 
@@ -346,6 +259,49 @@ impl World {
     /// Steps taken.
     pub fn steps(&self) -> u64 {
         self.steps
+    }
+
+    /// Sets the inverse mass of every real particle (0 pins a particle). Tethers keep the
+    /// anchors they were built with.
+    pub fn set_inverse_masses(&mut self, w: &[f32]) -> Result<()> {
+        let n = self.particles.count();
+        if w.len() != n {
+            return Err(WeftError::BufferLength {
+                name: "inverse masses",
+                got: w.len(),
+                expected: n,
+            });
+        }
+        if let Some(bad) = w.iter().find(|v| !(v.is_finite() && **v >= 0.0)) {
+            return Err(WeftError::param("inverse mass", bad, "must be finite and zero or greater"));
+        }
+        self.particles.w[..n].copy_from_slice(w);
+        Ok(())
+    }
+
+    /// Sets the position of every real particle (predictions follow).
+    pub fn set_positions(&mut self, x: [&[f32]; 3]) -> Result<()> {
+        let n = self.particles.count();
+        for (name, s) in [("x", x[0]), ("y", x[1]), ("z", x[2])] {
+            if s.len() != n {
+                return Err(WeftError::BufferLength {
+                    name,
+                    got: s.len(),
+                    expected: n,
+                });
+            }
+            if let Some(bad) = s.iter().find(|f| !f.is_finite()) {
+                return Err(WeftError::param(name, bad, "positions must be finite"));
+            }
+        }
+        let p = &mut self.particles;
+        p.x[..n].copy_from_slice(x[0]);
+        p.y[..n].copy_from_slice(x[1]);
+        p.z[..n].copy_from_slice(x[2]);
+        p.px.copy_from_slice(&p.x);
+        p.py.copy_from_slice(&p.y);
+        p.pz.copy_from_slice(&p.z);
+        Ok(())
     }
 
     /// Sets the velocity of every real particle (e.g. initial conditions in tests).

@@ -1,0 +1,149 @@
+//! The step, stage by stage, top to bottom.
+//!
+//! ```text
+//! step(dt):
+//!   keep a copy of x, v (guard)
+//!   for each substep h = dt / substeps:
+//!     wind forces per triangle → per particle          [effects]        (if named)
+//!     predict: v += h g + h w f, drag; p = x + h v      [integrate]
+//!     `iterations` sweeps: distance constraints by colour, tethers   [constraints]
+//!     update: v = (p - x) / h, damping; x = p          [integrate]
+//!   on a non-finite value: restore the copy, replay the step with a check after every stage
+//!   to name the stage and particle, and return `Diverged`
+//! ```
+
+use crate::error::{positive, Result, WeftError};
+use crate::integrate::{predict, update, PredictParams};
+use crate::params::Backend;
+use crate::world::World;
+
+/// Index of the first entry below `n` that is not finite in any of `arrays`.
+fn first_non_finite(arrays: &[&[f32]], n: usize) -> Option<usize> {
+    (0..n).find(|&i| arrays.iter().any(|a| !a[i].is_finite()))
+}
+
+impl World {
+    /// Advances the world by `dt` seconds.
+    ///
+    /// With [`guard`](crate::SolverParams::guard) on (the default), a step that produces a
+    /// non-finite value restores the state from before the step and returns
+    /// [`WeftError::Diverged`] naming the first bad particle and the stage that produced it;
+    /// the user's state is never overwritten with NaN.
+    pub fn step(&mut self, dt: f32) -> Result<()> {
+        positive("dt", dt)?;
+        let guard = self.params.guard;
+        if guard {
+            self.save_backup();
+        }
+        self.in_pool(|w| w.run_substeps(dt, false));
+        if guard && self.particles.first_non_finite().is_some() {
+            self.restore_backup();
+            let found = self.in_pool(|w| w.run_substeps(dt, true));
+            self.restore_backup();
+            let (particle, stage) = found.unwrap_or((self.particles.first_non_finite().unwrap_or(0), "step"));
+            return Err(WeftError::Diverged { particle, stage });
+        }
+        self.time += dt as f64;
+        self.steps += 1;
+        Ok(())
+    }
+
+    fn in_pool<R: Send>(&mut self, f: impl FnOnce(&mut World) -> R + Send) -> R {
+        match self.pool.clone() {
+            Some(pool) => pool.install(|| f(self)),
+            None => f(self),
+        }
+    }
+
+    fn save_backup(&mut self) {
+        let p = &self.particles;
+        for (dst, src) in self.backup.iter_mut().zip([&p.x, &p.y, &p.z, &p.vx, &p.vy, &p.vz]) {
+            dst.copy_from_slice(src);
+        }
+    }
+
+    fn restore_backup(&mut self) {
+        let p = &mut self.particles;
+        for (src, dst) in self
+            .backup
+            .iter()
+            .zip([&mut p.x, &mut p.y, &mut p.z, &mut p.vx, &mut p.vy, &mut p.vz])
+        {
+            dst.copy_from_slice(src);
+        }
+        p.px.copy_from_slice(&p.x);
+        p.py.copy_from_slice(&p.y);
+        p.pz.copy_from_slice(&p.z);
+    }
+
+    /// Runs the substeps. With `check`, stops at the first stage that leaves a non-finite
+    /// value and returns `(particle, stage)`; without, never checks (the fast path).
+    fn run_substeps(&mut self, dt: f32, check: bool) -> Option<(usize, &'static str)> {
+        let n = self.particles.count();
+        let n_sub = self.params.substeps;
+        let h = dt / n_sub as f32;
+        let simd = self.params.backend == Backend::Simd;
+        let parallel = simd;
+        if self.has_damping && self.damp_h != h {
+            self.damp_factor = self.damping_rate.iter().map(|&c| 1.0 / (1.0 + c * h)).collect();
+            self.damp_factor.resize(self.particles.padded_len(), 1.0);
+            self.damp_h = h;
+        }
+        let inv_h2 = 1.0 / (h * h);
+        self.last_h = h;
+        macro_rules! checkpoint {
+            ($stage:literal, $($a:expr),+) => {
+                if check {
+                    if let Some(i) = first_non_finite(&[$(&$a[..]),+], n) {
+                        return Some((i, $stage));
+                    }
+                }
+            };
+        }
+        for s in 0..n_sub {
+            let t = self.time + (s as f64) * (h as f64);
+            if let (Some(w), Some(state)) = (&self.effects.wind, &mut self.wind) {
+                let p = &self.particles;
+                state.compute(w, t, &self.triangles, [&p.x, &p.y, &p.z], [&p.vx, &p.vy, &p.vz], parallel);
+                checkpoint!("wind", state.fx, state.fy, state.fz);
+            }
+            {
+                let force = self.wind.as_ref().map(|w| [&w.fx[..], &w.fy[..], &w.fz[..]]);
+                let pp = PredictParams {
+                    h,
+                    gravity: self.effects.gravity,
+                    drag: self.effects.drag,
+                    force,
+                };
+                self.particles.for_chunks(parallel, |c| predict(c, &pp, simd));
+            }
+            {
+                let p = &self.particles;
+                checkpoint!("predict", p.px, p.py, p.pz, p.vx, p.vy, p.vz);
+            }
+            self.distance.reset_lambda();
+            for _ in 0..self.params.iterations {
+                let p = &mut self.particles;
+                if simd {
+                    self.distance.solve_simd(&mut p.px, &mut p.py, &mut p.pz, &p.w, inv_h2, parallel);
+                } else {
+                    self.distance.solve_scalar(&mut p.px, &mut p.py, &mut p.pz, &p.w, inv_h2);
+                }
+                checkpoint!("constraints", p.px, p.py, p.pz);
+                if !self.tethers.is_empty() {
+                    if simd {
+                        self.tethers.solve_simd(&mut p.px, &mut p.py, &mut p.pz, parallel);
+                    } else {
+                        self.tethers.solve_scalar(&mut p.px, &mut p.py, &mut p.pz);
+                    }
+                    checkpoint!("tethers", p.px, p.py, p.pz);
+                }
+            }
+            let damp = self.has_damping.then_some(&self.damp_factor[..]);
+            self.particles.for_chunks(parallel, |c| update(c, h, damp, simd));
+            let p = &self.particles;
+            checkpoint!("update", p.x, p.y, p.z, p.vx, p.vy, p.vz);
+        }
+        None
+    }
+}
