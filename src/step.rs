@@ -58,6 +58,7 @@ impl World {
     fn save_backup(&mut self) {
         let p = &self.particles;
         for (dst, src) in self.backup.iter_mut().zip([&p.x, &p.y, &p.z, &p.vx, &p.vy, &p.vz]) {
+            dst.resize(src.len(), 0.0);
             dst.copy_from_slice(src);
         }
     }
