@@ -6,6 +6,8 @@ pub mod effects;
 pub mod error;
 pub mod export;
 pub mod fabric;
+#[doc(hidden)]
+pub mod fuzzing;
 pub mod integrate;
 pub mod lanes;
 pub mod metrics;

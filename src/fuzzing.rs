@@ -1,0 +1,131 @@
+//! Entry points shared by the fuzz targets (`fuzz/`) and the corpus replay test
+//! (`tests/fuzz_corpus.rs`), so CI runs the saved corpus through exactly what the fuzzers run.
+//! Each returns normally for every input; a panic is a bug.
+
+use crate::cloth::{ClothDesc, PinSpec};
+use crate::effects::{Effects, Wind};
+use crate::fabric::Fabric;
+use crate::params::{Backend, SolverParams};
+use crate::scene::Scene;
+use crate::world::World;
+
+/// Parses arbitrary bytes as a scene; if it parses, builds the world and runs a few steps when
+/// the scene is small.
+pub fn scene_bytes(data: &[u8]) {
+    let Ok(text) = std::str::from_utf8(data) else { return };
+    let Ok(scene) = Scene::parse(text, "fuzz.toml") else { return };
+    // Bound the work: huge but valid scenes are legitimate, just not for a fuzzer.
+    let particles: u64 = scene
+        .cloth
+        .iter()
+        .map(|c| c.get_ref().rows.0 as u64 * c.get_ref().cols.0 as u64)
+        .sum();
+    if particles > 20_000 || scene.solver.substeps.0 > 64 || scene.solver.iterations.0 > 64 {
+        return;
+    }
+    if let Ok(mut w) = scene.world() {
+        let dt = w.params().dt;
+        for _ in 0..3 {
+            if w.step(dt).is_err() {
+                break;
+            }
+        }
+        let _ = scene.to_toml();
+    }
+}
+
+/// Reads numbers from a byte string, cycling through it; empty input gives zeros.
+struct Bytes<'a> {
+    data: &'a [u8],
+    at: usize,
+}
+
+impl Bytes<'_> {
+    fn u8(&mut self) -> u8 {
+        if self.data.is_empty() {
+            return 0;
+        }
+        let b = self.data[self.at % self.data.len()];
+        self.at += 1;
+        b
+    }
+    fn f32(&mut self) -> f32 {
+        f32::from_le_bytes([self.u8(), self.u8(), self.u8(), self.u8()])
+    }
+    fn small(&mut self, max: u8) -> u32 {
+        (self.u8() % max) as u32
+    }
+}
+
+/// Builds a small world from arbitrary bytes (any float, including NaN, infinities and
+/// subnormals, in every parameter and initial state) and steps it. Bad parameters must be
+/// errors; accepted worlds must step without panicking and never expose non-finite state.
+pub fn step_bytes(data: &[u8]) {
+    let mut b = Bytes { data, at: 0 };
+    let params = SolverParams {
+        dt: b.f32(),
+        substeps: b.small(6),
+        iterations: b.small(4),
+        threads: b.small(3) as usize,
+        backend: if b.u8() % 2 == 0 { Backend::Simd } else { Backend::Scalar },
+        guard: true,
+    };
+    let effects = Effects {
+        gravity: (b.u8() % 2 == 0).then(|| [b.f32(), b.f32(), b.f32()]),
+        drag: (b.u8() % 3 == 0).then(|| b.f32()),
+        wind: (b.u8() % 3 == 0).then(|| Wind {
+            velocity: [b.f32(), b.f32(), b.f32()],
+            gust: b.f32(),
+            ..Wind::default()
+        }),
+    };
+    let Ok(mut world) = World::new(params.clone(), effects) else {
+        return;
+    };
+    let fabric = Fabric {
+        mass: b.f32(),
+        stretch_compliance: b.f32(),
+        shear_compliance: b.f32(),
+        bend_compliance: b.f32(),
+        damping: b.f32(),
+        thickness: b.f32(),
+        dt: 0.01,
+    };
+    let desc = ClothDesc {
+        rows: b.small(12),
+        cols: b.small(12),
+        spacing: b.f32(),
+        origin: [b.f32(), b.f32(), b.f32()],
+        u: [b.f32(), b.f32(), b.f32()],
+        v: [b.f32(), b.f32(), b.f32()],
+        fabric,
+        pins: match b.u8() % 4 {
+            0 => vec![],
+            1 => vec![PinSpec::FirstRowCorners],
+            2 => vec![PinSpec::Row(b.small(12))],
+            _ => vec![PinSpec::Indices(vec![b.small(200), b.small(200)])],
+        },
+        shear: b.u8() % 2 == 0,
+        bend: b.u8() % 2 == 0,
+        tethers: (b.u8() % 2 == 0).then(|| b.f32()),
+    };
+    if world.add_cloth(&desc).is_err() {
+        return;
+    }
+    let n = world.particle_count();
+    let v: [Vec<f32>; 3] = std::array::from_fn(|_| (0..n).map(|_| b.f32()).collect());
+    let _ = world.set_velocities([&v[0], &v[1], &v[2]]);
+    for _ in 0..4 {
+        match world.step(params.dt) {
+            Ok(()) => {}
+            Err(_) => break,
+        }
+        let finite = world
+            .positions()
+            .iter()
+            .chain(world.velocities().iter())
+            .all(|a| a.iter().all(|x| x.is_finite()));
+        assert!(finite, "a step exposed a non-finite value");
+    }
+    let _ = world.metrics();
+}
