@@ -52,6 +52,9 @@ impl Bytes<'_> {
     fn f32(&mut self) -> f32 {
         f32::from_le_bytes([self.u8(), self.u8(), self.u8(), self.u8()])
     }
+    fn one_in(&mut self, k: u8) -> bool {
+        self.u8().is_multiple_of(k)
+    }
     fn small(&mut self, max: u8) -> u32 {
         (self.u8() % max) as u32
     }
@@ -67,13 +70,13 @@ pub fn step_bytes(data: &[u8]) {
         substeps: b.small(6),
         iterations: b.small(4),
         threads: b.small(3) as usize,
-        backend: if b.u8() % 2 == 0 { Backend::Simd } else { Backend::Scalar },
+        backend: if b.one_in(2) { Backend::Simd } else { Backend::Scalar },
         guard: true,
     };
     let effects = Effects {
-        gravity: (b.u8() % 2 == 0).then(|| [b.f32(), b.f32(), b.f32()]),
-        drag: (b.u8() % 3 == 0).then(|| b.f32()),
-        wind: (b.u8() % 3 == 0).then(|| Wind {
+        gravity: b.one_in(2).then(|| [b.f32(), b.f32(), b.f32()]),
+        drag: b.one_in(3).then(|| b.f32()),
+        wind: b.one_in(3).then(|| Wind {
             velocity: [b.f32(), b.f32(), b.f32()],
             gust: b.f32(),
             ..Wind::default()
@@ -105,9 +108,9 @@ pub fn step_bytes(data: &[u8]) {
             2 => vec![PinSpec::Row(b.small(12))],
             _ => vec![PinSpec::Indices(vec![b.small(200), b.small(200)])],
         },
-        shear: b.u8() % 2 == 0,
-        bend: b.u8() % 2 == 0,
-        tethers: (b.u8() % 2 == 0).then(|| b.f32()),
+        shear: b.one_in(2),
+        bend: b.one_in(2),
+        tethers: b.one_in(2).then(|| b.f32()),
     };
     if world.add_cloth(&desc).is_err() {
         return;
