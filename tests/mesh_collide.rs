@@ -32,17 +32,21 @@ fn bumpy_sphere(seg: usize, rings: usize, amp: f32, bumps: &[f32]) -> TriMesh {
     let id = |i: usize, j: usize| (2 + (i - 1) * seg + j % seg) as u32;
     let mut f = Vec::new();
     for j in 0..seg {
-        f.push([0, id(1, j + 1), id(1, j)]);
-        f.push([1, id(rings - 1, j), id(rings - 1, j + 1)]);
+        f.push([0, id(1, j), id(1, j + 1)]);
+        f.push([1, id(rings - 1, j + 1), id(rings - 1, j)]);
     }
     for i in 1..rings - 1 {
         for j in 0..seg {
-            f.push([id(i, j), id(i, j + 1), id(i + 1, j)]);
-            f.push([id(i, j + 1), id(i + 1, j + 1), id(i + 1, j)]);
+            f.push([id(i, j), id(i + 1, j), id(i, j + 1)]);
+            f.push([id(i, j + 1), id(i + 1, j), id(i + 1, j + 1)]);
         }
     }
     let (m, r) = TriMesh::new(v, f).unwrap();
-    assert_eq!(r.boundary_edges + r.non_manifold_edges, 0);
+    assert_eq!(
+        r.boundary_edges + r.non_manifold_edges + r.misoriented_edges,
+        0
+    );
+    assert_eq!(m.solid_side(), Some(1.0), "outward winding");
     m
 }
 
@@ -149,8 +153,11 @@ proptest! {
         m in mesh_strategy(),
         dirs in prop::collection::vec((prop::array::uniform3(-1.0f32..1.0), 0.1f32..0.9, any::<bool>()), 30),
     ) {
-        // All test meshes are star-shaped about the axis point `c` (origin, or the dress
-        // form's axis at mid height); far points are outside.
+        // A far point is outside; a point on the vertical axis near the middle is inside
+        // every test mesh. A straight path between them crosses the surface.
+        prop_assert_eq!(m.solid_side(), Some(1.0));
+        let mut sheet = m.clone();
+        sheet.set_two_sided();
         let (lo, hi) = m.bounds();
         let c = [0.0, 0.5 * (lo[1] + hi[1]), 0.0];
         let far = 3.0 * (0..3).map(|k| hi[k] - lo[k]).fold(0.0, f32::max);
@@ -160,15 +167,18 @@ proptest! {
             let l = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
             prop_assume!(l > 1e-3);
             let out = [0, 1, 2].map(|k| c[k] + far * d[k] / l);
-            // an inside point: on the axis segment well inside the form
             let inside = [c[0], c[1] + (frac - 0.5) * 0.1 * (hi[1] - lo[1]), c[2]];
             let (x, p) = if outward { (inside, out) } else { (out, inside) };
             for bp in &bps {
-                let hit = mesh_contact_with(&m, bp.as_ref(), x, p, 0.0, &mut scratch);
+                // two-sided: caught in both directions
+                let hit = mesh_contact_with(&sheet, bp.as_ref(), x, p, 0.0, &mut scratch);
                 prop_assert!(hit.is_some(), "{}: {x:?} -> {p:?} tunnelled", bp.describe());
                 let hit = hit.unwrap();
                 prop_assert_eq!(hit.kind, ContactKind::Crossing);
                 prop_assert!(hit.t >= 0.0 && hit.t <= 1.0);
+                // solid: caught going in, let out going out
+                let hit = mesh_contact_with(&m, bp.as_ref(), x, p, 0.0, &mut scratch);
+                prop_assert_eq!(hit.is_some(), !outward, "{}: {:?}", bp.describe(), hit);
             }
         }
     }
@@ -198,7 +208,7 @@ proptest! {
             }
             if th > 0.0 {
                 // standing on the surface is always within the thickness
-                prop_assert!(mesh_contact_with(&m, &bp, q, q, th, &mut scratch).is_some());
+                prop_assert!(mesh_contact_with(&m, &bp, q, q, th, &mut scratch).is_some(), "f {f} kind {kind} q {q:?} corners {:?} n {:?}", m.corners(f), m.normals()[f as usize]);
             }
         }
     }
@@ -327,4 +337,104 @@ fn batch_rejects_bad_input() {
     m.translate([0.0, 1.0, 0.0]).unwrap();
     let e = contacts_par(&m, &g, ok, ok, 0.01, &mut out).unwrap_err();
     assert!(e.to_string().contains("rebuild"), "{e}");
+}
+
+/// Is `q` inside the closed mesh `m`? Majority of the crossing parities along three oblique
+/// rays (a ray grazing an edge may count the edge's two faces).
+/// `m` must be two-sided here, so that leaving crossings count too.
+fn inside_mesh(m: &TriMesh, q: [f32; 3]) -> bool {
+    assert!(m.solid_side().is_none());
+    let dirs = [
+        [3.1271, 10.0, 1.7313],
+        [-2.913, -7.77, 4.05],
+        [9.1, 0.71, -3.3],
+    ];
+    let votes = dirs
+        .iter()
+        .filter(|d| {
+            let far = [q[0] + d[0], q[1] + d[1], q[2] + d[2]];
+            let n = (0..m.face_count() as u32)
+                .filter_map(|f| weft::collide::narrow::face_contact(m, f, q, far, 0.0))
+                .filter(|c| c.kind == ContactKind::Crossing)
+                .count();
+            n % 2 == 1
+        })
+        .count();
+    votes >= 2
+}
+
+#[test]
+fn falling_particles_never_penetrate_the_form() {
+    use weft::collide::face_memory::{project_if_remembered, Projection};
+    use weft::collide::mesh_response::{resolve_position, resolve_velocity};
+    let m = dress_form(1200).unwrap();
+    let bp = UniformGrid::auto(&m).unwrap();
+    let (th, band, h, mu) = (0.003f32, 0.006f32, 1.0f32 / 240.0, 0.3f32);
+    let mut xs: Vec<[f32; 3]> = Vec::new();
+    for i in 0..20 {
+        for j in 0..20 {
+            let (u, v) = (i as f32 / 19.0 - 0.5, j as f32 / 19.0 - 0.5);
+            xs.push([0.36 * u, 0.85 + 0.01 * ((i + j) % 3) as f32, 0.2 * v]);
+        }
+    }
+    let n = xs.len();
+    let mut vs = vec![[0.0f32; 3]; n];
+    let mut mem = vec![u32::MAX; n];
+    let mut out = Vec::new();
+    let mut contacts = 0;
+    for _step in 0..240 {
+        let mut ps = xs.clone();
+        for i in 0..n {
+            let g = project_if_remembered(
+                &m,
+                mem[i],
+                xs[i],
+                band,
+                Projection::IntoFaceOnly,
+                [0.0, -9.81, 0.0],
+            );
+            for k in 0..3 {
+                vs[i][k] += h * g[k];
+                ps[i][k] = xs[i][k] + h * vs[i][k];
+            }
+        }
+        let col = |a: &Vec<[f32; 3]>, k: usize| a.iter().map(|q| q[k]).collect::<Vec<f32>>();
+        let (sx, sy, sz) = (col(&xs, 0), col(&xs, 1), col(&xs, 2));
+        let (qx, qy, qz) = (col(&ps, 0), col(&ps, 1), col(&ps, 2));
+        let (s, p) = (
+            Soa3 {
+                x: &sx,
+                y: &sy,
+                z: &sz,
+            },
+            Soa3 {
+                x: &qx,
+                y: &qy,
+                z: &qz,
+            },
+        );
+        contacts_with_memory_serial(&m, &bp, s, p, th, band, &mut mem, &mut out).unwrap();
+        for i in 0..n {
+            if let Some(c) = out[i] {
+                contacts += 1;
+                ps[i] = resolve_position(xs[i], ps[i], &c, th);
+                vs[i] = resolve_velocity(vs[i], c.normal, mu);
+            }
+            assert!(ps[i].iter().all(|v| v.is_finite()));
+        }
+        xs = ps;
+    }
+    assert!(
+        contacts > n,
+        "the particles must land on the form ({contacts} contacts)"
+    );
+    let mut sheet = m.clone();
+    sheet.set_two_sided();
+    let inside: Vec<usize> = (0..n).filter(|&i| inside_mesh(&sheet, xs[i])).collect();
+    assert!(
+        inside.is_empty(),
+        "{} particles inside, e.g. {:?}",
+        inside.len(),
+        inside.first().map(|&i| xs[i])
+    );
 }

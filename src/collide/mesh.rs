@@ -15,7 +15,8 @@
 //! [`SLIVER_RATIO`] times the squared longest edge) cannot carry a normal, so they are dropped
 //! and counted in [`MeshReport`]. Edges shared by more than two faces (non-manifold) and by a
 //! single face (open boundary) are counted but accepted: collision does not need a closed
-//! surface, only the side test does (a particle's side is taken from where it came from).
+//! surface. A closed, consistently wound mesh is recognised as a solid
+//! ([`TriMesh::solid_side`]), which fixes on which side of each face particles belong.
 
 use crate::{Result, WeftError};
 use std::collections::HashMap;
@@ -42,6 +43,8 @@ pub struct MeshReport {
     pub non_manifold_edges: usize,
     /// Edges used by exactly one face (the mesh is open there).
     pub boundary_edges: usize,
+    /// Edges whose two faces run along them in the same direction (inconsistent winding).
+    pub misoriented_edges: usize,
     /// Human-readable warnings, one per kind of problem found.
     pub warnings: Vec<String>,
 }
@@ -57,6 +60,7 @@ pub struct TriMesh {
     lo: [f32; 3],
     hi: [f32; 3],
     stamp: u64,
+    solid_side: Option<f32>,
 }
 
 fn sub(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
@@ -148,15 +152,25 @@ impl TriMesh {
                 report.skipped_faces[0]
             ));
         }
-        let mut edges: HashMap<(u32, u32), u32> = HashMap::with_capacity(kept.len() * 3 / 2);
+        // per undirected edge: (uses, uses running from the smaller to the larger index)
+        let mut edges: HashMap<(u32, u32), (u32, u32)> = HashMap::with_capacity(kept.len() * 3 / 2);
         for f in &kept {
             for k in 0..3 {
                 let (i, j) = (f[k], f[(k + 1) % 3]);
-                *edges.entry((i.min(j), i.max(j))).or_insert(0) += 1;
+                let e = edges.entry((i.min(j), i.max(j))).or_insert((0, 0));
+                e.0 += 1;
+                e.1 += (i < j) as u32;
             }
         }
-        report.non_manifold_edges = edges.values().filter(|&&c| c > 2).count();
-        report.boundary_edges = edges.values().filter(|&&c| c == 1).count();
+        report.non_manifold_edges = edges.values().filter(|c| c.0 > 2).count();
+        report.boundary_edges = edges.values().filter(|c| c.0 == 1).count();
+        report.misoriented_edges = edges.values().filter(|c| c.0 == 2 && c.1 != 1).count();
+        if report.misoriented_edges > 0 {
+            report.warnings.push(format!(
+                "{} edges with inconsistent winding (faces on both sides run the same way)",
+                report.misoriented_edges
+            ));
+        }
         if report.non_manifold_edges > 0 {
             report.warnings.push(format!(
                 "{} non-manifold edges (shared by more than two faces)",
@@ -178,8 +192,17 @@ impl TriMesh {
             lo: [0.0; 3],
             hi: [0.0; 3],
             stamp: 0,
+            solid_side: None,
         };
         mesh.recompute();
+        let closed =
+            report.non_manifold_edges + report.boundary_edges + report.misoriented_edges == 0;
+        if closed {
+            let v = mesh.signed_volume();
+            if v != 0.0 {
+                mesh.solid_side = Some(if v > 0.0 { 1.0 } else { -1.0 });
+            }
+        }
         Ok((mesh, report))
     }
 
@@ -320,6 +343,18 @@ impl TriMesh {
             && lo[1] <= b[1]
             && lo[2] <= b[2]
     }
+    /// For a closed, consistently wound mesh (a solid): `+1.0` if the face normals point out
+    /// (positive [`signed_volume`](Self::signed_volume)), `-1.0` if they point in. `None` for
+    /// open or inconsistent meshes, and after [`set_two_sided`](Self::set_two_sided). The
+    /// narrowphase takes a solid's outside as the particle's side (see `narrow`).
+    pub fn solid_side(&self) -> Option<f32> {
+        self.solid_side
+    }
+    /// Treat the mesh as a two-sided sheet even if it is closed: the particle's side is then
+    /// taken from where it started (the brief's rule), not from the solid's outside.
+    pub fn set_two_sided(&mut self) {
+        self.solid_side = None;
+    }
     /// Signed volume enclosed (positive for a closed mesh with outward winding).
     pub fn signed_volume(&self) -> f64 {
         self.faces
@@ -360,6 +395,17 @@ mod tests {
         assert_eq!(r.boundary_edges, 0);
         assert!(r.warnings.is_empty());
         assert!((m.signed_volume() - 1.0 / 6.0).abs() < 1e-9);
+        assert_eq!(m.solid_side(), Some(1.0));
+        let (v, f) = tetra();
+        let inward = f.iter().map(|t| [t[0], t[2], t[1]]).collect();
+        assert_eq!(
+            TriMesh::new(v.clone(), inward).unwrap().0.solid_side(),
+            Some(-1.0)
+        );
+        let mut mixed = f.clone();
+        mixed[1] = [0, 3, 1];
+        let (mm, r) = TriMesh::new(v, mixed).unwrap();
+        assert_eq!((mm.solid_side(), r.misoriented_edges), (None, 3));
         assert_eq!(m.bounds(), ([0.0; 3], [1.0; 3]));
         assert_eq!(m.normals()[0], [0.0, 0.0, -1.0]);
     }
@@ -394,6 +440,7 @@ mod tests {
         assert_eq!(r.non_manifold_edges, 1);
         assert_eq!(r.boundary_edges, 2);
         assert_eq!(r.warnings.len(), 3);
+        assert_eq!(m.solid_side(), None);
     }
 
     #[test]

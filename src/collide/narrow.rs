@@ -5,11 +5,17 @@
 //! thickness `Th`. Per face (computed in `f64` from the `f32` data):
 //!
 //! 1. **Side.** With the unit normal `n` and a corner `a`, the signed heights are
-//!    `hx = n.(x - a)` and `hp = n.(p - a)`. The particle's side is `s = sign(hx)`
-//!    (`+1`, the outside of an outward-wound mesh, when `x` lies exactly on the plane).
-//! 2. **Crossing (continuous test).** If `s*hp < 0` the segment crosses the plane at
+//!    `hx = n.(x - a)` and `hp = n.(p - a)`. On a two-sided sheet (an open mesh) the
+//!    particle's side is where it came from, `s = sign(hx)` (`+1` when `x` lies exactly on
+//!    the plane). On a solid ([`TriMesh::solid_side`]) `s` is the solid's outside for every
+//!    face. Why: near a concave edge a particle outside the body can be behind the plane of
+//!    one of the edge's faces (e.g. falling past the overhang of the shoulders) and the
+//!    `sign(hx)` rule would push it to that plane's back side, into the body; a test
+//!    (`falling_particles_never_penetrate_the_form`) showed exactly that.
+//! 2. **Crossing (continuous test).** If `s*hx >= 0 > s*hp` the segment crosses the plane at
 //!    `t = hx / (hx - hp)`, which lies in `[0, 1]` and never divides by zero because the two
-//!    heights have strictly different signs. A segment lying in the plane never "crosses".
+//!    heights have strictly different signs. A segment lying in the plane never "crosses"; a
+//!    particle leaving a solid from inside is let out.
 //!    The point `q = x + t (p - x)` is inside the triangle when its three barycentric weights
 //!    `w_i = n.((v_j - q) x (v_k - q)) / |(b-a) x (c-a)|` are all `>= -EDGE_TOLERANCE`: hits
 //!    exactly on an edge or vertex count for every face sharing it (no tunnelling through
@@ -143,7 +149,11 @@ pub fn face_contact(mesh: &TriMesh, f: u32, x: [f32; 3], p: [f32; 3], th: f32) -
     let (xd, pd) = (d(x), d(p));
     let hx = dot(u, sub(xd, a));
     let hp = dot(u, sub(pd, a));
-    let s = if hx < 0.0 { -1.0 } else { 1.0 };
+    let s = match mesh.solid_side() {
+        Some(side) => side as f64,
+        None if hx < 0.0 => -1.0,
+        None => 1.0,
+    };
     let fnorm = mesh.normals()[f as usize];
     let make = |point: V, t: f64, kind| Contact {
         face: f,
@@ -153,7 +163,7 @@ pub fn face_contact(mesh: &TriMesh, f: u32, x: [f32; 3], p: [f32; 3], th: f32) -
         depth: (th as f64 - s * hp) as f32,
         kind,
     };
-    if s * hp < 0.0 {
+    if s * hp < 0.0 && s * hx >= 0.0 {
         let t = hx / (hx - hp);
         let q = axpy(xd, t, sub(pd, xd));
         if inside(q, a, b, c, n, nn, EDGE_TOLERANCE) {
@@ -298,6 +308,37 @@ mod tests {
             assert!(c.point.iter().chain(&c.normal).all(|v| v.is_finite()));
             assert_eq!(c.depth, 0.05);
         }
+    }
+
+    #[test]
+    fn solids_have_one_outside() {
+        let v = vec![
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+        ];
+        let f = vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
+        let (m, _) = TriMesh::new(v, f).unwrap();
+        let bp = BruteForce::new(&m);
+        let (inside, below) = ([0.2, 0.2, 0.2], [0.2, 0.2, -0.5]);
+        // entering: caught, normal points out of the solid
+        let c = mesh_contact(&m, &bp, below, inside, 0.0).unwrap();
+        assert_eq!(
+            (c.face, c.kind, c.normal),
+            (0, ContactKind::Crossing, [0.0, 0.0, -1.0])
+        );
+        // leaving: let out
+        assert!(mesh_contact(&m, &bp, inside, below, 0.0).is_none());
+        // ended just inside the floor, within the thickness: pushed out, below the floor
+        let c = mesh_contact(&m, &bp, [0.2, 0.2, 0.05], [0.2, 0.2, 0.01], 0.02).unwrap();
+        assert_eq!((c.face, c.normal), (0, [0.0, 0.0, -1.0]));
+        assert!((c.depth - 0.03).abs() < 1e-6);
+        // as a two-sided sheet the same step is kept inside instead
+        let mut sheet = m.clone();
+        sheet.set_two_sided();
+        let c = mesh_contact(&sheet, &bp, [0.2, 0.2, 0.05], [0.2, 0.2, 0.01], 0.02).unwrap();
+        assert_eq!(c.normal, [0.0, 0.0, 1.0]);
     }
 
     #[test]
