@@ -28,6 +28,7 @@ pub struct FaceHash {
     start: Vec<u32>,
     faces: Vec<u32>,
     big: Vec<u32>,
+    face_cell: Vec<[i64; 3]>,
     nfaces: u32,
     stamp: u64,
 }
@@ -97,6 +98,7 @@ impl FaceHash {
             start: vec![0; size + 1],
             faces: vec![0; entries as usize],
             big: Vec::new(),
+            face_cell: ranges.iter().map(|r| r.0).collect(),
             nfaces: nf,
             stamp: mesh.stamp(),
         };
@@ -160,18 +162,22 @@ impl FaceBroadphase for FaceHash {
             return;
         }
         out.extend_from_slice(&self.big);
+        // As in the grid, a face is reported from the first cell it shares with the query
+        // only (a face registered in two cells of one slot may still come twice).
         for k in a[2]..=b[2] {
             for j in a[1]..=b[1] {
                 for i in a[0]..=b[0] {
                     let s = slot(i, j, k, self.mask);
-                    out.extend_from_slice(
-                        &self.faces[self.start[s] as usize..self.start[s + 1] as usize],
-                    );
+                    let faces = &self.faces[self.start[s] as usize..self.start[s + 1] as usize];
+                    let cell = [i, j, k];
+                    let first = [0, 1, 2].map(|q| cell[q] == a[q]);
+                    out.extend(faces.iter().copied().filter(|&f| {
+                        let fc = &self.face_cell[f as usize];
+                        (0..3).all(|q| first[q] || fc[q] == cell[q])
+                    }));
                 }
             }
         }
-        out.sort_unstable();
-        out.dedup();
     }
     fn stamp(&self) -> u64 {
         self.stamp
@@ -198,6 +204,7 @@ mod tests {
                 let c = [0, 1, 2].map(|k| lo[k] + (hi[k] - lo[k]) * ((t * (k as f32 + 1.3)) % 1.0));
                 let (ql, qh) = (c.map(|v| v - 0.015), c.map(|v| v + 0.02));
                 h.candidates(&m, ql, qh, &mut out);
+                out.sort_unstable();
                 for f in 0..m.face_count() as u32 {
                     if m.face_overlaps(f, ql, qh) {
                         assert!(

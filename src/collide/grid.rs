@@ -11,7 +11,8 @@
 //! `0..n`, and the faces of the cells between the corners' cells are returned. The paper looks
 //! up the single cell holding the particle; we look up every cell the particle's whole
 //! segment box (grown by the thickness) touches, so a fast particle cannot skip a face in a
-//! neighbouring cell whatever the cell size. Because `floor`, `*` and `-` are monotonic in
+//! neighbouring cell whatever the cell size. A face met in several of those cells is reported
+//! once, from the first cell it shares with the query (a comparison of cell indices; no sort). Because `floor`, `*` and `-` are monotonic in
 //! floating point, a face whose box overlaps the query box always shares a cell with it: the
 //! grid is conservative, bit for bit.
 //!
@@ -37,6 +38,8 @@ pub struct UniformGrid {
     inv: [f32; 3],
     start: Vec<u32>,
     faces: Vec<u32>,
+    /// Each face's first cell (the cell of its box's lower corner).
+    face_cell: Vec<[u32; 3]>,
     stamp: u64,
 }
 
@@ -105,6 +108,7 @@ impl UniformGrid {
             inv,
             start: vec![0; total + 1],
             faces: Vec::new(),
+            face_cell: Vec::new(),
             stamp: mesh.stamp(),
         };
         let nf = mesh.face_count() as u32;
@@ -115,6 +119,13 @@ impl UniformGrid {
         for c in 0..total {
             g.start[c + 1] += g.start[c];
         }
+        g.face_cell = (0..nf)
+            .map(|f| {
+                g.range(mesh.face_lo(f), mesh.face_hi(f))
+                    .0
+                    .map(|i| i as u32)
+            })
+            .collect();
         let mut fill = g.start.clone();
         g.faces = vec![0; g.start[total] as usize];
         for f in 0..nf {
@@ -181,21 +192,27 @@ impl FaceBroadphase for UniformGrid {
             return;
         }
         // Stage two: which cells?
+        // A face in several visited cells is reported only from the first of them, the cell
+        // `max(face's first cell, query's first cell)` on each axis: no duplicates, no sort.
         let (a, b) = self.range(lo, hi);
-        let mut cells = 0;
         for z in a[2]..=b[2] {
             for y in a[1]..=b[1] {
                 let row = (z * self.dims[1] + y) * self.dims[0];
-                for c in row + a[0]..=row + b[0] {
-                    let (s, e) = (self.start[c] as usize, self.start[c + 1] as usize);
-                    out.extend_from_slice(&self.faces[s..e]);
-                    cells += 1;
+                for x in a[0]..=b[0] {
+                    let c = row + x;
+                    let faces = &self.faces[self.start[c] as usize..self.start[c + 1] as usize];
+                    let cell = [x as u32, y as u32, z as u32];
+                    let first = [0, 1, 2].map(|k| cell[k] == a[k] as u32);
+                    if first == [true; 3] {
+                        out.extend_from_slice(faces);
+                        continue;
+                    }
+                    out.extend(faces.iter().copied().filter(|&f| {
+                        let fc = &self.face_cell[f as usize];
+                        (0..3).all(|k| first[k] || fc[k] == cell[k])
+                    }));
                 }
             }
-        }
-        if cells > 1 {
-            out.sort_unstable();
-            out.dedup();
         }
     }
     fn stamp(&self) -> u64 {
@@ -235,6 +252,10 @@ mod tests {
             let c = [0, 1, 2].map(|k| lo[k] + (hi[k] - lo[k]) * ((t * (k as f32 + 1.7)) % 1.0));
             let (ql, qh) = (c.map(|v| v - 0.02), c.map(|v| v + 0.03));
             g.candidates(&m, ql, qh, &mut out);
+            let n = out.len();
+            out.sort_unstable();
+            out.dedup();
+            assert_eq!(out.len(), n, "a face reported twice");
             for f in 0..m.face_count() as u32 {
                 if m.face_overlaps(f, ql, qh) {
                     assert!(out.binary_search(&f).is_ok(), "face {f} missed");
