@@ -13,7 +13,7 @@ use weft::collide::face_broadphase::FaceBroadphase;
 use weft::collide::face_hash::FaceHash;
 use weft::collide::grid::UniformGrid;
 use weft::collide::mesh::TriMesh;
-use weft::collide::mesh_batch::{contacts_serial, Soa3};
+use weft::collide::mesh_batch::{contacts_par, contacts_serial, contacts_with_memory_serial, Soa3};
 
 const THICKNESS: f32 = 0.003;
 
@@ -47,12 +47,14 @@ fn draped(m: &TriMesh, n: usize) -> [Vec<f32>; 6] {
     out
 }
 
+/// Times every broadphase of `bps`, then face memory and the parallel batch on `bps[best]`.
 fn run(
     c: &mut Criterion,
     name: &str,
     m: &TriMesh,
     n: usize,
     bps: Vec<Box<dyn FaceBroadphase + Sync>>,
+    best: usize,
 ) {
     let [x, y, z, px, py, pz] = draped(m, n);
     let (s, p) = (
@@ -84,6 +86,44 @@ fn run(
             })
         });
     }
+    // The paper's face memory on the finest grid: memory filled by one pass, then each
+    // timed pass tests only the remembered face for particles still over it.
+    let bp = &bps[best];
+    let mut mem = vec![u32::MAX; n];
+    contacts_with_memory_serial(
+        m,
+        bp.as_ref(),
+        s,
+        p,
+        THICKNESS,
+        2.0 * THICKNESS,
+        &mut mem,
+        &mut out,
+    )
+    .unwrap();
+    let remembered = mem.iter().filter(|&&f| f != u32::MAX).count();
+    eprintln!(
+        "{name} {} + face memory: {remembered} particles remember a face",
+        bp.describe()
+    );
+    g.bench_function(format!("{} + face memory", bp.describe()), |b| {
+        b.iter(|| {
+            contacts_with_memory_serial(
+                m,
+                bp.as_ref(),
+                s,
+                p,
+                THICKNESS,
+                2.0 * THICKNESS,
+                &mut mem,
+                black_box(&mut out),
+            )
+            .unwrap()
+        })
+    });
+    g.bench_function(format!("{} parallel", bp.describe()), |b| {
+        b.iter(|| contacts_par(m, bp.as_ref(), s, p, THICKNESS, black_box(&mut out)).unwrap())
+    });
     g.finish();
 }
 
@@ -97,7 +137,7 @@ fn table(c: &mut Criterion) {
         Box::new(Bvh::new(&m)),
         Box::new(FaceHash::auto(&m).unwrap()),
     ];
-    run(c, "form4800_32500", &m, 32500, bps);
+    run(c, "form4800_32500", &m, 32500, bps, 2);
     let m = dress_form(PRESET_8350).unwrap();
     let bps: Vec<Box<dyn FaceBroadphase + Sync>> = vec![
         Box::new(UniformGrid::new(&m, [1, 1, 1]).unwrap()),
@@ -105,7 +145,7 @@ fn table(c: &mut Criterion) {
         Box::new(Bvh::new(&m)),
         Box::new(FaceHash::auto(&m).unwrap()),
     ];
-    run(c, "form8352_15000", &m, 15000, bps);
+    run(c, "form8352_15000", &m, 15000, bps, 1);
 }
 
 criterion_group!(benches, table);
