@@ -438,3 +438,39 @@ fn falling_particles_never_penetrate_the_form() {
         inside.first().map(|&i| xs[i])
     );
 }
+
+#[test]
+fn face_memory_batches_agree_across_broadphases() {
+    let m = dress_form(3000).unwrap();
+    let [x, y, z, px, py, pz] = particles(&m, 2000);
+    let (s, p) = (
+        Soa3 {
+            x: &x,
+            y: &y,
+            z: &z,
+        },
+        Soa3 {
+            x: &px,
+            y: &py,
+            z: &pz,
+        },
+    );
+    let mut reference: Option<(Vec<Option<Bits>>, Vec<u32>)> = None;
+    for bp in broadphases(&m) {
+        let mut mem = vec![u32::MAX; x.len()];
+        let mut out = Vec::new();
+        let mut used = Vec::new();
+        for _pass in 0..3 {
+            contacts_with_memory_par(&m, bp.as_ref(), s, p, 0.01, 0.02, &mut mem, &mut out)
+                .unwrap();
+            used.extend(out.iter().map(bits));
+        }
+        assert!(mem.iter().any(|&f| f != u32::MAX));
+        match &reference {
+            None => reference = Some((used, mem)),
+            Some((u, mm)) => {
+                assert!(u == &used && mm == &mem, "{} differs", bp.describe());
+            }
+        }
+    }
+}
