@@ -106,8 +106,10 @@ impl TriMesh {
                 faces.len()
             )));
         }
-        if vertices.len() > u32::MAX as usize {
-            return Err(bad("more than u32::MAX vertices".into()));
+        if vertices.len() > u32::MAX as usize || faces.len() >= u32::MAX as usize {
+            return Err(bad(
+                "too many vertices or faces (indices are u32; u32::MAX means \"no face\")".into(),
+            ));
         }
         if let Some((i, v)) = vertices
             .iter()
