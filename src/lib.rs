@@ -1,6 +1,7 @@
 #![doc = include_str!("../README.md")]
 pub mod checkpoint;
 pub mod cloth;
+pub mod collide;
 pub mod constraints;
 pub mod effects;
 pub mod error;
@@ -18,6 +19,7 @@ pub mod render;
 pub mod scene;
 pub mod step;
 pub mod world;
+//! weft: cloth and hair as particles, fast.
 
 pub use cloth::{ClothDesc, PinSpec};
 pub use effects::{Effects, Wind};
