@@ -48,27 +48,9 @@ fn draped(m: &TriMesh, n: usize) -> [Vec<f32>; 6] {
 }
 
 /// Times every broadphase of `bps`, then face memory and the parallel batch on `bps[best]`.
-fn run(
-    c: &mut Criterion,
-    name: &str,
-    m: &TriMesh,
-    n: usize,
-    bps: Vec<Box<dyn FaceBroadphase + Sync>>,
-    best: usize,
-) {
+fn run(c: &mut Criterion, name: &str, m: &TriMesh, n: usize, bps: Vec<Box<dyn FaceBroadphase + Sync>>, best: usize) {
     let [x, y, z, px, py, pz] = draped(m, n);
-    let (s, p) = (
-        Soa3 {
-            x: &x,
-            y: &y,
-            z: &z,
-        },
-        Soa3 {
-            x: &px,
-            y: &py,
-            z: &pz,
-        },
-    );
+    let (s, p) = (Soa3 { x: &x, y: &y, z: &z }, Soa3 { x: &px, y: &py, z: &pz });
     let mut g = c.benchmark_group(name);
     g.sample_size(10);
     g.throughput(Throughput::Elements(n as u64));
@@ -76,50 +58,20 @@ fn run(
     for bp in &bps {
         contacts_serial(m, bp.as_ref(), s, p, THICKNESS, &mut out).unwrap();
         let hits = out.iter().filter(|c| c.is_some()).count();
-        eprintln!(
-            "{name} {}: {hits} of {n} particles in contact",
-            bp.describe()
-        );
+        eprintln!("{name} {}: {hits} of {n} particles in contact", bp.describe());
         g.bench_function(bp.describe(), |b| {
-            b.iter(|| {
-                contacts_serial(m, bp.as_ref(), s, p, THICKNESS, black_box(&mut out)).unwrap()
-            })
+            b.iter(|| contacts_serial(m, bp.as_ref(), s, p, THICKNESS, black_box(&mut out)).unwrap())
         });
     }
     // The paper's face memory on the finest grid: memory filled by one pass, then each
     // timed pass tests only the remembered face for particles still over it.
     let bp = &bps[best];
     let mut mem = vec![u32::MAX; n];
-    contacts_with_memory_serial(
-        m,
-        bp.as_ref(),
-        s,
-        p,
-        THICKNESS,
-        2.0 * THICKNESS,
-        &mut mem,
-        &mut out,
-    )
-    .unwrap();
+    contacts_with_memory_serial(m, bp.as_ref(), s, p, THICKNESS, 2.0 * THICKNESS, &mut mem, &mut out).unwrap();
     let remembered = mem.iter().filter(|&&f| f != u32::MAX).count();
-    eprintln!(
-        "{name} {} + face memory: {remembered} particles remember a face",
-        bp.describe()
-    );
+    eprintln!("{name} {} + face memory: {remembered} particles remember a face", bp.describe());
     g.bench_function(format!("{} + face memory", bp.describe()), |b| {
-        b.iter(|| {
-            contacts_with_memory_serial(
-                m,
-                bp.as_ref(),
-                s,
-                p,
-                THICKNESS,
-                2.0 * THICKNESS,
-                &mut mem,
-                black_box(&mut out),
-            )
-            .unwrap()
-        })
+        b.iter(|| contacts_with_memory_serial(m, bp.as_ref(), s, p, THICKNESS, 2.0 * THICKNESS, &mut mem, black_box(&mut out)).unwrap())
     });
     g.bench_function(format!("{} parallel", bp.describe()), |b| {
         b.iter(|| contacts_par(m, bp.as_ref(), s, p, THICKNESS, black_box(&mut out)).unwrap())

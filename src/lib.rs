@@ -19,7 +19,6 @@ pub mod render;
 pub mod scene;
 pub mod step;
 pub mod world;
-//! weft: cloth and hair as particles, fast.
 
 pub use cloth::{ClothDesc, PinSpec};
 pub use effects::{Effects, Wind};

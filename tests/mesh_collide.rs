@@ -9,9 +9,7 @@ use weft::collide::face_broadphase::{BruteForce, FaceBroadphase};
 use weft::collide::face_hash::{mean_face_size, FaceHash};
 use weft::collide::grid::UniformGrid;
 use weft::collide::mesh::TriMesh;
-use weft::collide::mesh_batch::{
-    contacts_par, contacts_serial, contacts_with_memory_par, contacts_with_memory_serial, Soa3,
-};
+use weft::collide::mesh_batch::{contacts_par, contacts_serial, contacts_with_memory_par, contacts_with_memory_serial, Soa3};
 use weft::collide::narrow::{mesh_contact_with, Contact, ContactKind};
 
 /// UV sphere of radius ~1 with radial bumps `amp * bumps[k]`, star-shaped about the origin.
@@ -22,11 +20,7 @@ fn bumpy_sphere(seg: usize, rings: usize, amp: f32, bumps: &[f32]) -> TriMesh {
         for j in 0..seg {
             let th = std::f32::consts::TAU * j as f32 / seg as f32;
             let r = 1.0 + amp * bumps[(i * seg + j) % bumps.len()];
-            v.push([
-                r * phi.sin() * th.cos(),
-                -r * phi.cos(),
-                r * phi.sin() * th.sin(),
-            ]);
+            v.push([r * phi.sin() * th.cos(), -r * phi.cos(), r * phi.sin() * th.sin()]);
         }
     }
     let id = |i: usize, j: usize| (2 + (i - 1) * seg + j % seg) as u32;
@@ -42,10 +36,7 @@ fn bumpy_sphere(seg: usize, rings: usize, amp: f32, bumps: &[f32]) -> TriMesh {
         }
     }
     let (m, r) = TriMesh::new(v, f).unwrap();
-    assert_eq!(
-        r.boundary_edges + r.non_manifold_edges + r.misoriented_edges,
-        0
-    );
+    assert_eq!(r.boundary_edges + r.non_manifold_edges + r.misoriented_edges, 0);
     assert_eq!(m.solid_side(), Some(1.0), "outward winding");
     m
 }
@@ -55,18 +46,8 @@ fn cuboid(h: [f32; 3]) -> TriMesh {
     let v: Vec<[f32; 3]> = (0..8)
         .map(|i| [0, 1, 2].map(|k| if i >> k & 1 == 1 { h[k] } else { -h[k] }))
         .collect();
-    let quads = [
-        [0, 2, 3, 1],
-        [4, 5, 7, 6],
-        [0, 1, 5, 4],
-        [2, 6, 7, 3],
-        [0, 4, 6, 2],
-        [1, 3, 7, 5],
-    ];
-    let f = quads
-        .iter()
-        .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
-        .collect();
+    let quads = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]];
+    let f = quads.iter().flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]]).collect();
     TriMesh::new(v, f).unwrap().0
 }
 
@@ -103,12 +84,7 @@ fn broadphases(m: &TriMesh) -> Vec<Box<dyn FaceBroadphase + Sync>> {
 
 fn mesh_strategy() -> impl Strategy<Value = TriMesh> {
     prop_oneof![
-        (
-            4usize..20,
-            3usize..14,
-            0.0f32..0.3,
-            prop::collection::vec(-1.0f32..1.0, 1..50)
-        )
+        (4usize..20, 3usize..14, 0.0f32..0.3, prop::collection::vec(-1.0f32..1.0, 1..50))
             .prop_map(|(s, r, a, b)| bumpy_sphere(s, r, a, &b)),
         (0.05f32..2.0, 0.05f32..2.0, 0.05f32..2.0).prop_map(|(a, b, c)| cuboid([a, b, c])),
         (16usize..3000).prop_map(|t| dress_form(t).unwrap()),
@@ -237,41 +213,17 @@ fn batch_parallel_equals_serial_for_1_and_2_threads() {
     let m = dress_form(2000).unwrap();
     let g = UniformGrid::auto(&m).unwrap();
     let [x, y, z, px, py, pz] = particles(&m, 3000);
-    let (s, p) = (
-        Soa3 {
-            x: &x,
-            y: &y,
-            z: &z,
-        },
-        Soa3 {
-            x: &px,
-            y: &py,
-            z: &pz,
-        },
-    );
+    let (s, p) = (Soa3 { x: &x, y: &y, z: &z }, Soa3 { x: &px, y: &py, z: &pz });
     let mut serial = Vec::new();
     contacts_serial(&m, &g, s, p, 0.01, &mut serial).unwrap();
     assert!(serial.iter().filter(|c| c.is_some()).count() > 50);
     let mut mem_serial = vec![u32::MAX; x.len()];
     let mut out_mem_serial = Vec::new();
     for _ in 0..2 {
-        contacts_with_memory_serial(
-            &m,
-            &g,
-            s,
-            p,
-            0.01,
-            0.02,
-            &mut mem_serial,
-            &mut out_mem_serial,
-        )
-        .unwrap();
+        contacts_with_memory_serial(&m, &g, s, p, 0.01, 0.02, &mut mem_serial, &mut out_mem_serial).unwrap();
     }
     for threads in [1, 2] {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         let mut par = Vec::new();
         let mut mem = vec![u32::MAX; x.len()];
         let mut out_mem = Vec::new();
@@ -299,38 +251,10 @@ fn batch_rejects_bad_input() {
     let g = Bvh::new(&m);
     let (x, mut y, z) = (vec![0.0f32; 4], vec![0.0f32; 4], vec![0.0f32; 3]);
     let mut out = Vec::new();
-    let ok = Soa3 {
-        x: &x,
-        y: &x,
-        z: &x,
-    };
-    assert!(contacts_par(
-        &m,
-        &g,
-        ok,
-        Soa3 {
-            x: &x,
-            y: &y,
-            z: &z
-        },
-        0.01,
-        &mut out
-    )
-    .is_err());
+    let ok = Soa3 { x: &x, y: &x, z: &x };
+    assert!(contacts_par(&m, &g, ok, Soa3 { x: &x, y: &y, z: &z }, 0.01, &mut out).is_err());
     y[2] = f32::NAN;
-    assert!(contacts_par(
-        &m,
-        &g,
-        ok,
-        Soa3 {
-            x: &x,
-            y: &y,
-            z: &x
-        },
-        0.01,
-        &mut out
-    )
-    .is_err());
+    assert!(contacts_par(&m, &g, ok, Soa3 { x: &x, y: &y, z: &x }, 0.01, &mut out).is_err());
     assert!(contacts_serial(&m, &g, ok, ok, -1.0, &mut out).is_err());
     assert!(contacts_with_memory_par(&m, &g, ok, ok, 0.01, 0.02, &mut [0; 3], &mut out).is_err());
     contacts_par(&m, &g, ok, ok, 0.01, &mut out).unwrap();
@@ -344,11 +268,7 @@ fn batch_rejects_bad_input() {
 /// `m` must be two-sided here, so that leaving crossings count too.
 fn inside_mesh(m: &TriMesh, q: [f32; 3]) -> bool {
     assert!(m.solid_side().is_none());
-    let dirs = [
-        [3.1271, 10.0, 1.7313],
-        [-2.913, -7.77, 4.05],
-        [9.1, 0.71, -3.3],
-    ];
+    let dirs = [[3.1271, 10.0, 1.7313], [-2.913, -7.77, 4.05], [9.1, 0.71, -3.3]];
     let votes = dirs
         .iter()
         .filter(|d| {
@@ -385,14 +305,7 @@ fn falling_particles_never_penetrate_the_form() {
     for _step in 0..240 {
         let mut ps = xs.clone();
         for i in 0..n {
-            let g = project_if_remembered(
-                &m,
-                mem[i],
-                xs[i],
-                band,
-                Projection::IntoFaceOnly,
-                [0.0, -9.81, 0.0],
-            );
+            let g = project_if_remembered(&m, mem[i], xs[i], band, Projection::IntoFaceOnly, [0.0, -9.81, 0.0]);
             for k in 0..3 {
                 vs[i][k] += h * g[k];
                 ps[i][k] = xs[i][k] + h * vs[i][k];
@@ -401,18 +314,7 @@ fn falling_particles_never_penetrate_the_form() {
         let col = |a: &Vec<[f32; 3]>, k: usize| a.iter().map(|q| q[k]).collect::<Vec<f32>>();
         let (sx, sy, sz) = (col(&xs, 0), col(&xs, 1), col(&xs, 2));
         let (qx, qy, qz) = (col(&ps, 0), col(&ps, 1), col(&ps, 2));
-        let (s, p) = (
-            Soa3 {
-                x: &sx,
-                y: &sy,
-                z: &sz,
-            },
-            Soa3 {
-                x: &qx,
-                y: &qy,
-                z: &qz,
-            },
-        );
+        let (s, p) = (Soa3 { x: &sx, y: &sy, z: &sz }, Soa3 { x: &qx, y: &qy, z: &qz });
         contacts_with_memory_serial(&m, &bp, s, p, th, band, &mut mem, &mut out).unwrap();
         for i in 0..n {
             if let Some(c) = out[i] {
@@ -424,10 +326,7 @@ fn falling_particles_never_penetrate_the_form() {
         }
         xs = ps;
     }
-    assert!(
-        contacts > n,
-        "the particles must land on the form ({contacts} contacts)"
-    );
+    assert!(contacts > n, "the particles must land on the form ({contacts} contacts)");
     let mut sheet = m.clone();
     sheet.set_two_sided();
     let inside: Vec<usize> = (0..n).filter(|&i| inside_mesh(&sheet, xs[i])).collect();
@@ -443,26 +342,14 @@ fn falling_particles_never_penetrate_the_form() {
 fn face_memory_batches_agree_across_broadphases() {
     let m = dress_form(3000).unwrap();
     let [x, y, z, px, py, pz] = particles(&m, 2000);
-    let (s, p) = (
-        Soa3 {
-            x: &x,
-            y: &y,
-            z: &z,
-        },
-        Soa3 {
-            x: &px,
-            y: &py,
-            z: &pz,
-        },
-    );
+    let (s, p) = (Soa3 { x: &x, y: &y, z: &z }, Soa3 { x: &px, y: &py, z: &pz });
     let mut reference: Option<(Vec<Option<Bits>>, Vec<u32>)> = None;
     for bp in broadphases(&m) {
         let mut mem = vec![u32::MAX; x.len()];
         let mut out = Vec::new();
         let mut used = Vec::new();
         for _pass in 0..3 {
-            contacts_with_memory_par(&m, bp.as_ref(), s, p, 0.01, 0.02, &mut mem, &mut out)
-                .unwrap();
+            contacts_with_memory_par(&m, bp.as_ref(), s, p, 0.01, 0.02, &mut mem, &mut out).unwrap();
             used.extend(out.iter().map(bits));
         }
         assert!(mem.iter().any(|&f| f != u32::MAX));

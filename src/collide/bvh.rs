@@ -35,12 +35,7 @@ pub struct Bvh {
 }
 
 fn overlaps(alo: &[f32; 3], ahi: &[f32; 3], lo: &[f32; 3], hi: &[f32; 3]) -> bool {
-    alo[0] <= hi[0]
-        && alo[1] <= hi[1]
-        && alo[2] <= hi[2]
-        && lo[0] <= ahi[0]
-        && lo[1] <= ahi[1]
-        && lo[2] <= ahi[2]
+    alo[0] <= hi[0] && alo[1] <= hi[1] && alo[2] <= hi[2] && lo[0] <= ahi[0] && lo[1] <= ahi[1] && lo[2] <= ahi[2]
 }
 
 impl Bvh {
@@ -94,9 +89,7 @@ impl Bvh {
         };
         let mid = first + (end - first) / 2;
         self.order[first..end].select_nth_unstable_by(mid - first, |&a, &b| {
-            centre[a as usize][axis]
-                .total_cmp(&centre[b as usize][axis])
-                .then(a.cmp(&b))
+            centre[a as usize][axis].total_cmp(&centre[b as usize][axis]).then(a.cmp(&b))
         });
         self.build(mesh, centre, first, mid);
         let right = self.nodes.len() as u32;
@@ -162,9 +155,7 @@ impl FaceBroadphase for Bvh {
                 continue;
             }
             if nd.count > 0 {
-                out.extend_from_slice(
-                    &self.order[nd.first as usize..(nd.first + nd.count) as usize],
-                );
+                out.extend_from_slice(&self.order[nd.first as usize..(nd.first + nd.count) as usize]);
             } else {
                 // Median splits halve the count, so depth stays below 64 for any u32 size.
                 stack[top] = nd.first;

@@ -42,11 +42,7 @@ const KEYS: [(f32, f32, f32); 12] = [
 /// Half-widths `(a, b)` of the section at height `y` (clamped to the form).
 pub fn section(y: f32) -> (f32, f32) {
     let y = y.clamp(0.0, HEIGHT);
-    let i = KEYS
-        .iter()
-        .rposition(|k| k.0 <= y)
-        .unwrap_or(0)
-        .min(KEYS.len() - 2);
+    let i = KEYS.iter().rposition(|k| k.0 <= y).unwrap_or(0).min(KEYS.len() - 2);
     let (k0, k1) = (KEYS[i], KEYS[i + 1]);
     let t = ((y - k0.0) / (k1.0 - k0.0)).clamp(0.0, 1.0);
     let s = t * t * (3.0 - 2.0 * t);
@@ -56,11 +52,7 @@ pub fn section(y: f32) -> (f32, f32) {
 /// Segments around and rings up chosen for a face-count target (module doc).
 pub fn dims_for(target_faces: usize) -> Result<(usize, usize)> {
     if !(16..=4_000_000).contains(&target_faces) {
-        return Err(WeftError::param(
-            "dress form faces",
-            target_faces,
-            "must be between 16 and 4000000",
-        ));
+        return Err(WeftError::param("dress form faces", target_faces, "must be between 16 and 4000000"));
     }
     let half = target_faces as f64 / 2.0;
     let r0 = half.sqrt();
@@ -113,10 +105,7 @@ pub fn dress_form_with(segments: usize, rings: usize) -> Result<TriMesh> {
         f.push([top, id(r - 1, j + 1), id(r - 1, j)]);
     }
     let (mesh, report) = TriMesh::new(v, f)?;
-    if !report.skipped_faces.is_empty()
-        || report.boundary_edges > 0
-        || report.non_manifold_edges > 0
-    {
+    if !report.skipped_faces.is_empty() || report.boundary_edges > 0 || report.non_manifold_edges > 0 {
         return Err(WeftError::InvalidMesh {
             source_name: Some("dress form".into()),
             reason: format!("resolution {s} x {r} is too fine: {:?}", report.warnings),
@@ -142,15 +131,11 @@ mod tests {
             for k in 0..3 {
                 let (a, b) = (f[k], f[(k + 1) % 3]);
                 // +1 for a->b, -1 for b->a: consistent winding cancels on every edge
-                *edges.entry((a.min(b), a.max(b))).or_insert(0) +=
-                    if a < b { 1 } else { -1 } * 10 + 1;
+                *edges.entry((a.min(b), a.max(b))).or_insert(0) += if a < b { 1 } else { -1 } * 10 + 1;
             }
         }
         // each edge used twice (+1 +1 = 2) in opposite directions (+10 -10 = 0)
-        assert!(
-            edges.values().all(|&c| c == 2),
-            "not closed / inconsistent winding"
-        );
+        assert!(edges.values().all(|&c| c == 2), "not closed / inconsistent winding");
         let vol = m.signed_volume();
         assert!(vol > 0.0, "inward normals, volume {vol}");
         // a body this size: somewhere between a thin and a fat cylinder
@@ -177,10 +162,7 @@ mod tests {
         for t in [16, 100, 777, 3000, 20000] {
             let m = dress_form(t).unwrap();
             let got = m.face_count() as f64;
-            assert!(
-                (got - t as f64).abs() <= 0.05 * t as f64 + 8.0,
-                "{t} -> {got}"
-            );
+            assert!((got - t as f64).abs() <= 0.05 * t as f64 + 8.0, "{t} -> {got}");
             check_closed_outward(&m);
         }
         assert!(dress_form(3).is_err());

@@ -31,9 +31,7 @@ pub struct BruteForce {
 impl BruteForce {
     /// A brute-force broadphase for `mesh`.
     pub fn new(mesh: &TriMesh) -> Self {
-        BruteForce {
-            stamp: mesh.stamp(),
-        }
+        BruteForce { stamp: mesh.stamp() }
     }
 }
 

@@ -40,16 +40,12 @@ fn coord(q: f32, inv: f32) -> i64 {
 
 #[inline]
 fn slot(i: i64, j: i64, k: i64, mask: u64) -> usize {
-    let h = (i as u64).wrapping_mul(73_856_093)
-        ^ (j as u64).wrapping_mul(19_349_663)
-        ^ (k as u64).wrapping_mul(83_492_791);
+    let h = (i as u64).wrapping_mul(73_856_093) ^ (j as u64).wrapping_mul(19_349_663) ^ (k as u64).wrapping_mul(83_492_791);
     (h & mask) as usize
 }
 
 fn span(a: [i64; 3], b: [i64; 3]) -> u64 {
-    (0..3).fold(1u64, |acc, k| {
-        acc.saturating_mul(b[k].saturating_sub(a[k]) as u64 + 1)
-    })
+    (0..3).fold(1u64, |acc, k| acc.saturating_mul(b[k].saturating_sub(a[k]) as u64 + 1))
 }
 
 /// Mean over faces of the largest side of the face box: a natural cell edge.
@@ -70,26 +66,13 @@ impl FaceHash {
         crate::error::positive("face hash cell", cell)?;
         let inv = 1.0 / cell;
         if !inv.is_finite() {
-            return Err(crate::WeftError::param(
-                "face hash cell",
-                cell,
-                "is too small",
-            ));
+            return Err(crate::WeftError::param("face hash cell", cell, "is too small"));
         }
         let nf = mesh.face_count() as u32;
         let ranges: Vec<([i64; 3], [i64; 3])> = (0..nf)
-            .map(|f| {
-                (
-                    mesh.face_lo(f).map(|q| coord(q, inv)),
-                    mesh.face_hi(f).map(|q| coord(q, inv)),
-                )
-            })
+            .map(|f| (mesh.face_lo(f).map(|q| coord(q, inv)), mesh.face_hi(f).map(|q| coord(q, inv))))
             .collect();
-        let entries: u64 = ranges
-            .iter()
-            .map(|&(a, b)| span(a, b))
-            .filter(|&s| s <= BIG_FACE_CELLS)
-            .sum();
+        let entries: u64 = ranges.iter().map(|&(a, b)| span(a, b)).filter(|&s| s <= BIG_FACE_CELLS).sum();
         let size = (2 * entries).max(16).next_power_of_two() as usize;
         let mut h = FaceHash {
             inv,
@@ -207,10 +190,7 @@ mod tests {
                 out.sort_unstable();
                 for f in 0..m.face_count() as u32 {
                     if m.face_overlaps(f, ql, qh) {
-                        assert!(
-                            out.binary_search(&f).is_ok(),
-                            "cell {cell}: face {f} missed"
-                        );
+                        assert!(out.binary_search(&f).is_ok(), "cell {cell}: face {f} missed");
                     }
                 }
             }

@@ -62,14 +62,7 @@ pub fn project_onto_face(mesh: &TriMesh, f: u32, v: [f32; 3], rule: Projection) 
 }
 
 /// Projects `v` onto the remembered face if the particle at `x` is over it; otherwise `v`.
-pub fn project_if_remembered(
-    mesh: &TriMesh,
-    memory: u32,
-    x: [f32; 3],
-    band: f32,
-    rule: Projection,
-    v: [f32; 3],
-) -> [f32; 3] {
+pub fn project_if_remembered(mesh: &TriMesh, memory: u32, x: [f32; 3], band: f32, rule: Projection, v: [f32; 3]) -> [f32; 3] {
     if memory != NO_FACE && over_face(mesh, memory, x, band) {
         project_onto_face(mesh, memory, v, rule)
     } else {
@@ -121,12 +114,7 @@ mod tests {
     use crate::collide::face_broadphase::BruteForce;
 
     fn square() -> TriMesh {
-        let v = vec![
-            [0.0, 0.0, 0.0],
-            [1.0, 0.0, 0.0],
-            [1.0, 1.0, 0.0],
-            [0.0, 1.0, 0.0],
-        ];
+        let v = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
         TriMesh::new(v, vec![[0, 1, 2], [0, 2, 3]]).unwrap().0
     }
 
@@ -137,69 +125,24 @@ mod tests {
         let (th, band) = (0.05, 0.1);
         let mut mem = NO_FACE;
         let mut s = Vec::new();
-        let r = contact_with_memory(
-            &m,
-            &bp,
-            &mut mem,
-            [0.8, 0.2, 0.5],
-            [0.8, 0.2, -0.1],
-            th,
-            band,
-            &mut s,
-        );
+        let r = contact_with_memory(&m, &bp, &mut mem, [0.8, 0.2, 0.5], [0.8, 0.2, -0.1], th, band, &mut s);
         assert!(!r.used_memory);
         assert_eq!(mem, 0);
         // resting on face 0 and pressing in: only face 0 tested, contact found
-        let r = contact_with_memory(
-            &m,
-            &bp,
-            &mut mem,
-            [0.8, 0.2, 0.05],
-            [0.8, 0.3, 0.0],
-            th,
-            band,
-            &mut s,
-        );
+        let r = contact_with_memory(&m, &bp, &mut mem, [0.8, 0.2, 0.05], [0.8, 0.3, 0.0], th, band, &mut s);
         assert!(r.used_memory);
         assert_eq!(r.contact.unwrap().face, 0);
         // moving over face 1: full search, memory follows the new contact
-        let r = contact_with_memory(
-            &m,
-            &bp,
-            &mut mem,
-            [0.8, 0.3, 0.05],
-            [0.2, 0.7, 0.02],
-            th,
-            band,
-            &mut s,
-        );
+        let r = contact_with_memory(&m, &bp, &mut mem, [0.8, 0.3, 0.05], [0.2, 0.7, 0.02], th, band, &mut s);
         assert!(!r.used_memory);
         assert_eq!(mem, 1);
         // lifted beyond the band: memory cleared
-        let r = contact_with_memory(
-            &m,
-            &bp,
-            &mut mem,
-            [0.2, 0.7, 0.3],
-            [0.2, 0.7, 0.5],
-            th,
-            band,
-            &mut s,
-        );
+        let r = contact_with_memory(&m, &bp, &mut mem, [0.2, 0.7, 0.3], [0.2, 0.7, 0.5], th, band, &mut s);
         assert!(!r.used_memory && r.contact.is_none());
         assert_eq!(mem, NO_FACE);
         // garbage memory counts as empty
         let mut bad = 77;
-        let r = contact_with_memory(
-            &m,
-            &bp,
-            &mut bad,
-            [0.2, 0.7, 0.3],
-            [0.2, 0.7, 0.5],
-            th,
-            band,
-            &mut s,
-        );
+        let r = contact_with_memory(&m, &bp, &mut bad, [0.2, 0.7, 0.3], [0.2, 0.7, 0.5], th, band, &mut s);
         assert!(!r.used_memory);
         assert_eq!(bad, NO_FACE);
     }
@@ -208,32 +151,17 @@ mod tests {
     fn projection_rules() {
         let m = square();
         let g = [1.0, 2.0, -9.8];
-        assert_eq!(
-            project_onto_face(&m, 0, g, Projection::Full),
-            [1.0, 2.0, 0.0]
-        );
-        assert_eq!(
-            project_onto_face(&m, 0, g, Projection::IntoFaceOnly),
-            [1.0, 2.0, 0.0]
-        );
+        assert_eq!(project_onto_face(&m, 0, g, Projection::Full), [1.0, 2.0, 0.0]);
+        assert_eq!(project_onto_face(&m, 0, g, Projection::IntoFaceOnly), [1.0, 2.0, 0.0]);
         let up = [1.0, 2.0, 3.0];
-        assert_eq!(
-            project_onto_face(&m, 0, up, Projection::Full),
-            [1.0, 2.0, 0.0]
-        );
+        assert_eq!(project_onto_face(&m, 0, up, Projection::Full), [1.0, 2.0, 0.0]);
         assert_eq!(project_onto_face(&m, 0, up, Projection::IntoFaceOnly), up);
         assert_eq!(
             project_if_remembered(&m, 0, [0.9, 0.1, 0.01], 0.1, Projection::Full, g),
             [1.0, 2.0, 0.0]
         );
-        assert_eq!(
-            project_if_remembered(&m, 0, [0.1, 0.9, 0.01], 0.1, Projection::Full, g),
-            g
-        );
-        assert_eq!(
-            project_if_remembered(&m, NO_FACE, [0.9, 0.1, 0.01], 0.1, Projection::Full, g),
-            g
-        );
+        assert_eq!(project_if_remembered(&m, 0, [0.1, 0.9, 0.01], 0.1, Projection::Full, g), g);
+        assert_eq!(project_if_remembered(&m, NO_FACE, [0.9, 0.1, 0.01], 0.1, Projection::Full, g), g);
         assert!(over_face(&m, 0, [1.0, 0.0, 0.0], 0.0));
         assert!(!over_face(&m, 5, [1.0, 0.0, 0.0], 1.0));
     }

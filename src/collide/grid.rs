@@ -55,13 +55,7 @@ pub fn auto_dims(mesh: &TriMesh) -> [usize; 3] {
     let (lo, hi) = mesh.bounds();
     let ext = [0, 1, 2].map(|k| (hi[k] - lo[k]) as f64);
     let cap = (4 * n).max(1) as f64;
-    let mut d = ext.map(|e| {
-        if size > 0.0 {
-            (e / size).ceil().max(1.0)
-        } else {
-            1.0
-        }
-    });
+    let mut d = ext.map(|e| if size > 0.0 { (e / size).ceil().max(1.0) } else { 1.0 });
     let total = d[0] * d[1] * d[2];
     if total > cap {
         let s = (cap / total).cbrt();
@@ -120,11 +114,7 @@ impl UniformGrid {
             g.start[c + 1] += g.start[c];
         }
         g.face_cell = (0..nf)
-            .map(|f| {
-                g.range(mesh.face_lo(f), mesh.face_hi(f))
-                    .0
-                    .map(|i| i as u32)
-            })
+            .map(|f| g.range(mesh.face_lo(f), mesh.face_hi(f)).0.map(|i| i as u32))
             .collect();
         let mut fill = g.start.clone();
         g.faces = vec![0; g.start[total] as usize];
@@ -165,10 +155,7 @@ impl UniformGrid {
 
     #[inline]
     fn range(&self, lo: [f32; 3], hi: [f32; 3]) -> ([usize; 3], [usize; 3]) {
-        (
-            [0, 1, 2].map(|k| self.cell_of(lo[k], k)),
-            [0, 1, 2].map(|k| self.cell_of(hi[k], k)),
-        )
+        ([0, 1, 2].map(|k| self.cell_of(lo[k], k)), [0, 1, 2].map(|k| self.cell_of(hi[k], k)))
     }
 
     fn for_cells(&mut self, a: [usize; 3], b: [usize; 3], mut f: impl FnMut(usize, &mut Self)) {

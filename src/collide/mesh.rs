@@ -67,11 +67,7 @@ fn sub(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
 }
 
 fn cross(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
+    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
 }
 
 fn norm2(a: [f32; 3]) -> f32 {
@@ -87,10 +83,7 @@ fn face_ok([a, b, c]: [[f32; 3]; 3]) -> bool {
 }
 
 fn bad(reason: String) -> WeftError {
-    WeftError::InvalidMesh {
-        source_name: None,
-        reason,
-    }
+    WeftError::InvalidMesh { source_name: None, reason }
 }
 
 impl TriMesh {
@@ -100,22 +93,14 @@ impl TriMesh {
     /// face left after dropping slivers. Slivers and non-manifold/boundary edges are reported.
     pub fn new(vertices: Vec<[f32; 3]>, faces: Vec<[u32; 3]>) -> Result<(TriMesh, MeshReport)> {
         if vertices.is_empty() || faces.is_empty() {
-            return Err(bad(format!(
-                "empty mesh ({} vertices, {} faces)",
-                vertices.len(),
-                faces.len()
-            )));
+            return Err(bad(format!("empty mesh ({} vertices, {} faces)", vertices.len(), faces.len())));
         }
         if vertices.len() > u32::MAX as usize || faces.len() >= u32::MAX as usize {
             return Err(bad(
-                "too many vertices or faces (indices are u32; u32::MAX means \"no face\")".into(),
+                "too many vertices or faces (indices are u32; u32::MAX means \"no face\")".into()
             ));
         }
-        if let Some((i, v)) = vertices
-            .iter()
-            .enumerate()
-            .find(|(_, v)| !v.iter().all(|c| c.is_finite()))
-        {
+        if let Some((i, v)) = vertices.iter().enumerate().find(|(_, v)| !v.iter().all(|c| c.is_finite())) {
             return Err(bad(format!("vertex {i} is not finite: {v:?}")));
         }
         let nv = vertices.len();
@@ -126,25 +111,16 @@ impl TriMesh {
         let mut kept = Vec::with_capacity(faces.len());
         for (fi, f) in faces.iter().enumerate() {
             if let Some(&k) = f.iter().find(|&&k| k as usize >= nv) {
-                return Err(bad(format!(
-                    "face {fi} uses vertex {k} but there are only {nv} vertices"
-                )));
+                return Err(bad(format!("face {fi} uses vertex {k} but there are only {nv} vertices")));
             }
-            if f[0] == f[1]
-                || f[1] == f[2]
-                || f[0] == f[2]
-                || !face_ok(f.map(|k| vertices[k as usize]))
-            {
+            if f[0] == f[1] || f[1] == f[2] || f[0] == f[2] || !face_ok(f.map(|k| vertices[k as usize])) {
                 report.skipped_faces.push(fi);
             } else {
                 kept.push(*f);
             }
         }
         if kept.is_empty() {
-            return Err(bad(format!(
-                "all {} faces have zero area or are slivers",
-                faces.len()
-            )));
+            return Err(bad(format!("all {} faces have zero area or are slivers", faces.len())));
         }
         if !report.skipped_faces.is_empty() {
             report.warnings.push(format!(
@@ -179,10 +155,9 @@ impl TriMesh {
             ));
         }
         if report.boundary_edges > 0 {
-            report.warnings.push(format!(
-                "{} boundary edges: the mesh is not closed",
-                report.boundary_edges
-            ));
+            report
+                .warnings
+                .push(format!("{} boundary edges: the mesh is not closed", report.boundary_edges));
         }
         let mut mesh = TriMesh {
             vertices,
@@ -196,8 +171,7 @@ impl TriMesh {
             solid_side: None,
         };
         mesh.recompute();
-        let closed =
-            report.non_manifold_edges + report.boundary_edges + report.misoriented_edges == 0;
+        let closed = report.non_manifold_edges + report.boundary_edges + report.misoriented_edges == 0;
         if closed {
             let v = mesh.signed_volume();
             if v != 0.0 {
@@ -213,19 +187,11 @@ impl TriMesh {
     /// (or, for [`Bvh`](super::bvh::Bvh), refitted); batch queries refuse stale ones.
     pub fn translate(&mut self, d: [f32; 3]) -> Result<()> {
         crate::error::finite3("translation", d)?;
-        let moved: Vec<[f32; 3]> = self
-            .vertices
-            .iter()
-            .map(|v| [v[0] + d[0], v[1] + d[1], v[2] + d[2]])
-            .collect();
+        let moved: Vec<[f32; 3]> = self.vertices.iter().map(|v| [v[0] + d[0], v[1] + d[1], v[2] + d[2]]).collect();
         if let Some(v) = moved.iter().find(|v| !v.iter().all(|c| c.is_finite())) {
             return Err(bad(format!("translation makes a vertex non-finite: {v:?}")));
         }
-        if let Some(fi) = self
-            .faces
-            .iter()
-            .position(|f| !face_ok(f.map(|k| moved[k as usize])))
-        {
+        if let Some(fi) = self.faces.iter().position(|f| !face_ok(f.map(|k| moved[k as usize]))) {
             return Err(bad(format!(
                 "translation by {d:?} collapses face {fi} (coordinates too large for f32)"
             )));
@@ -300,12 +266,7 @@ impl TriMesh {
     #[inline]
     pub fn face_overlaps(&self, f: u32, lo: [f32; 3], hi: [f32; 3]) -> bool {
         let (a, b) = (&self.face_lo[f as usize], &self.face_hi[f as usize]);
-        a[0] <= hi[0]
-            && a[1] <= hi[1]
-            && a[2] <= hi[2]
-            && lo[0] <= b[0]
-            && lo[1] <= b[1]
-            && lo[2] <= b[2]
+        a[0] <= hi[0] && a[1] <= hi[1] && a[2] <= hi[2] && lo[0] <= b[0] && lo[1] <= b[1] && lo[2] <= b[2]
     }
     /// For a closed, consistently wound mesh (a solid): `+1.0` if the face normals point out
     /// (positive [`signed_volume`](Self::signed_volume)), `-1.0` if they point in. `None` for
@@ -325,11 +286,7 @@ impl TriMesh {
             .iter()
             .map(|f| {
                 let [a, b, c] = f.map(|k| self.vertices[k as usize].map(|x| x as f64));
-                let bc = [
-                    b[1] * c[2] - b[2] * c[1],
-                    b[2] * c[0] - b[0] * c[2],
-                    b[0] * c[1] - b[1] * c[0],
-                ];
+                let bc = [b[1] * c[2] - b[2] * c[1], b[2] * c[0] - b[0] * c[2], b[0] * c[1] - b[1] * c[0]];
                 (a[0] * bc[0] + a[1] * bc[1] + a[2] * bc[2]) / 6.0
             })
             .sum()
@@ -341,12 +298,7 @@ mod tests {
     use super::*;
 
     fn tetra() -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
-        let v = vec![
-            [0.0, 0.0, 0.0],
-            [1.0, 0.0, 0.0],
-            [0.0, 1.0, 0.0],
-            [0.0, 0.0, 1.0],
-        ];
+        let v = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
         let f = vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
         (v, f)
     }
@@ -362,10 +314,7 @@ mod tests {
         assert_eq!(m.solid_side(), Some(1.0));
         let (v, f) = tetra();
         let inward = f.iter().map(|t| [t[0], t[2], t[1]]).collect();
-        assert_eq!(
-            TriMesh::new(v.clone(), inward).unwrap().0.solid_side(),
-            Some(-1.0)
-        );
+        assert_eq!(TriMesh::new(v.clone(), inward).unwrap().0.solid_side(), Some(-1.0));
         let mut mixed = f.clone();
         mixed[1] = [0, 3, 1];
         let (mm, r) = TriMesh::new(v, mixed).unwrap();

@@ -43,24 +43,14 @@ impl Soa3<'_> {
                 });
             }
             if let Some(i) = arr.iter().position(|v| !v.is_finite()) {
-                return Err(WeftError::param(
-                    format!("{name}.{which}[{i}]"),
-                    arr[i],
-                    "must be finite",
-                ));
+                return Err(WeftError::param(format!("{name}.{which}[{i}]"), arr[i], "must be finite"));
             }
         }
         Ok(())
     }
 }
 
-fn check<B: FaceBroadphase + ?Sized>(
-    mesh: &TriMesh,
-    bp: &B,
-    start: &Soa3,
-    pred: &Soa3,
-    th: f32,
-) -> Result<usize> {
+fn check<B: FaceBroadphase + ?Sized>(mesh: &TriMesh, bp: &B, start: &Soa3, pred: &Soa3, th: f32) -> Result<usize> {
     let n = start.x.len();
     start.check("start", n)?;
     pred.check("predicted", n)?;
@@ -87,9 +77,7 @@ pub fn contacts_serial<B: FaceBroadphase + ?Sized>(
     let n = check(mesh, bp, &start, &pred, th)?;
     let mut scratch = Vec::new();
     out.clear();
-    out.extend(
-        (0..n).map(|i| mesh_contact_with(mesh, bp, start.get(i), pred.get(i), th, &mut scratch)),
-    );
+    out.extend((0..n).map(|i| mesh_contact_with(mesh, bp, start.get(i), pred.get(i), th, &mut scratch)));
     Ok(())
 }
 
@@ -142,19 +130,12 @@ pub fn contacts_with_memory_serial<B: FaceBroadphase + ?Sized>(
     check_memory(memory, n, band)?;
     let mut scratch = Vec::new();
     out.clear();
-    out.extend(memory.iter_mut().enumerate().map(|(i, m)| {
-        contact_with_memory(
-            mesh,
-            bp,
-            m,
-            start.get(i),
-            pred.get(i),
-            th,
-            band,
-            &mut scratch,
-        )
-        .contact
-    }));
+    out.extend(
+        memory
+            .iter_mut()
+            .enumerate()
+            .map(|(i, m)| contact_with_memory(mesh, bp, m, start.get(i), pred.get(i), th, band, &mut scratch).contact),
+    );
     Ok(())
 }
 
@@ -180,8 +161,7 @@ pub fn contacts_with_memory_par<B: FaceBroadphase + Sync + ?Sized>(
         .enumerate()
         .with_min_len(MIN_CHUNK)
         .for_each_init(Vec::new, |scratch, (i, (o, m))| {
-            *o = contact_with_memory(mesh, bp, m, start.get(i), pred.get(i), th, band, scratch)
-                .contact;
+            *o = contact_with_memory(mesh, bp, m, start.get(i), pred.get(i), th, band, scratch).contact;
         });
     Ok(())
 }

@@ -34,12 +34,7 @@ impl TriMesh {
         for m in &models {
             let base = vertices.len() as u32;
             vertices.extend(m.mesh.positions.chunks_exact(3).map(|c| [c[0], c[1], c[2]]));
-            faces.extend(
-                m.mesh
-                    .indices
-                    .chunks_exact(3)
-                    .map(|c| [base + c[0], base + c[1], base + c[2]]),
-            );
+            faces.extend(m.mesh.indices.chunks_exact(3).map(|c| [base + c[0], base + c[1], base + c[2]]));
         }
         TriMesh::new(vertices, faces).map_err(|e| match e {
             WeftError::InvalidMesh { reason, .. } => named(reason),

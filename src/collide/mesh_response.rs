@@ -63,12 +63,7 @@ mod tests {
     use crate::collide::narrow::mesh_contact;
 
     fn square() -> TriMesh {
-        let v = vec![
-            [0.0, 0.0, 0.0],
-            [1.0, 0.0, 0.0],
-            [1.0, 1.0, 0.0],
-            [0.0, 1.0, 0.0],
-        ];
+        let v = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
         TriMesh::new(v, vec![[0, 1, 2], [0, 2, 3]]).unwrap().0
     }
 
@@ -95,9 +90,6 @@ mod tests {
         assert_eq!(resolve_velocity([3.0, 0.0, -1.0], n, 0.5), [2.5, 0.0, 0.0]);
         assert_eq!(resolve_velocity([0.4, 0.0, -1.0], n, 0.5), [0.0; 3]);
         assert_eq!(resolve_velocity([3.0, 0.0, 1.0], n, 0.5), [3.0, 0.0, 1.0]);
-        assert_eq!(
-            resolve_velocity([3.0, 0.0, -1.0], n, f32::NAN),
-            [3.0, 0.0, 0.0]
-        );
+        assert_eq!(resolve_velocity([3.0, 0.0, -1.0], n, f32::NAN), [3.0, 0.0, 0.0]);
     }
 }

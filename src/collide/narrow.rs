@@ -83,11 +83,7 @@ fn dot(a: V, b: V) -> f64 {
 }
 #[inline]
 fn cross(a: V, b: V) -> V {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
+    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
 }
 #[inline]
 fn axpy(a: V, t: f64, b: V) -> V {
@@ -135,9 +131,7 @@ pub fn closest_point_on_triangle(q: [f64; 3], a: [f64; 3], b: [f64; 3], c: [f64;
 #[inline]
 pub(crate) fn inside(q: V, a: V, b: V, c: V, n: V, nn: f64, tol: f64) -> bool {
     let (qa, qb, qc) = (sub(a, q), sub(b, q), sub(c, q));
-    dot(cross(qb, qc), n) >= -tol * nn
-        && dot(cross(qc, qa), n) >= -tol * nn
-        && dot(cross(qa, qb), n) >= -tol * nn
+    dot(cross(qb, qc), n) >= -tol * nn && dot(cross(qc, qa), n) >= -tol * nn && dot(cross(qa, qb), n) >= -tol * nn
 }
 
 /// Tests the step `x -> p` of a particle with thickness `th` against face `f` alone.
@@ -186,10 +180,7 @@ pub fn face_contact(mesh: &TriMesh, f: u32, x: [f32; 3], p: [f32; 3], th: f32) -
 pub fn query_box(x: [f32; 3], p: [f32; 3], th: f32) -> ([f32; 3], [f32; 3]) {
     let big = x.iter().chain(p.iter()).fold(0.0f32, |m, v| m.max(v.abs()));
     let g = th + QUERY_PAD * (1.0 + big);
-    (
-        [0, 1, 2].map(|k| x[k].min(p[k]) - g),
-        [0, 1, 2].map(|k| x[k].max(p[k]) + g),
-    )
+    ([0, 1, 2].map(|k| x[k].min(p[k]) - g), [0, 1, 2].map(|k| x[k].max(p[k]) + g))
 }
 
 /// Is contact `a` chosen over `b`? Smaller time of impact first, then smaller face index.
@@ -224,13 +215,7 @@ pub fn mesh_contact_with<B: FaceBroadphase + ?Sized>(
 }
 
 /// [`mesh_contact_with`] with its own scratch list.
-pub fn mesh_contact<B: FaceBroadphase + ?Sized>(
-    mesh: &TriMesh,
-    bp: &B,
-    x: [f32; 3],
-    p: [f32; 3],
-    th: f32,
-) -> Option<Contact> {
+pub fn mesh_contact<B: FaceBroadphase + ?Sized>(mesh: &TriMesh, bp: &B, x: [f32; 3], p: [f32; 3], th: f32) -> Option<Contact> {
     mesh_contact_with(mesh, bp, x, p, th, &mut Vec::new())
 }
 
@@ -240,12 +225,7 @@ mod tests {
     use crate::collide::face_broadphase::BruteForce;
 
     fn square() -> TriMesh {
-        let v = vec![
-            [0.0, 0.0, 0.0],
-            [1.0, 0.0, 0.0],
-            [1.0, 1.0, 0.0],
-            [0.0, 1.0, 0.0],
-        ];
+        let v = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
         TriMesh::new(v, vec![[0, 1, 2], [0, 2, 3]]).unwrap().0
     }
 
@@ -289,21 +269,13 @@ mod tests {
         assert_eq!(c.point, [1.0, 1.0, 0.0]);
         // lying in the plane, on the face: proximity, normal is the outside
         let c = mesh_contact(&m, &bp, [0.2, 0.1, 0.0], [0.6, 0.1, 0.0], 0.01).unwrap();
-        assert_eq!(
-            (c.kind, c.normal, c.depth),
-            (ContactKind::Proximity, [0.0, 0.0, 1.0], 0.01)
-        );
+        assert_eq!((c.kind, c.normal, c.depth), (ContactKind::Proximity, [0.0, 0.0, 1.0], 0.01));
         // starting exactly on the face, moving in: crossing at t = 0
         let c = mesh_contact(&m, &bp, [0.3, 0.1, 0.0], [0.3, 0.1, -0.5], 0.0).unwrap();
         assert_eq!((c.kind, c.t), (ContactKind::Crossing, 0.0));
         // zero-length step on a vertex, zero thickness: nothing, no NaN
         assert!(mesh_contact(&m, &bp, [0.0; 3], [0.0; 3], 0.0).is_none());
-        for q in [
-            [0.0f32; 3],
-            [1.0, 0.0, 0.0],
-            [0.5, 0.5, 0.0],
-            [0.5, 0.0, 0.0],
-        ] {
+        for q in [[0.0f32; 3], [1.0, 0.0, 0.0], [0.5, 0.5, 0.0], [0.5, 0.0, 0.0]] {
             let c = mesh_contact(&m, &bp, q, q, 0.05).unwrap();
             assert!(c.point.iter().chain(&c.normal).all(|v| v.is_finite()));
             assert_eq!(c.depth, 0.05);
@@ -312,22 +284,14 @@ mod tests {
 
     #[test]
     fn solids_have_one_outside() {
-        let v = vec![
-            [0.0, 0.0, 0.0],
-            [1.0, 0.0, 0.0],
-            [0.0, 1.0, 0.0],
-            [0.0, 0.0, 1.0],
-        ];
+        let v = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
         let f = vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
         let (m, _) = TriMesh::new(v, f).unwrap();
         let bp = BruteForce::new(&m);
         let (inside, below) = ([0.2, 0.2, 0.2], [0.2, 0.2, -0.5]);
         // entering: caught, normal points out of the solid
         let c = mesh_contact(&m, &bp, below, inside, 0.0).unwrap();
-        assert_eq!(
-            (c.face, c.kind, c.normal),
-            (0, ContactKind::Crossing, [0.0, 0.0, -1.0])
-        );
+        assert_eq!((c.face, c.kind, c.normal), (0, ContactKind::Crossing, [0.0, 0.0, -1.0]));
         // leaving: let out
         assert!(mesh_contact(&m, &bp, inside, below, 0.0).is_none());
         // ended just inside the floor, within the thickness: pushed out, below the floor
