@@ -11,8 +11,10 @@
 //! [`basis_global`] evaluates all `n_ctrl` functions this way, level by level, in `f64`: the
 //! reference, `O(n p)` per point. Since `N_{i,p}` vanishes outside `[t_i, t_{i+p+1})`, only the
 //! `p + 1` functions `N_{s-p} ..= N_s` are non-zero on the span `[t_s, t_{s+1})` that holds
-//! `u`. [`basis_local`] finds `s` by binary search and computes just those with the triangular
-//! scheme (Piegl & Tiller, *The NURBS Book*, A2.2): `O(p^2)` per point, independent of `n`.
+//! `u`. [`basis_local`] finds `s` (directly for the clamped uniform vector, by binary search
+//! for any other) and computes just those with the triangular scheme (Piegl & Tiller, *The
+//! NURBS Book*, A2.2): `O(p^2)` per point, independent of `n` (plus `O(log n)` for the search
+//! when the knots are not uniform).
 //! This is the paper's "local evaluation" (formula 2.11): it sums over `[now - k, now + k]`,
 //! a window that contains the `k` non-zero terms; the others are exactly zero.
 

@@ -1,7 +1,7 @@
 //! Batch evaluation of a NURBS curve at many parameters, SoA out, SIMD over parameters.
 //!
 //! Eight parameters are evaluated at once, one per lane: each lane finds its own knot span
-//! (binary search, scalar), the knots and control points it needs are gathered into `f32x8`
+//! (scalar), the knots and control points it needs are gathered into `f32x8`
 //! registers, and the triangular Cox–de Boor scheme and the rational sum run in SIMD with
 //! exactly the operations, in exactly the order, of the scalar local evaluator. The SIMD path
 //! and its scalar twin ([`NurbsCurve::eval_many_scalar`]) therefore agree bit for bit (no FMA

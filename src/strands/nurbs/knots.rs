@@ -42,6 +42,24 @@ pub struct KnotVector {
     knots: Vec<f32>,
     degree: usize,
     n_ctrl: usize,
+    /// The knots are exactly [`KnotVector::clamped_uniform`]'s: the span is found in O(1).
+    uniform: bool,
+}
+
+/// The clamped uniform knot values (see the module docs).
+fn clamped_values(n_ctrl: usize, degree: usize) -> Vec<f32> {
+    let spans = (n_ctrl - degree) as f64;
+    (0..n_ctrl + degree + 1)
+        .map(|i| {
+            if i <= degree {
+                0.0
+            } else if i >= n_ctrl {
+                1.0
+            } else {
+                ((i - degree) as f64 / spans) as f32
+            }
+        })
+        .collect()
 }
 
 fn check_shape(n_ctrl: usize, degree: usize) -> Result<()> {
@@ -103,10 +121,12 @@ impl KnotVector {
                 "the domain [t_degree, t_n_ctrl] must have positive length",
             ));
         }
+        let uniform = knots == clamped_values(n_ctrl, degree);
         Ok(Self {
             knots,
             degree,
             n_ctrl,
+            uniform,
         })
     }
 
@@ -115,19 +135,7 @@ impl KnotVector {
     /// points.
     pub fn clamped_uniform(n_ctrl: usize, degree: usize) -> Result<Self> {
         check_shape(n_ctrl, degree)?;
-        let spans = (n_ctrl - degree) as f64;
-        let knots = (0..n_ctrl + degree + 1)
-            .map(|i| {
-                if i <= degree {
-                    0.0
-                } else if i >= n_ctrl {
-                    1.0
-                } else {
-                    ((i - degree) as f64 / spans) as f32
-                }
-            })
-            .collect();
-        Self::new(knots, degree, n_ctrl)
+        Self::new(clamped_values(n_ctrl, degree), degree, n_ctrl)
     }
 
     /// The paper's formula 2.9 exactly as printed (order `k = degree + 1`, `n = n_ctrl - 1`,
@@ -188,16 +196,37 @@ impl KnotVector {
     }
 
     /// The knot span `s` with `t_s <= u < t_{s+1}` and `degree <= s < n_ctrl` (at the right end
-    /// of the domain, the last non-empty span), by binary search. Errors if `u` is outside the
-    /// domain or not finite.
+    /// of the domain, the last non-empty span): computed directly for the clamped uniform
+    /// vector, by binary search otherwise. Errors if `u` is outside the domain or not finite.
     pub fn find_span(&self, u: f32) -> Result<usize> {
         self.check_param("u", u)?;
         Ok(self.span_unchecked(u))
     }
 
-    /// [`KnotVector::find_span`] for a `u` already known to be in the domain.
+    /// [`KnotVector::find_span`] for a `u` already known to be in the domain. For the clamped
+    /// uniform vector the span is computed directly, `s = p + floor(u (n_ctrl - p))`, then
+    /// corrected by a step if the rounding of the `f32` knots disagrees: O(1), so local
+    /// evaluation costs the same for any number of control points. Otherwise binary search.
     #[inline]
     pub(crate) fn span_unchecked(&self, u: f32) -> usize {
+        if !self.uniform {
+            return self.span_search(u);
+        }
+        let (p, n, t) = (self.degree, self.n_ctrl, &self.knots);
+        let spans = n - p;
+        let mut s = p + ((u as f64 * spans as f64) as usize).min(spans - 1);
+        while s > p && t[s] > u {
+            s -= 1;
+        }
+        while s + 1 < n && t[s + 1] <= u {
+            s += 1;
+        }
+        s
+    }
+
+    /// The span by binary search; any valid knot vector.
+    #[inline]
+    fn span_search(&self, u: f32) -> usize {
         let p = self.degree;
         // Number of knots t_{p+1} .. t_{n_ctrl-1} that are <= u: the last span starting at or
         // before u. t_{p+1..n_ctrl} is sorted, so partition_point is a binary search.
@@ -271,7 +300,27 @@ mod tests {
             );
         }
         assert!(kv.find_span(-0.001).is_err());
+        assert!(kv.uniform);
+        assert!(!KnotVector::paper_verbatim(7, 3).unwrap().uniform);
         assert!(kv.find_span(1.001).is_err());
         assert!(kv.find_span(f32::NAN).is_err());
+    }
+
+    #[test]
+    fn direct_span_of_uniform_vector_equals_binary_search() {
+        for (n, p) in [(2, 1), (7, 3), (64, 5), (1000, 2), (4096, 3), (4099, 15)] {
+            let kv = KnotVector::clamped_uniform(n, p).unwrap();
+            let mut us: Vec<f32> = (0..=2000).map(|i| i as f32 / 2000.0).collect();
+            for &t in kv.knots() {
+                us.extend([
+                    t,
+                    f32::from_bits(t.to_bits().saturating_sub(1)),
+                    t.next_up(),
+                ]);
+            }
+            for u in us.into_iter().filter(|u| (0.0..=1.0).contains(u)) {
+                assert_eq!(kv.span_unchecked(u), kv.span_search(u), "n={n} p={p} u={u}");
+            }
+        }
     }
 }
