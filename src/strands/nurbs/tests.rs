@@ -28,10 +28,23 @@ impl Ctrl {
     }
 }
 
+/// Uniform `f32` in `[lo, hi]` on a grid of 2^24 steps, drawn from an integer. proptest's own
+/// `f32` range sampler trips a debug assertion on some seeds (proptest 1.12, known upstream),
+/// so float ranges are never used directly.
+fn uf(lo: f32, hi: f32) -> impl Strategy<Value = f32> + Clone {
+    (0u32..=1 << 24).prop_map(move |k| {
+        let t = k as f32 / (1u32 << 24) as f32;
+        (lo + (hi - lo) * t).clamp(lo, hi)
+    })
+}
+
 /// `n` random control points scaled by `10^e`, weights in `[0.2, 5]`.
 fn ctrl(n: std::ops::RangeInclusive<usize>) -> impl Strategy<Value = Ctrl> {
     (
-        prop::collection::vec((-1.0f32..1.0, -1.0f32..1.0, -1.0f32..1.0, 0.2f32..5.0), n),
+        prop::collection::vec(
+            (uf(-1.0, 1.0), uf(-1.0, 1.0), uf(-1.0, 1.0), uf(0.2, 5.0)),
+            n,
+        ),
         -3i32..=3,
     )
         .prop_map(|(v, e)| {
@@ -60,7 +73,7 @@ fn random_knots(n: usize, p: usize, mut interior: Vec<f32>) -> KnotVector {
 }
 
 fn params() -> impl Strategy<Value = Vec<f32>> {
-    prop::collection::vec(0.0f32..=1.0, 1..24).prop_map(|mut v| {
+    prop::collection::vec(uf(0.0, 1.0), 1..24).prop_map(|mut v| {
         v.extend([0.0, 1.0]);
         v
     })
@@ -82,7 +95,7 @@ proptest! {
     #[test]
     fn curve_global_equals_local(
         (p, c, interior, uniform) in (1usize..=5).prop_flat_map(|p| (
-            Just(p), ctrl(p + 1..=64), prop::collection::vec(0.001f32..0.999, 64), any::<bool>()
+            Just(p), ctrl(p + 1..=64), prop::collection::vec(uf(0.001, 0.999), 64), any::<bool>()
         )),
         us in params(),
     ) {
@@ -128,7 +141,7 @@ proptest! {
     #[test]
     fn basis_is_partition_of_unity(
         (p, n, interior, uniform) in (0usize..=MAX_DEGREE).prop_flat_map(|p| (
-            Just(p), p + 1..=80usize, prop::collection::vec(0.0f32..1.0, 80), any::<bool>()
+            Just(p), p + 1..=80usize, prop::collection::vec(uf(0.0, 1.0), 80), any::<bool>()
         )),
         us in params(),
     ) {
@@ -171,7 +184,7 @@ proptest! {
     #[test]
     fn curve_batch_simd_equals_scalar_bitwise(
         (p, c) in (1usize..=5).prop_flat_map(|p| (Just(p), ctrl(p + 1..=64))),
-        us in prop::collection::vec(0.0f32..=1.0, 0..41),
+        us in prop::collection::vec(uf(0.0, 1.0), 0..41),
     ) {
         let curve = curve_of(&c, KnotVector::clamped_uniform(c.x.len(), p).unwrap());
         let m = us.len();
@@ -193,8 +206,8 @@ proptest! {
         )).prop_flat_map(|(pu, pv, rows, cols)| (
             Just(pu), Just(pv), Just(rows), ctrl(rows * cols..=rows * cols)
         )),
-        us in prop::collection::vec(0.0f32..=1.0, 0..6),
-        vs in prop::collection::vec(0.0f32..=1.0, 0..27),
+        us in prop::collection::vec(uf(0.0, 1.0), 0..6),
+        vs in prop::collection::vec(uf(0.0, 1.0), 0..27),
     ) {
         let cols = c.x.len() / rows;
         let s = NurbsSurface::new(rows, cols, c.x, c.y, c.z, c.w, pu, pv).unwrap();
@@ -216,7 +229,7 @@ proptest! {
     #[test]
     fn moving_one_control_point_changes_only_its_k_spans(
         (p, c, pick, d) in (1usize..=5).prop_flat_map(|p| (
-            Just(p), ctrl(p + 1..=64), any::<prop::sample::Index>(), (-1.0f32..1.0, 0.1f32..1.0)
+            Just(p), ctrl(p + 1..=64), any::<prop::sample::Index>(), (uf(-1.0, 1.0), uf(0.1, 1.0))
         )),
     ) {
         let n = c.x.len();
@@ -237,11 +250,12 @@ proptest! {
                 prop_assert_eq!(curve.eval_global(u).unwrap(), before_g[j]);
             } else if after != before[j] {
                 changed_inside = true;
+                // Paper's terms (formula 2.11): the point at span `now` is summed over control
+                // points in [now - k, now + k]; the moved one is among the k = p + 1 of its span.
+                let now = curve.knots().find_span(u).unwrap();
+                prop_assert!(i + p >= now && i <= now, "u={} span {} moved by {}", u, now, i);
             }
         }
-        // The midpoint of the support has a basis value well above rounding: it must move.
-        let mid = 0.5 * (lo + hi);
-        prop_assert!(curve.eval_local(mid).unwrap() != before[0] || changed_inside);
         prop_assert!(changed_inside, "moving control point {} changed nothing", i);
         // In the paper's terms: the support spans k = p + 1 knot spans.
         let t = curve.knots().knots();
