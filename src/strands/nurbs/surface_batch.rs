@@ -15,8 +15,9 @@
 //! contraction shared by the whole row.
 //!
 //! SIMD: the contraction runs over eight consecutive columns `j` (contiguous loads, no
-//! gathers); the `v` stage over eight consecutive `v_b` (the `v` basis is stored as structure
-//! of arrays, `Q` is gathered per lane). Tails of fewer than eight go through the scalar code.
+//! gathers; a tail of fewer than eight columns goes through the scalar code). The `v` stage is
+//! scalar in both kernels: a lane-per-`v_b` version has to gather `Q` per lane, and measured
+//! (criterion, `nurbs_surface_grid`) it was about twice as slow as the scalar loop.
 //! The scalar twin [`NurbsSurface::eval_grid_scalar`] does the same operations in the same
 //! order, so the two agree bit for bit. Against [`NurbsSurface::eval_local`] (which sums the
 //! unfactored `(Nu Nv) w P`) they agree to rounding: within `1e-6` of the control-point scale,
@@ -141,7 +142,6 @@ impl NurbsSurface {
     fn grid(&self, us: &[f32], vs: &[f32], out: [&mut [f32]; 3], simd: bool) -> Result<()> {
         let [out_x, out_y, out_z] = out;
         let (tu, tv) = self.check_grid(us, vs, [out_x, out_y, out_z])?;
-        let pv = self.degrees().1;
         let cols = self.cols();
         let (nus, nvs) = (us.len(), vs.len());
         let mut q = Row {
@@ -150,27 +150,9 @@ impl NurbsSurface {
             z: vec![0.0; cols],
             w: vec![0.0; cols],
         };
-        let full = if simd { nvs / LANES * LANES } else { 0 };
-        let zero = F32s::splat(0.0);
         for a in 0..nus {
             self.contract_row(&tu, nus, a, &mut q, simd);
-            for b in (0..full).step_by(LANES) {
-                let (mut sx, mut sy, mut sz, mut sw) = (zero, zero, zero, zero);
-                for c in 0..=pv {
-                    let idx: [usize; LANES] = std::array::from_fn(|l| tv.span[b + l] - pv + c);
-                    let g = |s: &[f32]| F32s::from(idx.map(|j| s[j]));
-                    let nv = load(&tv.soa, c * nvs + b);
-                    sx += nv * g(&q.x);
-                    sy += nv * g(&q.y);
-                    sz += nv * g(&q.z);
-                    sw += nv * g(&q.w);
-                }
-                let o = a * nvs + b;
-                store(out_x, o, sx / sw);
-                store(out_y, o, sy / sw);
-                store(out_z, o, sz / sw);
-            }
-            for b in full..nvs {
+            for b in 0..nvs {
                 let o = a * nvs + b;
                 [out_x[o], out_y[o], out_z[o]] = self.v_point(&tv, nvs, b, &q);
             }
@@ -179,7 +161,7 @@ impl NurbsSurface {
     }
 
     /// Evaluates the surface at every `(us[a], vs[b])` into `out[a * vs.len() + b]` (factored
-    /// tensor sum, SIMD over columns and over `v`). All parameters are checked first; nothing
+    /// tensor sum, SIMD over control columns). All parameters are checked first; nothing
     /// is written on error. Empty `us` or `vs` is fine and writes nothing.
     pub fn eval_grid(
         &self,
