@@ -46,6 +46,6 @@ mod tests;
 
 pub use basis::{basis_global, basis_local, GlobalScratch, MAX_ORDER};
 pub use curve::NurbsCurve;
-pub use knots::{KnotVector, MAX_DEGREE};
+pub use knots::{KnotVector, MAX_CONTROL, MAX_DEGREE};
 pub use render::{CurveSamples, SurfaceMesh};
 pub use surface::NurbsSurface;

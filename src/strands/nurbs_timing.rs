@@ -13,7 +13,7 @@
 //! (surfaces: `samples` scattered `(u, v)` pairs). Each measurement is repeated
 //! [`REPETITIONS`] times and the median is kept.
 
-use super::nurbs::{GlobalScratch, NurbsCurve, NurbsSurface, MAX_DEGREE};
+use super::nurbs::{GlobalScratch, NurbsCurve, NurbsSurface, MAX_CONTROL, MAX_DEGREE};
 use std::hint::black_box;
 use std::time::Instant;
 
@@ -83,7 +83,7 @@ fn median_ns(samples: usize, mut f: impl FnMut()) -> f64 {
 
 /// Times global against local evaluation for every `n` in `ns` and degree in `degrees`:
 /// curves for every `n`, surfaces (an `n x n` grid) for `n <= SURFACE_MAX_N`. Combinations
-/// that do not make a spline (`degree >= n`, `degree > MAX_DEGREE`) are skipped; `samples` is
+/// that do not make a spline (`degree >= n`, `degree > MAX_DEGREE`, `n > MAX_CONTROL`) are skipped; `samples` is
 /// raised to at least 1. Rows come curve first, in the order of `ns` then `degrees`.
 pub fn nurbs_timing(ns: &[usize], degrees: &[usize], samples: usize) -> Vec<NurbsTimingRow> {
     let samples = samples.max(1);
@@ -94,7 +94,7 @@ pub fn nurbs_timing(ns: &[usize], degrees: &[usize], samples: usize) -> Vec<Nurb
     let vs: Vec<f32> = (0..samples)
         .map(|j| ((j as f64 * 0.618_033_988_749_895).fract()) as f32)
         .collect();
-    let fits = |n: usize, p: usize| p < n && p <= MAX_DEGREE;
+    let fits = |n: usize, p: usize| p < n && p <= MAX_DEGREE && n <= MAX_CONTROL;
     let mut rows = Vec::new();
     for &n in ns {
         for &p in degrees.iter().filter(|&&p| fits(n, p)) {

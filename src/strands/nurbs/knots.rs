@@ -36,6 +36,10 @@ use crate::{Result, WeftError};
 /// degrees this high are numerically pointless for strands and sheets anyway.
 pub const MAX_DEGREE: usize = 15;
 
+/// Largest number of control points per direction (2^30): far beyond any strand or sheet, and
+/// it keeps every index computation free of overflow.
+pub const MAX_CONTROL: usize = 1 << 30;
+
 /// A validated knot vector for a given degree and number of control points.
 #[derive(Clone, Debug, PartialEq)]
 pub struct KnotVector {
@@ -68,6 +72,13 @@ fn check_shape(n_ctrl: usize, degree: usize) -> Result<()> {
             "control points",
             0,
             "at least one control point is needed",
+        ));
+    }
+    if n_ctrl > MAX_CONTROL {
+        return Err(WeftError::param(
+            "control points",
+            n_ctrl,
+            format!("at most {MAX_CONTROL} per direction"),
         ));
     }
     if degree > MAX_DEGREE {
@@ -284,6 +295,8 @@ mod tests {
         );
         assert!(KnotVector::clamped_uniform(0, 0).is_err());
         assert!(KnotVector::clamped_uniform(40, MAX_DEGREE + 1).is_err());
+        assert!(KnotVector::clamped_uniform(usize::MAX, 3).is_err());
+        assert!(KnotVector::new(vec![0.0, 1.0], 1, usize::MAX).is_err());
     }
 
     #[test]
