@@ -19,9 +19,9 @@
 //! control points (cost `O(n)` per point, `O(n m)` for a surface); formula 2.11 sums only over
 //! a window `[now - k, now + k]` around the point (cost `O(k)`, `O(ku kv)`), and moving one
 //! control point changes the curve only over `k` knot spans. Here `eval_global` is the first
-//! (the `f64` reference), `eval_local` the second (find the span: O(1) for uniform knots, the `p + 1`
-//! non-zero basis values by the triangular scheme, `f32`), and the batch evaluators
-//! (`eval_many`, `eval_grid`) run the local scheme in SIMD with scalar twins.
+//! (the `f64` reference), `eval_local` the second (find the span, O(1) for uniform knots; the
+//! `p + 1` non-zero basis values by the triangular scheme; `f32`), and the batch evaluators
+//! (`eval_many`, `eval_grid`) run the local scheme with SIMD and have scalar twins.
 //!
 //! **Tolerances.** Local (`f32`) and global (`f64`) evaluation of the same curve agree to
 //! `1e-6` times the largest control-point coordinate (property tests, degrees 1..5, up to 64

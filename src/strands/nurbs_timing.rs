@@ -83,8 +83,9 @@ fn median_ns(samples: usize, mut f: impl FnMut()) -> f64 {
 
 /// Times global against local evaluation for every `n` in `ns` and degree in `degrees`:
 /// curves for every `n`, surfaces (an `n x n` grid) for `n <= SURFACE_MAX_N`. Combinations
-/// that do not make a spline (`degree >= n`, `degree > MAX_DEGREE`, `n > MAX_CONTROL`) are skipped; `samples` is
-/// raised to at least 1. Rows come curve first, in the order of `ns` then `degrees`.
+/// that do not make a spline (`degree >= n`, `degree > MAX_DEGREE`, `n > MAX_CONTROL`) are
+/// skipped; `samples` is raised to at least 1. Rows come curves first, in the order of `ns`
+/// then `degrees`.
 pub fn nurbs_timing(ns: &[usize], degrees: &[usize], samples: usize) -> Vec<NurbsTimingRow> {
     let samples = samples.max(1);
     let us: Vec<f32> = (0..samples)
