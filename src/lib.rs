@@ -18,6 +18,7 @@ pub mod reference;
 pub mod render;
 pub mod scene;
 pub mod step;
+pub mod strands;
 pub mod world;
 
 pub use cloth::{ClothDesc, PinSpec};
