@@ -1,4 +1,5 @@
 //! weft: cloth and hair as particles, fast.
+pub mod collide;
 pub mod error;
 pub mod lanes;
 
