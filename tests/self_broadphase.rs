@@ -272,6 +272,17 @@ fn far_coordinates_fall_back_and_stay_exact() {
     assert_eq!(reference.of(0), &[1, 4]);
     assert_eq!(hash_query(&t, 1.0e-20, 1.0e-20).1, reference);
     assert_eq!(tree_query(&t, TreeShape::LeafSize(1), 1.0e-20).1, reference);
+    // Squares that underflow: 1e-23² rounds to 0 <= (1e-30)² = 0, so the predicate calls these
+    // neighbours although they are 1e7 max_dists apart; the search margin must find them.
+    let u = Cloud {
+        x: vec![0.0, 1.0e-23, 1.0],
+        y: vec![0.0; 3],
+        z: vec![0.0; 3],
+    };
+    let reference = brute(&u, 1.0e-30);
+    assert_eq!(reference.of(0), &[1]);
+    assert_eq!(hash_query(&u, 1.0e-30, 1.0e-30).1, reference);
+    assert_eq!(tree_query(&u, TreeShape::LeafSize(1), 1.0e-30).1, reference);
 }
 
 #[test]
