@@ -107,13 +107,17 @@ fn bench(cr: &mut Criterion) {
         if n <= 10_000 {
             // The paper's box hierarchy: depth 5, 32 leaves.
             let mut t5 = ParticleTree::build(x, y, z, n, TreeShape::Depth(5)).unwrap();
-            g.bench_with_input(BenchmarkId::new("tree_depth5_refit_query", n), &n, |b, &n| {
-                b.iter(|| {
-                    t5.refit(x, y, z, n).unwrap();
-                    t5.query_all(x, y, z, n, s, &mut nb).unwrap();
-                    black_box(nb.total())
-                })
-            });
+            g.bench_with_input(
+                BenchmarkId::new("tree_depth5_refit_query", n),
+                &n,
+                |b, &n| {
+                    b.iter(|| {
+                        t5.refit(x, y, z, n).unwrap();
+                        t5.query_all(x, y, z, n, s, &mut nb).unwrap();
+                        black_box(nb.total())
+                    })
+                },
+            );
             g.bench_with_input(BenchmarkId::new("brute_force", n), &n, |b, &n| {
                 b.iter(|| {
                     nb.fill_brute_force(x, y, z, n, s).unwrap();

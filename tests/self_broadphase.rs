@@ -305,6 +305,14 @@ fn bad_inputs_are_errors_not_panics() {
     assert_eq!(t.depth(), 2);
     assert!(t.refit(&a, &a, &a, 2).is_err());
     assert!(t.query_all(&a, &a, &a, 3, f32::NAN, &mut nb).is_err());
+    // Positions that moved since the build / refit are refused, not silently misused.
+    let moved = [0.0f32, 1.0, 2.5];
+    assert!(h.query_all(&moved, &a, &a, 3, 0.5, &mut nb).is_err());
+    assert!(h.query_all_serial(&moved, &a, &a, 3, 0.5, &mut nb).is_err());
+    assert!(t.query_all(&moved, &a, &a, 3, 0.5, &mut nb).is_err());
+    assert!(t.query_all_serial(&moved, &a, &a, 3, 0.5, &mut nb).is_err());
+    t.refit(&moved, &a, &a, 3).unwrap();
+    assert!(t.query_all(&moved, &a, &a, 3, 0.5, &mut nb).is_ok());
 }
 
 #[test]

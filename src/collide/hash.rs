@@ -58,6 +58,12 @@ pub struct SpatialHash {
     cell_start: Vec<u32>,
     /// Particle ids grouped by bucket, ascending within a bucket.
     cell_entries: Vec<u32>,
+    /// Positions in `cell_entries` order, so a bucket's candidates are read contiguously.
+    sx: Vec<f32>,
+    sy: Vec<f32>,
+    sz: Vec<f32>,
+    /// Index of each particle in `cell_entries`, `NO_BUCKET` when non-finite.
+    slot_of: Vec<u32>,
 }
 
 /// The table size used for `n` particles: smallest power of two `>= max(2n, 16)`.
@@ -80,6 +86,10 @@ impl SpatialHash {
             bucket_of: Vec::with_capacity(max_particles),
             cell_start: Vec::with_capacity(ts + 1),
             cell_entries: Vec::with_capacity(max_particles),
+            sx: Vec::with_capacity(max_particles),
+            sy: Vec::with_capacity(max_particles),
+            sz: Vec::with_capacity(max_particles),
+            slot_of: Vec::with_capacity(max_particles),
         }
     }
 
@@ -180,7 +190,7 @@ impl SpatialHash {
                 }
             });
         self.bucket_of = buckets;
-        self.counting_sort();
+        self.counting_sort(x, y, z);
         Ok(())
     }
 
@@ -197,12 +207,13 @@ impl SpatialHash {
         for i in 0..n {
             self.bucket_of[i] = self.bucket_of_point(x[i], y[i], z[i]);
         }
-        self.counting_sort();
+        self.counting_sort(x, y, z);
         Ok(())
     }
 
-    /// Stable counting sort of particle ids by bucket into `cell_start` / `cell_entries`.
-    fn counting_sort(&mut self) {
+    /// Stable counting sort of particle ids by bucket into `cell_start` / `cell_entries`, with
+    /// the positions copied alongside.
+    fn counting_sort(&mut self, x: &[f32], y: &[f32], z: &[f32]) {
         let ts = self.table_size;
         self.cell_start.clear();
         self.cell_start.resize(ts + 1, 0);
@@ -223,6 +234,12 @@ impl SpatialHash {
         self.non_finite = self.n - placed as usize;
         self.cell_entries.clear();
         self.cell_entries.resize(placed as usize, 0);
+        for v in [&mut self.sx, &mut self.sy, &mut self.sz] {
+            v.clear();
+            v.resize(placed as usize, 0.0);
+        }
+        self.slot_of.clear();
+        self.slot_of.resize(self.n, NO_BUCKET);
         // Filling from the back while decrementing leaves cell_start[b] = start of bucket b and
         // the ids ascending within each bucket.
         for i in (0..self.n).rev() {
@@ -230,13 +247,40 @@ impl SpatialHash {
             if b != NO_BUCKET {
                 let slot = &mut self.cell_start[b as usize];
                 *slot -= 1;
-                self.cell_entries[*slot as usize] = i as u32;
+                let k = *slot as usize;
+                self.cell_entries[k] = i as u32;
+                (self.sx[k], self.sy[k], self.sz[k]) = (x[i], y[i], z[i]);
+                self.slot_of[i] = k as u32;
             }
         }
     }
 
-    /// Checks query inputs against the build; returns `max_dist²`.
-    fn check_query(&self, x: &[f32], y: &[f32], z: &[f32], n: usize, max_dist: f32) -> Result<f32> {
+    /// Whether particle `i` has the position it had at the last build (bitwise; a non-finite
+    /// particle only has to stay non-finite).
+    #[inline]
+    fn unchanged(&self, x: &[f32], y: &[f32], z: &[f32], i: usize) -> bool {
+        match self.slot_of[i] {
+            NO_BUCKET => !(x[i].is_finite() && y[i].is_finite() && z[i].is_finite()),
+            k => {
+                let k = k as usize;
+                x[i].to_bits() == self.sx[k].to_bits()
+                    && y[i].to_bits() == self.sy[k].to_bits()
+                    && z[i].to_bits() == self.sz[k].to_bits()
+            }
+        }
+    }
+
+    /// Checks query inputs against the build; returns `max_dist²`. `same` is whether the
+    /// positions are those of the build (computed by the caller, in parallel or not).
+    fn check_query(
+        &self,
+        x: &[f32],
+        y: &[f32],
+        z: &[f32],
+        n: usize,
+        max_dist: f32,
+        same: impl FnOnce() -> bool,
+    ) -> Result<f32> {
         check_positions(x, y, z, n)?;
         if n != self.n {
             return Err(WeftError::param(
@@ -256,14 +300,22 @@ impl SpatialHash {
                 format!("must not exceed the hash spacing ({})", self.spacing),
             ));
         }
+        if !same() {
+            return Err(WeftError::param(
+                "x, y, z",
+                "moved",
+                "must be the positions given to the last build; build the hash again",
+            ));
+        }
         Ok(md2)
     }
 
     /// For every particle, its neighbours within `max_dist` (the shared predicate), sorted,
     /// into `out`; parallel over particles, no allocation once `out` is warm.
     ///
-    /// `x, y, z, n` must be the positions given to the last [`SpatialHash::build`] (the cells
-    /// come from the build, the distances from these arrays). Errors if `n` differs from the
+    /// `x, y, z, n` must be the positions given to the last [`SpatialHash::build`]: the cells,
+    /// and a cell-ordered copy of the positions that the candidates are read from, come from
+    /// the build. This is checked (bitwise, one pass). Errors if the positions differ from the
     /// build, an array is short, or `max_dist` is negative, non-finite or above `spacing`.
     pub fn query_all(
         &self,
@@ -274,7 +326,8 @@ impl SpatialHash {
         max_dist: f32,
         out: &mut Neighbours,
     ) -> Result<()> {
-        let md2 = self.check_query(x, y, z, n, max_dist)?;
+        let same = || (0..n).into_par_iter().all(|i| self.unchanged(x, y, z, i));
+        let md2 = self.check_query(x, y, z, n, max_dist, same)?;
         let r = search_radius(max_dist);
         out.fill_parallel(n, |i, buf| self.scan(x, y, z, n, i, md2, r, buf))
     }
@@ -289,7 +342,8 @@ impl SpatialHash {
         max_dist: f32,
         out: &mut Neighbours,
     ) -> Result<()> {
-        let md2 = self.check_query(x, y, z, n, max_dist)?;
+        let same = || (0..n).all(|i| self.unchanged(x, y, z, i));
+        let md2 = self.check_query(x, y, z, n, max_dist, same)?;
         let r = search_radius(max_dist);
         out.fill_serial(n, |i, buf| self.scan(x, y, z, n, i, md2, r, buf))
     }
@@ -332,9 +386,10 @@ impl SpatialHash {
                 for cx in x0..=x1 {
                     let b = self.bucket(cx, cy, cz);
                     let (s, e) = (self.cell_start[b] as usize, self.cell_start[b + 1] as usize);
-                    for &j in &self.cell_entries[s..e] {
-                        let ju = j as usize;
-                        if j != iu && within(xi, yi, zi, x[ju], y[ju], z[ju], md2) {
+                    let ids = &self.cell_entries[s..e];
+                    let (bx, by, bz) = (&self.sx[s..e], &self.sy[s..e], &self.sz[s..e]);
+                    for (((&j, &xj), &yj), &zj) in ids.iter().zip(bx).zip(by).zip(bz) {
+                        if j != iu && within(xi, yi, zi, xj, yj, zj, md2) {
                             buf.push(j);
                         }
                     }

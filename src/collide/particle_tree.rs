@@ -27,7 +27,9 @@
 //! many particles (8 to 16 is fast). `D` is at most [`MAX_DEPTH`].
 
 use super::hash::sort_dedup_tail;
-use super::neighbours::{check_max_dist, check_positions, search_radius, within, Neighbours};
+use super::neighbours::{
+    check_max_dist, check_positions, search_radius, within, Neighbours, CHUNK,
+};
 use crate::{Result, WeftError};
 use rayon::prelude::*;
 
@@ -92,6 +94,13 @@ pub struct ParticleTree {
     leaf_start: Vec<u32>,
     /// Node boxes in heap order, length `2^(depth+1) - 1`.
     boxes: Vec<Aabb>,
+    /// Positions in `order` (leaf) order as of the last refit: leaf scans read them
+    /// contiguously.
+    lx: Vec<f32>,
+    ly: Vec<f32>,
+    lz: Vec<f32>,
+    /// Index of each particle in `order`.
+    slot_of: Vec<u32>,
 }
 
 impl ParticleTree {
@@ -120,12 +129,20 @@ impl ParticleTree {
         let mut leaf_start = Vec::with_capacity((1usize << depth) + 1);
         leaf_start.push(0);
         split(&mut order, 0, x, y, z, depth, &mut leaf_start);
+        let mut slot_of = vec![0u32; n];
+        for (k, &j) in order.iter().enumerate() {
+            slot_of[j as usize] = k as u32;
+        }
         let mut tree = Self {
             depth,
             n,
             order,
             leaf_start,
             boxes: vec![Aabb::EMPTY; (2usize << depth) - 1],
+            lx: vec![0.0; n],
+            ly: vec![0.0; n],
+            lz: vec![0.0; n],
+            slot_of,
         };
         tree.refit_serial(x, y, z, n)?;
         Ok(tree)
@@ -179,28 +196,62 @@ impl ParticleTree {
         Ok(())
     }
 
-    fn leaf_box(&self, l: usize, x: &[f32], y: &[f32], z: &[f32]) -> Aabb {
+    /// Box of leaf `l` from the leaf-ordered positions.
+    fn leaf_box(&self, l: usize) -> Aabb {
         let mut b = Aabb::EMPTY;
         let (s, e) = (self.leaf_start[l] as usize, self.leaf_start[l + 1] as usize);
-        for &j in &self.order[s..e] {
-            let j = j as usize;
-            b.grow([x[j], y[j], z[j]]);
+        for k in s..e {
+            b.grow([self.lx[k], self.ly[k], self.lz[k]]);
         }
         b
     }
 
-    /// Recomputes every box for new positions of the same particles, bottom-up, in parallel
-    /// (leaves, then each level). Errors if `n` differs from the build or an array is short.
+    /// Whether particle `i` is where it was at the last refit (bitwise).
+    #[inline]
+    fn unchanged(&self, x: &[f32], y: &[f32], z: &[f32], i: usize) -> bool {
+        let k = self.slot_of[i] as usize;
+        x[i].to_bits() == self.lx[k].to_bits()
+            && y[i].to_bits() == self.ly[k].to_bits()
+            && z[i].to_bits() == self.lz[k].to_bits()
+    }
+
+    /// Errors unless the positions are those of the last refit.
+    fn check_unchanged(same: bool) -> Result<()> {
+        if same {
+            Ok(())
+        } else {
+            Err(WeftError::param(
+                "x, y, z",
+                "moved",
+                "must be the positions given to the last refit; refit the tree first",
+            ))
+        }
+    }
+
+    /// Recomputes every box for new positions of the same particles, bottom-up, in parallel:
+    /// copies the positions into leaf order, fits the leaves, then each level up. Errors if `n`
+    /// differs from the build or an array is short.
     pub fn refit(&mut self, x: &[f32], y: &[f32], z: &[f32], n: usize) -> Result<()> {
         self.check_n(x, y, z, n)?;
         let fl = self.first_leaf();
+        self.lx
+            .par_chunks_mut(CHUNK)
+            .zip(self.ly.par_chunks_mut(CHUNK))
+            .zip(self.lz.par_chunks_mut(CHUNK))
+            .zip(self.order.par_chunks(CHUNK))
+            .for_each(|(((cx, cy), cz), ids)| {
+                for (k, &j) in ids.iter().enumerate() {
+                    let j = j as usize;
+                    (cx[k], cy[k], cz[k]) = (x[j], y[j], z[j]);
+                }
+            });
         let mut boxes = std::mem::take(&mut self.boxes);
         let this = &*self;
         boxes[fl..]
             .par_iter_mut()
             .with_min_len(64)
             .enumerate()
-            .for_each(|(l, b)| *b = this.leaf_box(l, x, y, z));
+            .for_each(|(l, b)| *b = this.leaf_box(l));
         for level in (0..self.depth).rev() {
             let (lo, hi) = ((1usize << level) - 1, (2usize << level) - 1);
             let (upper, lower) = boxes.split_at_mut(hi);
@@ -221,8 +272,12 @@ impl ParticleTree {
     pub fn refit_serial(&mut self, x: &[f32], y: &[f32], z: &[f32], n: usize) -> Result<()> {
         self.check_n(x, y, z, n)?;
         let fl = self.first_leaf();
+        for (k, &j) in self.order.iter().enumerate() {
+            let j = j as usize;
+            (self.lx[k], self.ly[k], self.lz[k]) = (x[j], y[j], z[j]);
+        }
         for l in 0..self.leaf_count() {
-            self.boxes[fl + l] = self.leaf_box(l, x, y, z);
+            self.boxes[fl + l] = self.leaf_box(l);
         }
         for k in (0..fl).rev() {
             self.boxes[k] = self.boxes[2 * k + 1].union(&self.boxes[2 * k + 2]);
@@ -236,8 +291,9 @@ impl ParticleTree {
     }
 
     /// For every particle, its neighbours within `max_dist`, sorted, into `out`; parallel over
-    /// particles. The boxes must have been refitted to these positions. Errors if `n` differs
-    /// from the build, an array is short, or `max_dist` is negative or non-finite.
+    /// particles. The positions must be those of the last refit (checked bitwise in one pass:
+    /// leaf scans read the leaf-ordered copy the refit made). Errors if they are not, if `n`
+    /// differs from the build, an array is short, or `max_dist` is negative or non-finite.
     pub fn query_all(
         &self,
         x: &[f32],
@@ -249,6 +305,7 @@ impl ParticleTree {
     ) -> Result<()> {
         self.check_n(x, y, z, n)?;
         let md2 = check_max_dist(max_dist)?;
+        Self::check_unchanged((0..n).into_par_iter().all(|i| self.unchanged(x, y, z, i)))?;
         let r = search_radius(max_dist);
         out.fill_parallel(n, |i, buf| self.scan(x, y, z, i, md2, r, buf))
     }
@@ -265,6 +322,7 @@ impl ParticleTree {
     ) -> Result<()> {
         self.check_n(x, y, z, n)?;
         let md2 = check_max_dist(max_dist)?;
+        Self::check_unchanged((0..n).all(|i| self.unchanged(x, y, z, i)))?;
         let r = search_radius(max_dist);
         out.fill_serial(n, |i, buf| self.scan(x, y, z, i, md2, r, buf))
     }
@@ -309,9 +367,10 @@ impl ParticleTree {
             if k >= fl {
                 let l = k - fl;
                 let (s, e) = (self.leaf_start[l] as usize, self.leaf_start[l + 1] as usize);
-                for &j in &self.order[s..e] {
-                    let ju = j as usize;
-                    if j != iu && within(xi, yi, zi, x[ju], y[ju], z[ju], md2) {
+                let ids = &self.order[s..e];
+                let (px, py, pz) = (&self.lx[s..e], &self.ly[s..e], &self.lz[s..e]);
+                for (((&j, &xj), &yj), &zj) in ids.iter().zip(px).zip(py).zip(pz) {
+                    if j != iu && within(xi, yi, zi, xj, yj, zj, md2) {
                         buf.push(j);
                     }
                 }
