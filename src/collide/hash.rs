@@ -45,7 +45,7 @@
 //!   tested against all particles instead (correct, slow).
 
 use super::neighbours::{
-    check_max_dist, check_positions, search_radius, within, Neighbours, CHUNK,
+    check_max_dist, check_positions, search_radius, sort_dedup_tail, within, Neighbours, CHUNK,
 };
 use crate::{Result, WeftError};
 use rayon::prelude::*;
@@ -95,7 +95,11 @@ impl SpatialHash {
             n: 0,
             non_finite: 0,
             bucket_of: Vec::with_capacity(max_particles),
-            cell_start: Vec::with_capacity(ts + 1),
+            cell_start: {
+                let mut v = Vec::with_capacity(ts + 1);
+                v.resize(table_size_for(0) + 1, 0);
+                v
+            },
             cell_entries: Vec::with_capacity(max_particles),
             sx: Vec::with_capacity(max_particles),
             sy: Vec::with_capacity(max_particles),
@@ -443,22 +447,4 @@ impl SpatialHash {
             }
         }
     }
-}
-
-/// Sorts `buf[start..]` and removes repeated ids from it.
-#[inline]
-pub(crate) fn sort_dedup_tail(buf: &mut Vec<u32>, start: usize) {
-    let tail = &mut buf[start..];
-    if tail.len() < 2 {
-        return;
-    }
-    tail.sort_unstable();
-    let mut w = 1;
-    for r in 1..tail.len() {
-        if tail[r] != tail[w - 1] {
-            tail[w] = tail[r];
-            w += 1;
-        }
-    }
-    buf.truncate(start + w);
 }

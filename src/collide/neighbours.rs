@@ -239,6 +239,24 @@ fn copy_buffers(bufs: &[Vec<u32>], dst: &mut [u32]) {
     );
 }
 
+/// Sorts `buf[start..]` and removes repeated ids from it.
+#[inline]
+pub(crate) fn sort_dedup_tail(buf: &mut Vec<u32>, start: usize) {
+    let tail = &mut buf[start..];
+    if tail.len() < 2 {
+        return;
+    }
+    tail.sort_unstable();
+    let mut w = 1;
+    for r in 1..tail.len() {
+        if tail[r] != tail[w - 1] {
+            tail[w] = tail[r];
+            w += 1;
+        }
+    }
+    buf.truncate(start + w);
+}
+
 /// The neighbour predicate (see the module docs), shared by every broadphase.
 #[inline(always)]
 pub(crate) fn within(xi: f32, yi: f32, zi: f32, xj: f32, yj: f32, zj: f32, md2: f32) -> bool {
@@ -306,6 +324,13 @@ mod tests {
         assert_eq!(nb.total(), 6);
         nb.clear();
         assert!(nb.is_empty() && nb.first == vec![0] && nb.ids.is_empty());
+    }
+
+    #[test]
+    fn sort_dedup_tail_leaves_the_head_alone() {
+        let mut v = vec![9, 1, 5, 3, 5, 1, 5];
+        sort_dedup_tail(&mut v, 2);
+        assert_eq!(v, vec![9, 1, 1, 3, 5]);
     }
 
     #[test]

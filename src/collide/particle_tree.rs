@@ -26,9 +26,8 @@
 //! 100x100 cloth); [`TreeShape::LeafSize`] picks the smallest `D` whose leaves hold at most that
 //! many particles (8 to 16 is fast). `D` is at most [`MAX_DEPTH`].
 
-use super::hash::sort_dedup_tail;
 use super::neighbours::{
-    check_max_dist, check_positions, search_radius, within, Neighbours, CHUNK,
+    check_max_dist, check_positions, search_radius, sort_dedup_tail, within, Neighbours, CHUNK,
 };
 use crate::{Result, WeftError};
 use rayon::prelude::*;
