@@ -20,9 +20,10 @@
 //! the particle's own (the paper's rule); with `max_dist == spacing` a particle lying exactly on
 //! a cell boundary sees one more layer (up to 4 cells an axis), because the margin reaches past
 //! the boundary. Candidates pass the shared neighbour predicate; the list is sorted and
-//! de-duplicated (two rows of the box may share buckets). Queries run in parallel over
-//! particles; the lists are canonical, so the output is bitwise the same for any thread count
-//! and equal to the brute force.
+//! de-duplicated (two rows of the box may share buckets). Candidates are tested eight at a time
+//! (`f32x8`, the predicate computed operation for operation like the scalar one, no FMA), and
+//! queries run in parallel over particles; the lists are canonical, so the output is bitwise
+//! the same for any thread count, equal to the scalar serial twin and to the brute force.
 //!
 //! # Choices
 //! * `table_size` is the smallest power of two `>= 2n` (at least 16): the paper's "about twice
@@ -47,6 +48,7 @@
 use super::neighbours::{
     check_max_dist, check_positions, search_radius, sort_dedup_tail, within, Neighbours, CHUNK,
 };
+use crate::lanes::{F32s, Vec3x8, LANES};
 use crate::{Result, WeftError};
 use rayon::prelude::*;
 
@@ -261,7 +263,9 @@ impl SpatialHash {
         self.cell_entries.resize(placed as usize, 0);
         for v in [&mut self.sx, &mut self.sy, &mut self.sz] {
             v.clear();
-            v.resize(placed as usize, 0.0);
+            // LANES of NaN padding: a lane load at any entry stays in bounds, and NaN lanes
+            // fail the predicate.
+            v.resize(placed as usize + LANES, f32::NAN);
         }
         self.slot_of.clear();
         self.slot_of.resize(self.n, NO_BUCKET);
@@ -354,10 +358,11 @@ impl SpatialHash {
         let same = || (0..n).into_par_iter().all(|i| self.unchanged(x, y, z, i));
         let md2 = self.check_query(x, y, z, n, max_dist, same)?;
         let r = search_radius(max_dist);
-        out.fill_parallel(n, |i, buf| self.scan(x, y, z, n, i, md2, r, buf))
+        out.fill_parallel(n, |i, buf| self.scan::<true>(x, y, z, n, i, md2, r, buf))
     }
 
-    /// Serial twin of [`SpatialHash::query_all`]; produces identical lists.
+    /// Serial, scalar twin of [`SpatialHash::query_all`] (no threads, no lanes); produces
+    /// identical lists.
     pub fn query_all_serial(
         &self,
         x: &[f32],
@@ -370,13 +375,13 @@ impl SpatialHash {
         let same = || (0..n).all(|i| self.unchanged(x, y, z, i));
         let md2 = self.check_query(x, y, z, n, max_dist, same)?;
         let r = search_radius(max_dist);
-        out.fill_serial(n, |i, buf| self.scan(x, y, z, n, i, md2, r, buf))
+        out.fill_serial(n, |i, buf| self.scan::<false>(x, y, z, n, i, md2, r, buf))
     }
 
     /// Appends the sorted neighbours of particle `i` to `buf`.
     #[allow(clippy::too_many_arguments)]
     #[inline]
-    fn scan(
+    fn scan<const SIMD: bool>(
         &self,
         x: &[f32],
         y: &[f32],
@@ -407,6 +412,7 @@ impl SpatialHash {
         }
         let iu = i as u32;
         let ts = self.table_size;
+        let (p, md2v) = (Vec3x8::splat([xi, yi, zi]), F32s::splat(md2));
         // Buckets b0 ..= b0 + w hold one row of cells; they may wrap past the table's end.
         let cells = (x1 as i64 - x0 as i64) as usize + 1;
         for cz in z0..=z1 {
@@ -414,37 +420,59 @@ impl SpatialHash {
                 let b0 = self.bucket(x0, cy, cz);
                 let b1 = b0 + cells;
                 if b1 <= ts {
-                    self.scan_range(b0, b1, iu, xi, yi, zi, md2, buf);
+                    self.scan_range::<SIMD>(b0, b1, iu, &p, md2v, buf);
                 } else {
-                    self.scan_range(b0, ts, iu, xi, yi, zi, md2, buf);
-                    self.scan_range(0, b1 - ts, iu, xi, yi, zi, md2, buf);
+                    self.scan_range::<SIMD>(b0, ts, iu, &p, md2v, buf);
+                    self.scan_range::<SIMD>(0, b1 - ts, iu, &p, md2v, buf);
                 }
             }
         }
         sort_dedup_tail(buf, start);
     }
 
-    /// Tests the particles of buckets `b0..b1` against particle `i`.
-    #[allow(clippy::too_many_arguments)]
+    /// Tests the particles of buckets `b0..b1` against particle `p` (splatted), eight
+    /// candidates a lane load. The lane predicate is [`within`]'s, operation for operation
+    /// (`(dx*dx + dy*dy) + dz*dz <= md2`, no FMA), so it decides exactly like the scalar brute
+    /// force the tests compare against.
+    /// With `SIMD == false` it is the plain scalar loop (the twin the serial query uses).
     #[inline(always)]
-    fn scan_range(
+    fn scan_range<const SIMD: bool>(
         &self,
         b0: usize,
         b1: usize,
         iu: u32,
-        xi: f32,
-        yi: f32,
-        zi: f32,
-        md2: f32,
+        p: &Vec3x8,
+        md2: F32s,
         buf: &mut Vec<u32>,
     ) {
         let (s, e) = (self.cell_start[b0] as usize, self.cell_start[b1] as usize);
-        let ids = &self.cell_entries[s..e];
-        let (bx, by, bz) = (&self.sx[s..e], &self.sy[s..e], &self.sz[s..e]);
-        for (((&j, &xj), &yj), &zj) in ids.iter().zip(bx).zip(by).zip(bz) {
-            if j != iu && within(xi, yi, zi, xj, yj, zj, md2) {
-                buf.push(j);
+        if !SIMD {
+            let [xi, yi, zi, m2] = [p.x, p.y, p.z, md2].map(|v| v.to_array()[0]);
+            for k in s..e {
+                let j = self.cell_entries[k];
+                if j != iu && within(xi, yi, zi, self.sx[k], self.sy[k], self.sz[k], m2) {
+                    buf.push(j);
+                }
             }
+            return;
+        }
+        let mut k = s;
+        while k < e {
+            let q = Vec3x8::load(&self.sx, &self.sy, &self.sz, k);
+            let d = q - *p;
+            let d2 = d.x * d.x + d.y * d.y + d.z * d.z;
+            let mut bits = d2.simd_le(md2).to_bitmask();
+            if e - k < LANES {
+                bits &= (1u32 << (e - k)) - 1;
+            }
+            while bits != 0 {
+                let j = self.cell_entries[k + bits.trailing_zeros() as usize];
+                bits &= bits - 1;
+                if j != iu {
+                    buf.push(j);
+                }
+            }
+            k += LANES;
         }
     }
 }
