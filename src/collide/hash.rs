@@ -46,9 +46,10 @@
 //!   tested against all particles instead (correct, slow).
 
 use super::neighbours::{
-    check_max_dist, check_positions, search_radius, sort_dedup_tail, within, Neighbours, CHUNK,
+    check_max_dist, check_positions, search_radius, sort_dedup_tail, within, Candidates,
+    Neighbours, CHUNK,
 };
-use crate::lanes::{F32s, Vec3x8, LANES};
+use crate::lanes::LANES;
 use crate::{Result, WeftError};
 use rayon::prelude::*;
 
@@ -412,7 +413,7 @@ impl SpatialHash {
         }
         let iu = i as u32;
         let ts = self.table_size;
-        let (p, md2v) = (Vec3x8::splat([xi, yi, zi]), F32s::splat(md2));
+        let p = [xi, yi, zi];
         // Buckets b0 ..= b0 + w hold one row of cells; they may wrap past the table's end.
         let cells = (x1 as i64 - x0 as i64) as usize + 1;
         for cz in z0..=z1 {
@@ -420,59 +421,34 @@ impl SpatialHash {
                 let b0 = self.bucket(x0, cy, cz);
                 let b1 = b0 + cells;
                 if b1 <= ts {
-                    self.scan_range::<SIMD>(b0, b1, iu, &p, md2v, buf);
+                    self.scan_buckets::<SIMD>(b0, b1, iu, p, md2, buf);
                 } else {
-                    self.scan_range::<SIMD>(b0, ts, iu, &p, md2v, buf);
-                    self.scan_range::<SIMD>(0, b1 - ts, iu, &p, md2v, buf);
+                    self.scan_buckets::<SIMD>(b0, ts, iu, p, md2, buf);
+                    self.scan_buckets::<SIMD>(0, b1 - ts, iu, p, md2, buf);
                 }
             }
         }
         sort_dedup_tail(buf, start);
     }
 
-    /// Tests the particles of buckets `b0..b1` against particle `p` (splatted), eight
-    /// candidates a lane load. The lane predicate is [`within`]'s, operation for operation
-    /// (`(dx*dx + dy*dy) + dz*dz <= md2`, no FMA), so it decides exactly like the scalar brute
-    /// force the tests compare against.
-    /// With `SIMD == false` it is the plain scalar loop (the twin the serial query uses).
+    /// Tests the particles of buckets `b0..b1` (one contiguous range) against `p`.
     #[inline(always)]
-    fn scan_range<const SIMD: bool>(
+    fn scan_buckets<const SIMD: bool>(
         &self,
         b0: usize,
         b1: usize,
         iu: u32,
-        p: &Vec3x8,
-        md2: F32s,
+        p: [f32; 3],
+        md2: f32,
         buf: &mut Vec<u32>,
     ) {
-        let (s, e) = (self.cell_start[b0] as usize, self.cell_start[b1] as usize);
-        if !SIMD {
-            let [xi, yi, zi, m2] = [p.x, p.y, p.z, md2].map(|v| v.to_array()[0]);
-            for k in s..e {
-                let j = self.cell_entries[k];
-                if j != iu && within(xi, yi, zi, self.sx[k], self.sy[k], self.sz[k], m2) {
-                    buf.push(j);
-                }
-            }
-            return;
-        }
-        let mut k = s;
-        while k < e {
-            let q = Vec3x8::load(&self.sx, &self.sy, &self.sz, k);
-            let d = q - *p;
-            let d2 = d.x * d.x + d.y * d.y + d.z * d.z;
-            let mut bits = d2.simd_le(md2).to_bitmask();
-            if e - k < LANES {
-                bits &= (1u32 << (e - k)) - 1;
-            }
-            while bits != 0 {
-                let j = self.cell_entries[k + bits.trailing_zeros() as usize];
-                bits &= bits - 1;
-                if j != iu {
-                    buf.push(j);
-                }
-            }
-            k += LANES;
-        }
+        let range = self.cell_start[b0] as usize..self.cell_start[b1] as usize;
+        let c = Candidates {
+            ids: &self.cell_entries,
+            x: &self.sx,
+            y: &self.sy,
+            z: &self.sz,
+        };
+        c.scan::<SIMD>(range, iu, p, md2, buf);
     }
 }

@@ -27,6 +27,7 @@
 //! Buffers are kept between calls: once the lists have reached their working size, refilling
 //! them allocates nothing.
 
+use crate::lanes::{F32s, Vec3x8, LANES};
 use crate::{Result, WeftError};
 use rayon::prelude::*;
 
@@ -255,6 +256,61 @@ pub(crate) fn sort_dedup_tail(buf: &mut Vec<u32>, start: usize) {
         }
     }
     buf.truncate(start + w);
+}
+
+/// Candidate particles stored contiguously: ids with their positions at the same index. The
+/// position arrays extend at least [`LANES`] entries past any scanned range (NaN padding), so a
+/// lane load never leaves them.
+pub(crate) struct Candidates<'a> {
+    pub ids: &'a [u32],
+    pub x: &'a [f32],
+    pub y: &'a [f32],
+    pub z: &'a [f32],
+}
+
+impl Candidates<'_> {
+    /// Appends to `buf` each `ids[k]`, `k` in `range`, other than `skip`, whose position passes
+    /// the predicate against `p`. With `SIMD` eight candidates are tested per lane load, the
+    /// predicate computed operation for operation like [`within`] (no FMA), so both paths pick
+    /// the same ids; without it, the plain scalar loop (the twin).
+    #[inline(always)]
+    pub fn scan<const SIMD: bool>(
+        &self,
+        range: std::ops::Range<usize>,
+        skip: u32,
+        p: [f32; 3],
+        md2: f32,
+        buf: &mut Vec<u32>,
+    ) {
+        let (s, e) = (range.start, range.end);
+        if !SIMD {
+            for k in s..e {
+                let j = self.ids[k];
+                if j != skip && within(p[0], p[1], p[2], self.x[k], self.y[k], self.z[k], md2) {
+                    buf.push(j);
+                }
+            }
+            return;
+        }
+        let (pv, m2) = (Vec3x8::splat(p), F32s::splat(md2));
+        let mut k = s;
+        while k < e {
+            let d = Vec3x8::load(self.x, self.y, self.z, k) - pv;
+            let d2 = d.x * d.x + d.y * d.y + d.z * d.z;
+            let mut bits = d2.simd_le(m2).to_bitmask();
+            if e - k < LANES {
+                bits &= (1u32 << (e - k)) - 1;
+            }
+            while bits != 0 {
+                let j = self.ids[k + bits.trailing_zeros() as usize];
+                bits &= bits - 1;
+                if j != skip {
+                    buf.push(j);
+                }
+            }
+            k += LANES;
+        }
+    }
 }
 
 /// The neighbour predicate (see the module docs), shared by every broadphase.

@@ -18,8 +18,8 @@
 //! **Query**: for each particle, a depth-first walk from the root visits the nodes whose box
 //! meets the particle's search box `[x_i - r, x_i + r]³` (`r` = `max_dist` plus the rounding
 //! margin of [`super::neighbours`]) and tests the particles of the leaves reached with the
-//! shared neighbour predicate. Lists are sorted, so the result equals the hash and the brute
-//! force exactly.
+//! shared neighbour predicate, eight at a time (`f32x8`; the serial twin is scalar). Lists
+//! are sorted, so the result equals the hash and the brute force exactly.
 //!
 //! # Shape
 //! [`TreeShape::Depth`] fixes `D` (the paper uses 5: 32 leaves, so ~312 particles a leaf for a
@@ -27,8 +27,9 @@
 //! many particles (8 to 16 is fast). `D` is at most [`MAX_DEPTH`].
 
 use super::neighbours::{
-    check_max_dist, check_positions, search_radius, sort_dedup_tail, within, Neighbours, CHUNK,
+    check_max_dist, check_positions, search_radius, sort_dedup_tail, Candidates, Neighbours, CHUNK,
 };
+use crate::lanes::LANES;
 use crate::{Result, WeftError};
 use rayon::prelude::*;
 
@@ -138,9 +139,10 @@ impl ParticleTree {
             order,
             leaf_start,
             boxes: vec![Aabb::EMPTY; (2usize << depth) - 1],
-            lx: vec![0.0; n],
-            ly: vec![0.0; n],
-            lz: vec![0.0; n],
+            // NaN padding of LANES: lane loads stay in bounds and padded lanes never match.
+            lx: vec![f32::NAN; n + LANES],
+            ly: vec![f32::NAN; n + LANES],
+            lz: vec![f32::NAN; n + LANES],
             slot_of,
         };
         tree.refit_serial(x, y, z, n)?;
@@ -233,10 +235,10 @@ impl ParticleTree {
     pub fn refit(&mut self, x: &[f32], y: &[f32], z: &[f32], n: usize) -> Result<()> {
         self.check_n(x, y, z, n)?;
         let fl = self.first_leaf();
-        self.lx
+        self.lx[..n]
             .par_chunks_mut(CHUNK)
-            .zip(self.ly.par_chunks_mut(CHUNK))
-            .zip(self.lz.par_chunks_mut(CHUNK))
+            .zip(self.ly[..n].par_chunks_mut(CHUNK))
+            .zip(self.lz[..n].par_chunks_mut(CHUNK))
             .zip(self.order.par_chunks(CHUNK))
             .for_each(|(((cx, cy), cz), ids)| {
                 for (k, &j) in ids.iter().enumerate() {
@@ -306,10 +308,11 @@ impl ParticleTree {
         let md2 = check_max_dist(max_dist)?;
         Self::check_unchanged((0..n).into_par_iter().all(|i| self.unchanged(x, y, z, i)))?;
         let r = search_radius(max_dist);
-        out.fill_parallel(n, |i, buf| self.scan(x, y, z, i, md2, r, buf))
+        out.fill_parallel(n, |i, buf| self.scan::<true>(x, y, z, i, md2, r, buf))
     }
 
-    /// Serial twin of [`ParticleTree::query_all`]; produces identical lists.
+    /// Serial, scalar twin of [`ParticleTree::query_all`] (no threads, no lanes); produces
+    /// identical lists.
     pub fn query_all_serial(
         &self,
         x: &[f32],
@@ -323,13 +326,13 @@ impl ParticleTree {
         let md2 = check_max_dist(max_dist)?;
         Self::check_unchanged((0..n).all(|i| self.unchanged(x, y, z, i)))?;
         let r = search_radius(max_dist);
-        out.fill_serial(n, |i, buf| self.scan(x, y, z, i, md2, r, buf))
+        out.fill_serial(n, |i, buf| self.scan::<false>(x, y, z, i, md2, r, buf))
     }
 
     /// Appends the sorted neighbours of particle `i` to `buf`.
     #[allow(clippy::too_many_arguments)]
     #[inline]
-    fn scan(
+    fn scan<const SIMD: bool>(
         &self,
         x: &[f32],
         y: &[f32],
@@ -365,14 +368,14 @@ impl ParticleTree {
             }
             if k >= fl {
                 let l = k - fl;
-                let (s, e) = (self.leaf_start[l] as usize, self.leaf_start[l + 1] as usize);
-                let ids = &self.order[s..e];
-                let (px, py, pz) = (&self.lx[s..e], &self.ly[s..e], &self.lz[s..e]);
-                for (((&j, &xj), &yj), &zj) in ids.iter().zip(px).zip(py).zip(pz) {
-                    if j != iu && within(xi, yi, zi, xj, yj, zj, md2) {
-                        buf.push(j);
-                    }
-                }
+                let range = self.leaf_start[l] as usize..self.leaf_start[l + 1] as usize;
+                let c = Candidates {
+                    ids: &self.order,
+                    x: &self.lx,
+                    y: &self.ly,
+                    z: &self.lz,
+                };
+                c.scan::<SIMD>(range, iu, [xi, yi, zi], md2, buf);
             } else {
                 stack[sp] = (2 * k + 2) as u32;
                 stack[sp + 1] = (2 * k + 1) as u32;
