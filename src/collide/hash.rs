@@ -104,9 +104,9 @@ impl SpatialHash {
                 v
             },
             cell_entries: Vec::with_capacity(max_particles),
-            sx: Vec::with_capacity(max_particles),
-            sy: Vec::with_capacity(max_particles),
-            sz: Vec::with_capacity(max_particles),
+            sx: Vec::with_capacity(max_particles + LANES),
+            sy: Vec::with_capacity(max_particles + LANES),
+            sz: Vec::with_capacity(max_particles + LANES),
             slot_of: Vec::with_capacity(max_particles),
         }
     }
