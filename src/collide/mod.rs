@@ -1,17 +1,35 @@
-//! Collision detection. Mesh obstacles (SEEDS.md section D, Landovskaya, Landovsky &
-//! Frolovsky): a validated [`mesh::TriMesh`] (from arrays or [`mesh_obj`] files), three
-//! interchangeable face broadphases behind [`face_broadphase::FaceBroadphase`] (the paper's
-//! uniform [`grid`], a [`bvh`], a [`face_hash`]), the segment/proximity [`narrow`]phase, the
-//! position/velocity [`mesh_response`], the paper's [`face_memory`], parallel [`mesh_batch`]
-//! queries and procedural [`dressform`] mannequins.
+//! Collision detection.
+//!
+//! **Obstacles** (SEEDS.md section D, Landovskaya, Landovsky & Frolovsky): a validated
+//! [`mesh::TriMesh`] (from arrays or [`mesh_obj`] files), three interchangeable face
+//! broadphases behind [`face_broadphase::FaceBroadphase`] (the paper's uniform [`grid`], a
+//! [`bvh`], a [`face_hash`]), the segment/proximity [`narrow`]phase, the position/velocity
+//! [`mesh_response`], the paper's [`face_memory`], parallel [`mesh_batch`] queries and
+//! procedural [`dressform`] mannequins.
+//!
+//! **Self-collision broadphase**: finding, for every particle, the particles within a distance
+//! `max_dist`. Two methods, one answer:
+//! * [`hash::SpatialHash`] — the spatial hash of SEEDS section C (Müller's dense hash: cells of
+//!   side `spacing`, counting sort into `cell_start` / `cell_entries`, 27-cell queries). Built
+//!   once per step, before the substeps.
+//! * [`particle_tree::ParticleTree`] — the box hierarchy of SEEDS section A (VcCPBD): an AABB
+//!   tree built once and refitted every step.
+//!
+//! Both fill a [`neighbours::Neighbours`] (CSR lists, the paper's `firstAdjId` / `adjIds`) with
+//! the same canonical result — sorted lists under one shared `f32` predicate — which also
+//! equals the O(n²) brute force [`neighbours::Neighbours::fill_brute_force`]. Every parallel
+//! routine has a `_serial` twin, and the results do not depend on the thread count.
 pub mod bvh;
 pub mod dressform;
 pub mod face_broadphase;
 pub mod face_hash;
 pub mod face_memory;
 pub mod grid;
+pub mod hash;
 pub mod mesh;
 pub mod mesh_batch;
 pub mod mesh_obj;
 pub mod mesh_response;
 pub mod narrow;
+pub mod neighbours;
+pub mod particle_tree;
