@@ -14,6 +14,7 @@ pub mod lanes;
 pub mod metrics;
 pub mod params;
 pub mod particles;
+pub mod perf;
 pub mod reference;
 pub mod render;
 pub mod scene;

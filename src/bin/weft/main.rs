@@ -6,6 +6,7 @@
 //! weft run --resume out/big/checkpoint.bin
 //! ```
 
+mod bench;
 mod check;
 mod pictures;
 mod run;
@@ -33,6 +34,16 @@ enum Command {
         /// The scene file (TOML).
         scene: PathBuf,
     },
+    /// A quick (< 60 s) speed report: ns per particle per kernel, SIMD/scalar and 2-thread/1-thread
+    /// ratios, fraction of the memory bandwidth, ms per step of each shipped scene.
+    Bench {
+        /// Print one JSON object instead of the table.
+        #[arg(long)]
+        json: bool,
+        /// Directory of scenes to time.
+        #[arg(long, default_value = "scenes")]
+        scenes: PathBuf,
+    },
 }
 
 fn main() -> ExitCode {
@@ -40,6 +51,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Run(args) => run::run(args),
         Command::Check { scene } => check::check(&scene),
+        Command::Bench { json, scenes } => bench::bench(json, &scenes),
     };
     match result {
         Ok(code) => code,
