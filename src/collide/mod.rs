@@ -3,7 +3,8 @@
 //! interchangeable face broadphases behind [`face_broadphase::FaceBroadphase`] (the paper's
 //! uniform [`grid`], a [`bvh`], a [`face_hash`]), the segment/proximity [`narrow`]phase, the
 //! position/velocity [`mesh_response`], the paper's [`face_memory`], parallel [`mesh_batch`]
-//! queries and procedural [`dressform`] mannequins.
+//! queries and procedural [`dressform`] mannequins. Analytic [`shapes`] (plane, sphere,
+//! capsule, box) and the world's [`obstacles`] with their step kernels ([`obstacle_kernels`]).
 pub mod bvh;
 pub mod dressform;
 pub mod face_broadphase;
@@ -15,3 +16,6 @@ pub mod mesh_batch;
 pub mod mesh_obj;
 pub mod mesh_response;
 pub mod narrow;
+pub mod obstacle_kernels;
+pub mod obstacles;
+pub mod shapes;
