@@ -292,6 +292,7 @@ impl ObstacleSet {
 
     /// Places every obstacle at time `t` and finds the contacts of the step `x -> p` of
     /// length `h` (module doc, stages 1 and 2).
+    #[allow(clippy::needless_range_loop)] // lane `l` indexes the slot block and the memory alike
     pub(crate) fn generate(&mut self, particles: &Particles, t: f64, h: f32, parallel: bool, simd: bool) {
         let n = particles.count();
         for (o, slots) in self.list.iter_mut().zip(&mut self.slots) {
