@@ -6,7 +6,7 @@
 //!   for each substep h = dt / substeps:
 //!     wind forces per triangle → per particle          [effects]        (if named)
 //!     predict: v += h g + h w f, drag; p = x + h v      [integrate]
-//!     obstacle contacts of x -> p, projection           [collide/obstacles] (if any)
+//!     obstacle contacts of x -> p, back along the path  [collide/obstacles] (if any)
 //!     `iterations` sweeps: distance constraints by colour, tethers,
 //!       obstacle projection (if any)                    [constraints, collide]
 //!     update: v = (p - x) / h, damping; x = p          [integrate]
@@ -132,7 +132,7 @@ impl World {
             if has_obstacles {
                 let t_end = self.time + ((s + 1) as f64) * (h as f64);
                 self.obstacles.generate(&self.particles, t_end, h, parallel, simd);
-                self.obstacles.project(&mut self.particles, parallel, simd);
+                self.obstacles.resolve(&mut self.particles, h, parallel);
                 let p = &self.particles;
                 checkpoint!("obstacles", p.px, p.py, p.pz);
             }

@@ -18,4 +18,5 @@ pub mod mesh_response;
 pub mod narrow;
 pub mod obstacle_kernels;
 pub mod obstacles;
+pub mod penetration;
 pub mod shapes;

@@ -4,28 +4,31 @@
 //!
 //! **Slots.** Each obstacle owns one contact slot per particle: the tangent plane `(c, n)` of
 //! [`ShapeContact`](super::shapes::ShapeContact) (or of a mesh face). The slots are stored in
-//! blocks of eight particles, `[cx; 8] [cy; 8] [cz; 8] [nx; 8] [ny; 8] [nz; 8]`, so a SIMD
+//! blocks of eight particles, `[cx; 8] [cy; 8] [cz; 8] [nx; 8] [ny; 8] [nz; 8] [a; 8]`, so a SIMD
 //! lane reads contiguous values and a parallel task owns whole blocks. "No contact" is the
-//! zero normal, which makes the projection branch-free.
+//! zero normal, which makes the projection branch-free. `a` is the approach speed
+//! `max(0, -n.(v - u))` of the predicted velocity when the contact was found ([`fill_approach`]).
 //!
 //! **Projection** (every solver iteration, after the constraints): the inequality
 //! `n.(p - c) >= Th` is enforced by `p += max(0, Th - n.(p - c)) n` (PBD, Müller et al. 2007;
 //! the paper's "stand off the face by the thickness"). A zero normal leaves `p` unchanged.
 //!
 //! **Velocity pass** (after the velocity update): for a particle standing on its contact
-//! plane (`n.(x - c) <= Th + TOUCH_SLACK`), the velocity relative to the obstacle loses its
-//! approaching normal part and Coulomb friction shrinks the tangential part
-//! ([`resolve_velocity`](super::mesh_response::resolve_velocity)).
+//! plane (`n.(x - c) <= Th + TOUCH_SLACK`), the velocity relative to the obstacle `w = v - u`
+//! loses its approaching normal part and Coulomb friction shrinks the tangential part `w_t` by
+//! `mu max(a, -n.w)`: `w_t' = w_t max(0, 1 - mu max(a, -n.w) / |w_t|)`. After a position
+//! projection the updated velocity has almost no normal part left, so the normal impulse is
+//! measured before the projection, by the approach speed `a` (for cloth resting under gravity
+//! `a = g h cos(theta)`, which gives Coulomb's `mu g cos(theta)` deceleration).
 //!
 //! SIMD and scalar kernels perform the same f32 operations in the same order, with no fused
 //! multiply-add, so they agree bit for bit (`tests.rs`).
 
-use super::mesh_response::resolve_velocity;
 use super::shapes::{dot, sub, Shape};
 use crate::lanes::{F32s, Vec3x8, LANES};
 
 /// Floats per block of eight slots.
-pub const SLOT_BLOCK: usize = 6 * LANES;
+pub const SLOT_BLOCK: usize = 7 * LANES;
 /// A particle within this distance beyond the thickness still counts as touching.
 pub const TOUCH_SLACK: f32 = 1e-4;
 
@@ -37,6 +40,36 @@ pub fn write_slot(blocks: &mut [f32], i: usize, point: [f32; 3], normal: [f32; 3
         blocks[b * SLOT_BLOCK + k * LANES + l] = point[k];
         blocks[b * SLOT_BLOCK + (3 + k) * LANES + l] = normal[k];
     }
+    blocks[b * SLOT_BLOCK + 6 * LANES + l] = 0.0;
+}
+
+/// Sets the approach speeds `max(0, -n.(v - u))` of the eight slots of one block (`out`, the
+/// block's floats) from the velocities of particles `b * 8 ..`; slots without contact get 0.
+pub fn fill_approach(out: &mut [f32], b: usize, v: [&[f32]; 3], u: [f32; 3]) {
+    for l in 0..LANES {
+        let i = b * LANES + l;
+        let n = [3, 4, 5].map(|k| out[k * LANES + l]);
+        let rel = [v[0][i] - u[0], v[1][i] - u[1], v[2][i] - u[2]];
+        out[6 * LANES + l] = (-dot(n, rel)).max(0.0);
+    }
+}
+
+/// Approach speed of slot `i`.
+#[inline]
+pub fn read_approach(blocks: &[f32], i: usize) -> f32 {
+    blocks[i / LANES * SLOT_BLOCK + 6 * LANES + i % LANES]
+}
+
+/// The velocity `w` (relative to the obstacle) after contact with normal `n`, approach speed
+/// `a` and friction `mu` (module doc).
+pub fn contact_velocity(w: [f32; 3], n: [f32; 3], a: f32, mu: f32) -> [f32; 3] {
+    let wn = dot(w, n);
+    let wt = [w[0] - wn * n[0], w[1] - wn * n[1], w[2] - wn * n[2]];
+    let keep_n = wn.max(0.0);
+    let lt = dot(wt, wt).sqrt();
+    let drop = mu * a.max(-wn);
+    let f = if lt <= drop { 0.0 } else { 1.0 - drop / lt };
+    [0, 1, 2].map(|k| wt[k] * f + keep_n * n[k])
 }
 
 /// Reads slot `i`: `(point, normal)`.
@@ -123,7 +156,10 @@ pub fn shape_block_simd(shape: &Shape, g: &GenInput, b: usize, out: &mut [f32]) 
         _ => return shape_block_scalar(shape, g, b, out),
     };
     let m = live & hit;
-    for (k, v) in [point.x, point.y, point.z, normal.x, normal.y, normal.z].into_iter().enumerate() {
+    for (k, v) in [point.x, point.y, point.z, normal.x, normal.y, normal.z, zero]
+        .into_iter()
+        .enumerate()
+    {
         crate::lanes::store(out, k * LANES, m.select(v, zero));
     }
 }
@@ -221,8 +257,39 @@ pub fn project_simd(slots: &[Vec<f32>], th: &[f32], start: usize, p: [&mut [f32]
     }
 }
 
+/// The paper's response, applied once right after the contacts are found: for every obstacle's
+/// contact in order, move `p` back along its path (in the obstacle's frame, start `x - shift`)
+/// to the point that stands `Th` off the contact plane, or, when the path offers no such
+/// point (the particle started inside the layer), push it along the normal. The chosen
+/// contact is the first crossing of the path, so the point reached lies before every crossing:
+/// outside the obstacle ([`resolve_position`](super::mesh_response::resolve_position)).
+/// Element-wise; the parallel and serial runs give the same bits.
+pub fn resolve_along_path(slots: &[Vec<f32>], shifts: &[[f32; 3]], th: &[f32], start: usize, x: [&[f32]; 3], p: [&mut [f32]; 3]) {
+    let [px, py, pz] = p;
+    for i in 0..px.len() {
+        let g = start + i;
+        let mut q = [px[i], py[i], pz[i]];
+        for (s, u) in slots.iter().zip(shifts) {
+            let (c, n) = read_slot(s, g);
+            if n == [0.0; 3] {
+                continue;
+            }
+            let xr = [x[0][i] - u[0], x[1][i] - u[1], x[2][i] - u[2]];
+            let (hx, hp) = (dot(n, sub(xr, c)), dot(n, sub(q, c)));
+            if hx > hp && hx >= th[g] {
+                let tau = ((hx - th[g]) / (hx - hp)).clamp(0.0, 1.0);
+                q = [0, 1, 2].map(|k| xr[k] + tau * (q[k] - xr[k]));
+            } else if hp < th[g] {
+                let d = th[g] - hp;
+                q = [0, 1, 2].map(|k| q[k] + d * n[k]);
+            }
+        }
+        (px[i], py[i], pz[i]) = (q[0], q[1], q[2]);
+    }
+}
+
 /// Velocity pass for particles `start .. start + v[0].len()`: for every obstacle `k` whose
-/// slot touches the particle, `v = u_k + resolve_velocity(v - u_k, n, mu_k)`.
+/// slot touches the particle, `v = u_k + contact_velocity(v - u_k, n, a, mu_k)`.
 pub fn velocity_pass(slots: &[Vec<f32>], motion: &[([f32; 3], f32)], th: &[f32], start: usize, x: [&[f32]; 3], v: [&mut [f32]; 3]) {
     let [vx, vy, vz] = v;
     for i in 0..vx.len() {
@@ -234,7 +301,7 @@ pub fn velocity_pass(slots: &[Vec<f32>], motion: &[([f32; 3], f32)], th: &[f32],
                 continue;
             }
             let rel = [vx[i] - u[0], vy[i] - u[1], vz[i] - u[2]];
-            let w = resolve_velocity(rel, n, mu);
+            let w = contact_velocity(rel, n, read_approach(s, g), mu);
             (vx[i], vy[i], vz[i]) = (w[0] + u[0], w[1] + u[1], w[2] + u[2]);
         }
     }

@@ -102,6 +102,19 @@ fn velocity_pass_removes_approach_and_applies_friction() {
     let (mut vx, mut vy, mut vz) = (vec![3.0; LANES], vec![-1.0; LANES], vec![0.0; LANES]);
     velocity_pass(&slots, &[([0.0; 3], 0.5)], &th, 0, [&x, &y, &z], [&mut vx, &mut vy, &mut vz]);
     assert_eq!((vx[0], vy[0]), (2.5, 0.0));
+    // the approach speed measured before the projection sets the friction
+    let (vx2, vy2, vz2) = (vec![3.0; LANES], vec![0.0; LANES], vec![0.0; LANES]);
+    fill_approach(
+        &mut slots[0],
+        0,
+        [&vec![0.0; LANES], &vec![-4.0; LANES], &vec![0.0; LANES]],
+        [0.0; 3],
+    );
+    assert_eq!(read_approach(&slots[0], 0), 4.0);
+    let w = contact_velocity([vx2[0], vy2[0], vz2[0]], [0.0, 1.0, 0.0], 4.0, 0.5);
+    assert!((w[0] - 1.0).abs() < 1e-6 && w[1] == 0.0 && w[2] == 0.0, "{w:?}");
+    assert_eq!(contact_velocity([1.0, 0.0, 0.0], [0.0, 1.0, 0.0], 4.0, 0.5), [0.0; 3]);
+    assert_eq!(contact_velocity([1.0, 2.0, 0.0], [0.0, 1.0, 0.0], 0.0, 0.5), [1.0, 2.0, 0.0]);
     // not touching (0.5 m above): unchanged; no slot: unchanged
     assert_eq!((vx[1], vy[1]), (3.0, -1.0));
     assert_eq!((vx[2], vy[2]), (3.0, -1.0));

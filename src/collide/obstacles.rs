@@ -12,9 +12,13 @@
 //!    `x - u h -> p`, so a moving obstacle cannot sweep through a resting particle. Contacts are
 //!    kept within `reach = Th + max(Th, 1 mm)` so that the constraint solve, which moves the
 //!    particles after the contacts were found, still meets a contact plane.
-//! 3. **Projection** in every solver iteration, after the cloth constraints.
+//!    Then the paper's response: each particle goes back along its path until it stands the
+//!    thickness off the contact plane (the point lies before the first crossing, so outside).
+//! 3. **Projection** in every solver iteration, after the cloth constraints: the contact planes
+//!    as inequality constraints (the constraints may have pulled a particle back in).
 //! 4. **Velocity pass** after the velocity update: inelastic contact with Coulomb friction
-//!    relative to the obstacle's velocity.
+//!    relative to the obstacle's velocity, the normal impulse measured by the approach speed
+//!    of the predicted velocity (`obstacle_kernels.rs`).
 //!
 //! Mesh obstacles use one of three broadphases ([`BroadphaseKind`]), all giving the same
 //! contacts, and optionally the paper's face memory ([`face_memory`](super::face_memory)): a
@@ -295,6 +299,7 @@ impl ObstacleSet {
     #[allow(clippy::needless_range_loop)] // lane `l` indexes the slot block and the memory alike
     pub(crate) fn generate(&mut self, particles: &Particles, t: f64, h: f32, parallel: bool, simd: bool) {
         let n = particles.count();
+        let vel = [&particles.vx[..], &particles.vy[..], &particles.vz[..]];
         for (o, slots) in self.list.iter_mut().zip(&mut self.slots) {
             let u = o.velocity;
             let g = GenInput {
@@ -315,6 +320,7 @@ impl ObstacleSet {
                         } else {
                             k::shape_block_scalar(&shape, &g, b, out)
                         }
+                        k::fill_approach(out, b, vel, u);
                     });
                 }
                 Geometry::Mesh(m) => {
@@ -339,10 +345,21 @@ impl ObstacleSet {
                             let (pt, nr) = c.map_or(([0.0; 3], [0.0; 3]), |c| (c.point, c.normal));
                             k::write_slot(out, l, pt, nr);
                         }
+                        k::fill_approach(out, b, vel, u);
                     });
                 }
             }
         }
+    }
+
+    /// Moves every particle back along its path out of its contacts (stage 2, the paper's
+    /// response; [`k::resolve_along_path`]).
+    pub(crate) fn resolve(&self, particles: &mut Particles, h: f32, parallel: bool) {
+        let shifts: Vec<[f32; 3]> = self.list.iter().map(|o| o.velocity.map(|c| c * h)).collect();
+        let (slots, th) = (&self.slots, &self.th);
+        particles.for_chunks(parallel, |c| {
+            k::resolve_along_path(slots, &shifts, th, c.start, [&*c.x, &*c.y, &*c.z], [c.px, c.py, c.pz])
+        });
     }
 
     /// Projects every particle's prediction out of its contacts (stage 3).
