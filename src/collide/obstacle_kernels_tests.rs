@@ -107,7 +107,7 @@ fn velocity_pass_removes_approach_and_applies_friction() {
     fill_approach(
         &mut slots[0],
         0,
-        [&vec![0.0; LANES], &vec![-4.0; LANES], &vec![0.0; LANES]],
+        [&[0.0; LANES], &[-4.0; LANES], &[0.0; LANES]],
         [0.0; 3],
     );
     assert_eq!(read_approach(&slots[0], 0), 4.0);
