@@ -6,8 +6,11 @@
 //!   for each substep h = dt / substeps:
 //!     wind forces per triangle → per particle          [effects]        (if named)
 //!     predict: v += h g + h w f, drag; p = x + h v      [integrate]
-//!     `iterations` sweeps: distance constraints by colour, tethers   [constraints]
+//!     obstacle contacts of x -> p, back along the path  [collide/obstacles] (if any)
+//!     `iterations` sweeps: distance constraints by colour, tethers,
+//!       obstacle projection (if any)                    [constraints, collide]
 //!     update: v = (p - x) / h, damping; x = p          [integrate]
+//!     obstacle velocity pass: normal part, friction     [collide/obstacles] (if any)
 //!   on a non-finite value: restore the copy, replay the step with a check after every stage
 //!   to name the stage and particle, and return `Diverged`
 //! ```
@@ -101,6 +104,10 @@ impl World {
                 }
             };
         }
+        let has_obstacles = !self.obstacles.is_empty();
+        if has_obstacles {
+            self.obstacles.prepare(&self.particles, &self.cloths);
+        }
         for s in 0..n_sub {
             let t = self.time + (s as f64) * (h as f64);
             if let (Some(w), Some(state)) = (&self.effects.wind, &mut self.wind) {
@@ -122,6 +129,13 @@ impl World {
                 let p = &self.particles;
                 checkpoint!("predict", p.px, p.py, p.pz, p.vx, p.vy, p.vz);
             }
+            if has_obstacles {
+                let t_end = self.time + ((s + 1) as f64) * (h as f64);
+                self.obstacles.generate(&self.particles, t_end, h, parallel, simd);
+                self.obstacles.resolve(&mut self.particles, h, parallel);
+                let p = &self.particles;
+                checkpoint!("obstacles", p.px, p.py, p.pz);
+            }
             self.distance.reset_lambda();
             for _ in 0..self.params.iterations {
                 let p = &mut self.particles;
@@ -139,11 +153,20 @@ impl World {
                     }
                     checkpoint!("tethers", p.px, p.py, p.pz);
                 }
+                if has_obstacles {
+                    self.obstacles.project(p, parallel, simd);
+                    checkpoint!("obstacles", p.px, p.py, p.pz);
+                }
             }
             let damp = self.has_damping.then_some(&self.damp_factor[..]);
             self.particles.for_chunks(parallel, |c| update(c, h, damp, simd));
             let p = &self.particles;
             checkpoint!("update", p.x, p.y, p.z, p.vx, p.vy, p.vz);
+            if has_obstacles {
+                self.obstacles.velocity_pass(&mut self.particles, parallel);
+                let p = &self.particles;
+                checkpoint!("obstacles", p.vx, p.vy, p.vz);
+            }
         }
         None
     }

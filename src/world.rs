@@ -55,6 +55,7 @@ pub struct World {
     pub(crate) time: f64,
     pub(crate) steps: u64,
     pub(crate) last_h: f32,
+    pub(crate) obstacles: crate::collide::obstacles::ObstacleSet,
 }
 
 impl World {
@@ -84,6 +85,7 @@ impl World {
             time: 0.0,
             steps: 0,
             last_h: 0.0,
+            obstacles: Default::default(),
         })
     }
 
@@ -142,6 +144,7 @@ impl World {
         self.tethers = TetherSet::new(&self.tether_inputs, sink);
         self.wind = self.effects.wind.as_ref().map(|_| WindState::new(&self.triangles, len));
         self.damp_h = f32::NAN;
+        self.obstacles.invalidate();
         for b in &mut self.backup {
             b.resize(len, 0.0);
         }

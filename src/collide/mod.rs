@@ -5,10 +5,11 @@
 //! broadphases behind [`face_broadphase::FaceBroadphase`] (the paper's uniform [`grid`], a
 //! [`bvh`], a [`face_hash`]), the segment/proximity [`narrow`]phase, the position/velocity
 //! [`mesh_response`], the paper's [`face_memory`], parallel [`mesh_batch`] queries and
-//! procedural [`dressform`] mannequins.
+//! procedural [`dressform`] mannequins; analytic [`shapes`] (plane, sphere, capsule, box) and
+//! the world's [`obstacles`] with their step kernels ([`obstacle_kernels`]).
 //!
-//! **Self-collision broadphase**: finding, for every particle, the particles within a distance
-//! `max_dist`. Two methods, one answer:
+//! **Self-collision**: finding, for every particle, the particles within a distance
+//! `max_dist`, two methods with one answer:
 //! * [`hash::SpatialHash`] — the spatial hash of SEEDS section C (Müller's dense hash: cells of
 //!   side `spacing`, counting sort into `cell_start` / `cell_entries`, 27-cell queries). Built
 //!   once per step, before the substeps.
@@ -32,4 +33,8 @@ pub mod mesh_obj;
 pub mod mesh_response;
 pub mod narrow;
 pub mod neighbours;
+pub mod obstacle_kernels;
+pub mod obstacles;
 pub mod particle_tree;
+pub mod penetration;
+pub mod shapes;

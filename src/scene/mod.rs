@@ -28,6 +28,7 @@
 //! RON is not supported: TOML covers the format, and one syntax keeps error messages uniform.
 
 pub mod checked;
+pub mod obstacles;
 mod sections;
 
 pub use sections::{EffectsSection, OutputSection, SceneCloth, SolverSection, WindSection};
@@ -48,6 +49,9 @@ pub struct Scene {
     /// Cloth pieces.
     #[serde(default)]
     pub cloth: Vec<toml::Spanned<SceneCloth>>,
+    /// Obstacles (see [`obstacles`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub obstacle: Vec<toml::Spanned<obstacles::SceneObstacle>>,
     /// What a run writes.
     #[serde(default)]
     pub output: OutputSection,
@@ -94,16 +98,25 @@ impl Scene {
 
     fn build_world(&self, src: Option<(&str, &str)>) -> Result<World> {
         let mut world = World::new(self.solver.params(), self.effects.effects())?;
+        let at = |span: std::ops::Range<usize>| {
+            src.map(|(text, name)| {
+                let (l, col) = line_col(text, span.start);
+                format!("{name} at line {l}, column {col}: ")
+            })
+            .unwrap_or_default()
+        };
         for (k, c) in self.cloth.iter().enumerate() {
             let desc = c.get_ref().desc().and_then(|d| world.add_cloth(&d).map(|_| ()));
             if let Err(e) = desc {
-                let at = src
-                    .map(|(text, name)| {
-                        let (l, col) = line_col(text, c.span().start);
-                        format!("{name} at line {l}, column {col}: ")
-                    })
-                    .unwrap_or_default();
-                return Err(WeftError::Scene(format!("{at}cloth {k}: {e}")));
+                return Err(WeftError::Scene(format!("{}cloth {k}: {e}", at(c.span()))));
+            }
+        }
+        if let Some(mu) = self.effects.friction {
+            world.set_friction(mu.0)?;
+        }
+        for (k, o) in self.obstacle.iter().enumerate() {
+            if let Err(e) = o.get_ref().obstacle().and_then(|o| world.add_obstacle(o)) {
+                return Err(WeftError::Scene(format!("{}obstacle {k}: {e}", at(o.span()))));
             }
         }
         Ok(world)

@@ -92,6 +92,8 @@ pub struct EffectsSection {
     pub drag: Option<NonNegative>,
     /// Wind.
     pub wind: Option<WindSection>,
+    /// Coulomb friction coefficient against obstacles (default 0; an obstacle may set its own).
+    pub friction: Option<NonNegative>,
 }
 
 impl EffectsSection {

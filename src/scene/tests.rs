@@ -122,3 +122,110 @@ fn line_col_counts_from_one() {
     assert_eq!(line_col("ab\ncd", 3), (2, 1));
     assert_eq!(line_col("ab\ncd", 4), (2, 2));
 }
+
+const OBSTACLES: &str = r#"
+[effects]
+gravity = [0.0, -9.81, 0.0]
+friction = 0.3
+
+[[cloth]]
+rows = 4
+cols = 4
+spacing = 0.05
+
+[[obstacle]]
+kind = "plane"
+point = [0.0, 0.0, 0.0]
+normal = [0.0, 1.0, 0.0]
+
+[[obstacle]]
+kind = "sphere"
+center = [0.0, 0.5, 0.0]
+radius = 0.2
+velocity = [0.0, 0.0, 0.1]
+friction = 0.5
+
+[[obstacle]]
+kind = "capsule"
+a = [-0.5, 0.3, 0.0]
+b = [0.5, 0.3, 0.0]
+radius = 0.05
+
+[[obstacle]]
+kind = "box"
+center = [0.0, 0.1, 0.0]
+half_extents = [0.2, 0.1, 0.2]
+rotation = [0.0, 45.0, 0.0]
+
+[[obstacle]]
+kind = "mesh"
+dress_form = 400
+offset = [1.0, 0.0, 0.0]
+scale = 0.5
+broadphase = "grid"
+cells = [3, 4, 3]
+face_memory = true
+
+[[obstacle]]
+kind = "mesh"
+dress_form = 400
+broadphase = "bvh"
+"#;
+
+#[test]
+fn obstacles_parse_and_build() {
+    let s = Scene::parse(OBSTACLES, "obs.toml").unwrap();
+    let w = s.world().unwrap();
+    assert_eq!(w.obstacles().len(), 6);
+    assert_eq!(w.friction(), 0.3);
+    assert_eq!(w.obstacles()[1].friction(), Some(0.5));
+    assert!(
+        w.obstacles()[4].describe().contains("grid 3x4x3"),
+        "{}",
+        w.obstacles()[4].describe()
+    );
+    assert!(w.obstacles()[4].describe().contains("face memory"));
+    assert!(
+        w.obstacles()[5].describe().to_lowercase().contains("bvh"),
+        "{}",
+        w.obstacles()[5].describe()
+    );
+}
+
+fn obstacle_error(table: &str) -> String {
+    let text = format!("[[cloth]]\nrows = 2\ncols = 2\nspacing = 0.1\n\n[[obstacle]]\n{table}");
+    Scene::parse(&text, "bad.toml").unwrap_err().to_string()
+}
+
+#[test]
+fn obstacle_errors_carry_line_and_column() {
+    let e = obstacle_error("kind = \"sphere\"\ncenter = [0.0, 0.0, 0.0]\nradius = -1.0\n");
+    assert!(e.contains("line 9, column 10") && e.contains("out of range"), "{e}");
+    let e = obstacle_error("kind = \"sphere\"\ncentre = [0.0, 0.0, 0.0]\nradius = 1.0\n");
+    assert!(e.contains("line 8, column 1") && e.contains("centre"), "{e}");
+    let e = obstacle_error("kind = \"cone\"\n");
+    assert!(e.contains("line 7, column 8") && e.contains("cone"), "{e}");
+    let e = obstacle_error("kind = \"mesh\"\ndress_form = 400\nbroadphase = \"octree\"\n");
+    assert!(e.contains("line 9") && e.contains("octree"), "{e}");
+    let e = obstacle_error("kind = \"box\"\ncenter = [0.0, 0.0, 0.0]\nhalf_extents = [1.0, 0.0, 1.0]\n");
+    assert!(e.contains("line 9") && e.contains("out of range"), "{e}");
+    // cross-field problems name the obstacle's table
+    let e = obstacle_error("kind = \"plane\"\npoint = [0.0, 0.0, 0.0]\nradius = 1.0\nnormal = [0.0, 1.0, 0.0]\n");
+    assert!(
+        e.contains("line 6, column 1") && e.contains("obstacle 0") && e.contains("`radius` does not apply"),
+        "{e}"
+    );
+    let e = obstacle_error("kind = \"sphere\"\ncenter = [0.0, 0.0, 0.0]\n");
+    assert!(e.contains("line 6") && e.contains("needs `radius`"), "{e}");
+    let e = obstacle_error("kind = \"mesh\"\n");
+    assert!(e.contains("exactly one of `obj` and `dress_form`"), "{e}");
+    let e = obstacle_error("kind = \"mesh\"\ndress_form = 400\nbroadphase = \"bvh\"\ncells = [2, 2, 2]\n");
+    assert!(e.contains("grid broadphase only"), "{e}");
+    let e = obstacle_error("kind = \"plane\"\npoint = [0.0, 0.0, 0.0]\nnormal = [0.0, 0.0, 0.0]\n");
+    assert!(e.contains("plane.normal"), "{e}");
+    let e = obstacle_error("kind = \"mesh\"\nobj = \"/nonexistent/x.obj\"\n");
+    assert!(e.contains("line 6"), "{e}");
+    let text = "[effects]\nfriction = -0.5\n";
+    let e = Scene::parse(text, "f.toml").unwrap_err().to_string();
+    assert!(e.contains("line 2, column 12"), "{e}");
+}

@@ -1,0 +1,312 @@
+//! Per-particle obstacle kernels of the step: contact slots, the plane and sphere contact
+//! generators in SIMD (`f32x8`) with scalar twins, the position projection (SIMD + scalar
+//! twin) and the velocity pass.
+//!
+//! **Slots.** Each obstacle owns one contact slot per particle: the tangent plane `(c, n)` of
+//! [`ShapeContact`](super::shapes::ShapeContact) (or of a mesh face). The slots are stored in
+//! blocks of eight particles, `[cx; 8] [cy; 8] [cz; 8] [nx; 8] [ny; 8] [nz; 8] [a; 8]`, so a SIMD
+//! lane reads contiguous values and a parallel task owns whole blocks. "No contact" is the
+//! zero normal, which makes the projection branch-free. `a` is the approach speed
+//! `max(0, -n.(v - u))` of the predicted velocity when the contact was found ([`fill_approach`]).
+//!
+//! **Projection** (every solver iteration, after the constraints): the inequality
+//! `n.(p - c) >= Th` is enforced by `p += max(0, Th - n.(p - c)) n` (PBD, Müller et al. 2007;
+//! the paper's "stand off the face by the thickness"). A zero normal leaves `p` unchanged.
+//!
+//! **Velocity pass** (after the velocity update): for a particle standing on its contact
+//! plane (`n.(x - c) <= Th + TOUCH_SLACK`), the velocity relative to the obstacle `w = v - u`
+//! loses its approaching normal part and Coulomb friction shrinks the tangential part `w_t` by
+//! `mu max(a, -n.w)`: `w_t' = w_t max(0, 1 - mu max(a, -n.w) / |w_t|)`. After a position
+//! projection the updated velocity has almost no normal part left, so the normal impulse is
+//! measured before the projection, by the approach speed `a` (for cloth resting under gravity
+//! `a = g h cos(theta)`, which gives Coulomb's `mu g cos(theta)` deceleration).
+//!
+//! SIMD and scalar kernels perform the same f32 operations in the same order, with no fused
+//! multiply-add, so they agree bit for bit (`tests.rs`).
+
+use super::shapes::{dot, sub, Shape};
+use crate::lanes::{F32s, Vec3x8, LANES};
+
+/// Floats per block of eight slots.
+pub const SLOT_BLOCK: usize = 7 * LANES;
+/// A particle within this distance beyond the thickness still counts as touching.
+pub const TOUCH_SLACK: f32 = 1e-4;
+
+/// Writes slot `i` of `blocks` (blocks start at particle `first`).
+#[inline]
+pub fn write_slot(blocks: &mut [f32], i: usize, point: [f32; 3], normal: [f32; 3]) {
+    let (b, l) = (i / LANES, i % LANES);
+    for k in 0..3 {
+        blocks[b * SLOT_BLOCK + k * LANES + l] = point[k];
+        blocks[b * SLOT_BLOCK + (3 + k) * LANES + l] = normal[k];
+    }
+    blocks[b * SLOT_BLOCK + 6 * LANES + l] = 0.0;
+}
+
+/// Sets the approach speeds `max(0, -n.(v - u))` of the eight slots of one block (`out`, the
+/// block's floats) from the velocities of particles `b * 8 ..`; slots without contact get 0.
+pub fn fill_approach(out: &mut [f32], b: usize, v: [&[f32]; 3], u: [f32; 3]) {
+    for l in 0..LANES {
+        let i = b * LANES + l;
+        let n = [3, 4, 5].map(|k| out[k * LANES + l]);
+        let rel = [v[0][i] - u[0], v[1][i] - u[1], v[2][i] - u[2]];
+        out[6 * LANES + l] = (-dot(n, rel)).max(0.0);
+    }
+}
+
+/// Approach speed of slot `i`.
+#[inline]
+pub fn read_approach(blocks: &[f32], i: usize) -> f32 {
+    blocks[i / LANES * SLOT_BLOCK + 6 * LANES + i % LANES]
+}
+
+/// The velocity `w` (relative to the obstacle) after contact with normal `n`, approach speed
+/// `a` and friction `mu` (module doc).
+pub fn contact_velocity(w: [f32; 3], n: [f32; 3], a: f32, mu: f32) -> [f32; 3] {
+    let wn = dot(w, n);
+    let wt = [w[0] - wn * n[0], w[1] - wn * n[1], w[2] - wn * n[2]];
+    let keep_n = wn.max(0.0);
+    let lt = dot(wt, wt).sqrt();
+    let drop = mu * a.max(-wn);
+    let f = if lt <= drop { 0.0 } else { 1.0 - drop / lt };
+    [0, 1, 2].map(|k| wt[k] * f + keep_n * n[k])
+}
+
+/// Reads slot `i`: `(point, normal)`.
+#[inline]
+pub fn read_slot(blocks: &[f32], i: usize) -> ([f32; 3], [f32; 3]) {
+    let (b, l) = (i / LANES, i % LANES);
+    let g = |k: usize| blocks[b * SLOT_BLOCK + k * LANES + l];
+    ([g(0), g(1), g(2)], [g(3), g(4), g(5)])
+}
+
+#[inline(always)]
+fn load_block(blocks: &[f32], b: usize, k: usize) -> F32s {
+    crate::lanes::load(blocks, b * SLOT_BLOCK + k * LANES)
+}
+
+/// Read-only particle data a generator needs, all padded arrays of the same length.
+#[derive(Clone, Copy)]
+pub struct GenInput<'a> {
+    /// Start positions.
+    pub x: [&'a [f32]; 3],
+    /// Predicted positions.
+    pub p: [&'a [f32]; 3],
+    /// Inverse masses (0 = pinned: never collided).
+    pub w: &'a [f32],
+    /// Thickness per particle.
+    pub th: &'a [f32],
+    /// Contact reach per particle (`>= th`).
+    pub reach: &'a [f32],
+    /// Real particles (lanes at or beyond are padding).
+    pub n: usize,
+    /// The obstacle's displacement during this substep (start is shifted by `-shift`).
+    pub shift: [f32; 3],
+}
+
+impl GenInput<'_> {
+    /// Start (in the obstacle's end frame) and prediction of particle `i`.
+    #[inline]
+    pub fn path(&self, i: usize) -> ([f32; 3], [f32; 3]) {
+        let x = [0, 1, 2].map(|k| self.x[k][i] - self.shift[k]);
+        (x, [0, 1, 2].map(|k| self.p[k][i]))
+    }
+    /// Is particle `i` a real, movable particle?
+    #[inline]
+    pub fn live(&self, i: usize) -> bool {
+        i < self.n && self.w[i] > 0.0
+    }
+}
+
+/// Scalar twin of [`shape_block_simd`]: the contacts of the eight particles of block `b`.
+pub fn shape_block_scalar(shape: &Shape, g: &GenInput, b: usize, out: &mut [f32]) {
+    for l in 0..LANES {
+        let i = b * LANES + l;
+        let c = if g.live(i) {
+            let (x, p) = g.path(i);
+            shape.contact(x, p, g.th[i], g.reach[i])
+        } else {
+            None
+        };
+        let (pt, n) = c.map_or(([0.0; 3], [0.0; 3]), |c| (c.point, c.normal));
+        write_slot(out, l, pt, n);
+    }
+}
+
+/// Contacts of block `b` with `shape`, eight lanes at once for planes and spheres (other
+/// shapes use the scalar path). `out` is the block's 48 floats.
+pub fn shape_block_simd(shape: &Shape, g: &GenInput, b: usize, out: &mut [f32]) {
+    let i = b * LANES;
+    let zero = F32s::splat(0.0);
+    let live = F32s::from(std::array::from_fn::<f32, LANES, _>(|l| if g.live(i + l) { 1.0 } else { 0.0 })).simd_gt(zero);
+    let p = Vec3x8::load(g.p[0], g.p[1], g.p[2], i);
+    let reach = crate::lanes::load(g.reach, i);
+    let (point, normal, hit) = match shape {
+        Shape::Plane { point, normal } => {
+            let n = Vec3x8::splat(*normal);
+            let h = n.dot(p - Vec3x8::splat(*point));
+            let q = p + n.scale(-h);
+            (q, n, h.simd_lt(reach))
+        }
+        Shape::Sphere { center, radius } => {
+            let th = crate::lanes::load(g.th, i);
+            let x = Vec3x8::load(g.x[0], g.x[1], g.x[2], i) - Vec3x8::splat(g.shift);
+            sphere_lanes(*center, *radius, x, p, th, reach)
+        }
+        _ => return shape_block_scalar(shape, g, b, out),
+    };
+    let m = live & hit;
+    for (k, v) in [point.x, point.y, point.z, normal.x, normal.y, normal.z, zero]
+        .into_iter()
+        .enumerate()
+    {
+        crate::lanes::store(out, k * LANES, m.select(v, zero));
+    }
+}
+
+/// The sphere test of `shapes::ball_contact`, lane-wise: `(point, normal, hit)`.
+#[inline(always)]
+fn sphere_lanes(center: [f32; 3], r: f32, x: Vec3x8, p: Vec3x8, th: F32s, reach: F32s) -> (Vec3x8, Vec3x8, F32s) {
+    let zero = F32s::splat(0.0);
+    let one = F32s::splat(1.0);
+    let c = Vec3x8::splat(center);
+    let rv = F32s::splat(r);
+    let up = Vec3x8::splat([0.0, 1.0, 0.0]);
+    // proximity
+    let dp = p - c;
+    let l2 = dp.length_sq();
+    let rr = rv + reach;
+    let prox = l2.simd_lt(rr * rr);
+    let l = l2.sqrt();
+    let dx = x - c;
+    let lx = dx.length_sq().sqrt();
+    let n_x = Vec3x8::select(lx.simd_gt(zero), dx.div(lx), up);
+    let n_prox = Vec3x8::select(l.simd_gt(zero), dp.div(l), n_x);
+    // crossing into the ball of radius r + th
+    let d = p - x;
+    let f = dx;
+    let a = d.length_sq();
+    let b = f.dot(d);
+    let rt = rv + th;
+    let cc = f.length_sq() - rt * rt;
+    let disc = b * b - a * cc;
+    let t = (-b - disc.sqrt()) / a;
+    let cross = a.simd_gt(zero) & cc.simd_gt(zero) & b.simd_lt(zero) & disc.simd_ge(zero) & t.simd_ge(zero) & t.simd_le(one);
+    let e = (x + d.scale(t)) - c;
+    let le = e.length_sq().sqrt();
+    let n_cross = Vec3x8::select(le.simd_gt(zero), e.div(le), up);
+    let n = Vec3x8::select(prox, n_prox, n_cross);
+    (c + n.scale(rv), n, prox | cross)
+}
+
+trait Div {
+    fn div(self, s: F32s) -> Self;
+}
+impl Div for Vec3x8 {
+    #[inline(always)]
+    fn div(self, s: F32s) -> Self {
+        Vec3x8 {
+            x: self.x / s,
+            y: self.y / s,
+            z: self.z / s,
+        }
+    }
+}
+
+/// Scalar twin of [`project_simd`]: `p += max(0, Th - n.(p - c)) n` for every slot set, in
+/// obstacle order, over the particles `start .. start + p[0].len()`.
+pub fn project_scalar(slots: &[Vec<f32>], th: &[f32], start: usize, p: [&mut [f32]; 3]) {
+    let [px, py, pz] = p;
+    for i in 0..px.len() {
+        let g = start + i;
+        let mut q = [px[i], py[i], pz[i]];
+        for s in slots {
+            let (c, n) = read_slot(s, g);
+            let d = (th[g] - dot(n, sub(q, c))).max(0.0);
+            q = [q[0] + n[0] * d, q[1] + n[1] * d, q[2] + n[2] * d];
+        }
+        (px[i], py[i], pz[i]) = (q[0], q[1], q[2]);
+    }
+}
+
+/// The projection eight particles at a time (`start` and the chunk length are multiples of
+/// eight).
+pub fn project_simd(slots: &[Vec<f32>], th: &[f32], start: usize, p: [&mut [f32]; 3]) {
+    let [px, py, pz] = p;
+    let zero = F32s::splat(0.0);
+    for j in (0..px.len()).step_by(LANES) {
+        let g = start + j;
+        let b = g / LANES;
+        let mut q = Vec3x8::load(px, py, pz, j);
+        let t = crate::lanes::load(th, g);
+        for s in slots {
+            let c = Vec3x8 {
+                x: load_block(s, b, 0),
+                y: load_block(s, b, 1),
+                z: load_block(s, b, 2),
+            };
+            let n = Vec3x8 {
+                x: load_block(s, b, 3),
+                y: load_block(s, b, 4),
+                z: load_block(s, b, 5),
+            };
+            let d = (t - n.dot(q - c)).max(zero);
+            q = q + n.scale(d);
+        }
+        q.store(px, py, pz, j);
+    }
+}
+
+/// The paper's response, applied once right after the contacts are found: for every obstacle's
+/// contact in order, move `p` back along its path (in the obstacle's frame, start `x - shift`)
+/// to the point that stands `Th` off the contact plane, or, when the path offers no such
+/// point (the particle started inside the layer), push it along the normal. The chosen
+/// contact is the first crossing of the path, so the point reached lies before every crossing:
+/// outside the obstacle ([`resolve_position`](super::mesh_response::resolve_position)).
+/// Element-wise; the parallel and serial runs give the same bits.
+pub fn resolve_along_path(slots: &[Vec<f32>], shifts: &[[f32; 3]], th: &[f32], start: usize, x: [&[f32]; 3], p: [&mut [f32]; 3]) {
+    let [px, py, pz] = p;
+    for i in 0..px.len() {
+        let g = start + i;
+        let mut q = [px[i], py[i], pz[i]];
+        for (s, u) in slots.iter().zip(shifts) {
+            let (c, n) = read_slot(s, g);
+            if n == [0.0; 3] {
+                continue;
+            }
+            let xr = [x[0][i] - u[0], x[1][i] - u[1], x[2][i] - u[2]];
+            let (hx, hp) = (dot(n, sub(xr, c)), dot(n, sub(q, c)));
+            if hx > hp && hx >= th[g] {
+                let tau = ((hx - th[g]) / (hx - hp)).clamp(0.0, 1.0);
+                q = [0, 1, 2].map(|k| xr[k] + tau * (q[k] - xr[k]));
+            } else if hp < th[g] {
+                let d = th[g] - hp;
+                q = [0, 1, 2].map(|k| q[k] + d * n[k]);
+            }
+        }
+        (px[i], py[i], pz[i]) = (q[0], q[1], q[2]);
+    }
+}
+
+/// Velocity pass for particles `start .. start + v[0].len()`: for every obstacle `k` whose
+/// slot touches the particle, `v = u_k + contact_velocity(v - u_k, n, a, mu_k)`.
+pub fn velocity_pass(slots: &[Vec<f32>], motion: &[([f32; 3], f32)], th: &[f32], start: usize, x: [&[f32]; 3], v: [&mut [f32]; 3]) {
+    let [vx, vy, vz] = v;
+    for i in 0..vx.len() {
+        let g = start + i;
+        let q = [x[0][i], x[1][i], x[2][i]];
+        for (s, &(u, mu)) in slots.iter().zip(motion) {
+            let (c, n) = read_slot(s, g);
+            if n == [0.0; 3] || dot(n, sub(q, c)) > th[g] + TOUCH_SLACK {
+                continue;
+            }
+            let rel = [vx[i] - u[0], vy[i] - u[1], vz[i] - u[2]];
+            let w = contact_velocity(rel, n, read_approach(s, g), mu);
+            (vx[i], vy[i], vz[i]) = (w[0] + u[0], w[1] + u[1], w[2] + u[2]);
+        }
+    }
+}
+
+#[cfg(test)]
+#[path = "obstacle_kernels_tests.rs"]
+mod tests;

@@ -1,0 +1,463 @@
+//! Obstacles in the world: analytic [`Shape`]s and triangle meshes, static or moving with a
+//! constant velocity, and their part of the step (SEEDS.md section D).
+//!
+//! Per substep of length `h` ending at time `t` (`src/step.rs`):
+//!
+//! 1. **Place.** Every moving obstacle is put at `start + u t` (meshes: the base mesh
+//!    translated, then the broadphase rebuilt, or refitted for a BVH). Positions are a
+//!    function of time, never accumulated, so a resumed run sees the same bits.
+//! 2. **Contacts** (after predict): every particle against every obstacle, in parallel over
+//!    blocks of eight particles; each particle writes only its own slot, so the result does not
+//!    depend on the thread count. The particle's path is taken in the obstacle's frame,
+//!    `x - u h -> p`, so a moving obstacle cannot sweep through a resting particle. Contacts are
+//!    kept within `reach = Th + max(Th, 1 mm)` so that the constraint solve, which moves the
+//!    particles after the contacts were found, still meets a contact plane.
+//!    Then the paper's response: each particle goes back along its path until it stands the
+//!    thickness off the contact plane (the point lies before the first crossing, so outside).
+//! 3. **Projection** in every solver iteration, after the cloth constraints: the contact planes
+//!    as inequality constraints (the constraints may have pulled a particle back in).
+//! 4. **Velocity pass** after the velocity update: inelastic contact with Coulomb friction
+//!    relative to the obstacle's velocity, the normal impulse measured by the approach speed
+//!    of the predicted velocity (`obstacle_kernels.rs`).
+//!
+//! Mesh obstacles use one of three broadphases ([`BroadphaseKind`]), all giving the same
+//! contacts, and optionally the paper's face memory ([`face_memory`](super::face_memory)): a
+//! particle over the face it touched last tests only that face. A world without obstacles
+//! skips all of this: no pass, no allocation.
+
+use rayon::prelude::*;
+
+use super::bvh::Bvh;
+use super::face_broadphase::FaceBroadphase;
+use super::face_hash::FaceHash;
+use super::face_memory::{contact_with_memory, NO_FACE};
+use super::grid::UniformGrid;
+use super::mesh::TriMesh;
+use super::narrow::mesh_contact_with;
+use super::obstacle_kernels::{self as k, GenInput, SLOT_BLOCK};
+use super::shapes::Shape;
+use crate::error::{finite3, non_negative, Result};
+use crate::lanes::LANES;
+use crate::particles::Particles;
+use crate::world::World;
+
+/// Smallest contact margin beyond the thickness, m.
+pub const MIN_MARGIN: f32 = 1e-3;
+/// Blocks of eight particles per parallel task.
+const BLOCKS_PER_TASK: usize = 32;
+
+/// Which broadphase a mesh obstacle uses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BroadphaseKind {
+    /// The paper's uniform grid with these cells per axis, or sized automatically (`None`).
+    Grid(Option<[usize; 3]>),
+    /// An AABB tree of the faces.
+    Bvh,
+    /// A spatial hash of the faces.
+    Hash,
+}
+
+/// A built broadphase.
+#[derive(Debug, Clone)]
+pub enum MeshBroadphase {
+    /// Uniform grid.
+    Grid(UniformGrid),
+    /// AABB tree.
+    Bvh(Bvh),
+    /// Spatial hash.
+    Hash(FaceHash),
+}
+
+impl MeshBroadphase {
+    /// Builds the broadphase `kind` for `mesh`.
+    pub fn build(kind: BroadphaseKind, mesh: &TriMesh) -> Result<Self> {
+        Ok(match kind {
+            BroadphaseKind::Grid(Some(d)) => MeshBroadphase::Grid(UniformGrid::new(mesh, d)?),
+            BroadphaseKind::Grid(None) => MeshBroadphase::Grid(UniformGrid::auto(mesh)?),
+            BroadphaseKind::Bvh => MeshBroadphase::Bvh(Bvh::new(mesh)),
+            BroadphaseKind::Hash => MeshBroadphase::Hash(FaceHash::auto(mesh)?),
+        })
+    }
+    fn inner(&self) -> &(dyn FaceBroadphase + Sync) {
+        match self {
+            MeshBroadphase::Grid(g) => g,
+            MeshBroadphase::Bvh(b) => b,
+            MeshBroadphase::Hash(h) => h,
+        }
+    }
+}
+
+impl FaceBroadphase for MeshBroadphase {
+    fn candidates(&self, mesh: &TriMesh, lo: [f32; 3], hi: [f32; 3], out: &mut Vec<u32>) {
+        self.inner().candidates(mesh, lo, hi, out)
+    }
+    fn stamp(&self) -> u64 {
+        self.inner().stamp()
+    }
+    fn describe(&self) -> String {
+        self.inner().describe()
+    }
+}
+
+/// A triangle-mesh obstacle.
+#[derive(Debug, Clone)]
+pub struct MeshObstacle {
+    base: TriMesh,
+    mesh: TriMesh,
+    kind: BroadphaseKind,
+    broadphase: MeshBroadphase,
+    face_memory: bool,
+    memory: Vec<u32>,
+    placed: [f32; 3],
+}
+
+impl MeshObstacle {
+    /// The mesh at its current place.
+    pub fn mesh(&self) -> &TriMesh {
+        &self.mesh
+    }
+    /// The broadphase in use.
+    pub fn broadphase(&self) -> &MeshBroadphase {
+        &self.broadphase
+    }
+    /// Whether the paper's face memory is on.
+    pub fn face_memory(&self) -> bool {
+        self.face_memory
+    }
+    fn place(&mut self, d: [f32; 3]) {
+        if d == self.placed {
+            return;
+        }
+        let mut m = self.base.clone();
+        // A translation that would overflow f32 leaves the obstacle where it was.
+        if m.translate(d).is_ok() {
+            let bp = match (&mut self.broadphase, self.kind) {
+                (MeshBroadphase::Bvh(b), _) => b.refit(&m).map(|_| None),
+                (_, kind) => MeshBroadphase::build(kind, &m).map(Some),
+            };
+            if let Ok(bp) = bp {
+                if let Some(bp) = bp {
+                    self.broadphase = bp;
+                }
+                self.mesh = m;
+                self.placed = d;
+            }
+        }
+    }
+}
+
+/// What an obstacle is.
+#[derive(Debug, Clone)]
+pub enum Geometry {
+    /// An analytic shape (at time 0).
+    Shape(Shape),
+    /// A triangle mesh.
+    Mesh(Box<MeshObstacle>),
+}
+
+/// An obstacle: geometry, constant velocity, optional own friction coefficient.
+#[derive(Debug, Clone)]
+pub struct Obstacle {
+    geometry: Geometry,
+    velocity: [f32; 3],
+    friction: Option<f32>,
+}
+
+impl Obstacle {
+    /// An analytic obstacle (validated).
+    pub fn shape(shape: Shape) -> Result<Obstacle> {
+        shape.validate()?;
+        Ok(Obstacle {
+            geometry: Geometry::Shape(shape),
+            velocity: [0.0; 3],
+            friction: None,
+        })
+    }
+
+    /// A mesh obstacle with the given broadphase and, optionally, the paper's face memory.
+    pub fn mesh(mesh: TriMesh, broadphase: BroadphaseKind, face_memory: bool) -> Result<Obstacle> {
+        let bp = MeshBroadphase::build(broadphase, &mesh)?;
+        Ok(Obstacle {
+            geometry: Geometry::Mesh(Box::new(MeshObstacle {
+                base: mesh.clone(),
+                mesh,
+                kind: broadphase,
+                broadphase: bp,
+                face_memory,
+                memory: Vec::new(),
+                placed: [0.0; 3],
+            })),
+            velocity: [0.0; 3],
+            friction: None,
+        })
+    }
+
+    /// The same obstacle moving with constant velocity `v` (m/s) from time 0.
+    pub fn with_velocity(mut self, v: [f32; 3]) -> Result<Obstacle> {
+        finite3("obstacle.velocity", v)?;
+        self.velocity = v;
+        Ok(self)
+    }
+
+    /// The same obstacle with its own Coulomb friction coefficient (>= 0).
+    pub fn with_friction(mut self, mu: f32) -> Result<Obstacle> {
+        non_negative("obstacle.friction", mu)?;
+        self.friction = Some(mu);
+        Ok(self)
+    }
+
+    /// Geometry (meshes at their current place, shapes at time 0).
+    pub fn geometry(&self) -> &Geometry {
+        &self.geometry
+    }
+    /// Velocity, m/s.
+    pub fn velocity(&self) -> [f32; 3] {
+        self.velocity
+    }
+    /// Own friction coefficient, if any.
+    pub fn friction(&self) -> Option<f32> {
+        self.friction
+    }
+    /// The analytic shape at time `t`, if this is one.
+    pub fn shape_at(&self, t: f64) -> Option<Shape> {
+        match &self.geometry {
+            Geometry::Shape(s) => Some(s.translated(displacement(self.velocity, t))),
+            Geometry::Mesh(_) => None,
+        }
+    }
+    /// One line for reports: kind, size, broadphase.
+    pub fn describe(&self) -> String {
+        let v = if self.velocity == [0.0; 3] {
+            String::from("static")
+        } else {
+            format!("moving {:?} m/s", self.velocity)
+        };
+        let what = match &self.geometry {
+            Geometry::Shape(Shape::Plane { point, normal }) => format!("plane through {point:?}, normal {normal:?}"),
+            Geometry::Shape(Shape::Sphere { center, radius }) => format!("sphere at {center:?}, radius {radius}"),
+            Geometry::Shape(Shape::Capsule { a, b, radius }) => format!("capsule {a:?} - {b:?}, radius {radius}"),
+            Geometry::Shape(Shape::Box { center, half, .. }) => format!("box at {center:?}, half extents {half:?}"),
+            Geometry::Mesh(m) => format!(
+                "mesh of {} faces, {}{}",
+                m.mesh.face_count(),
+                m.broadphase.describe(),
+                if m.face_memory { ", face memory" } else { "" }
+            ),
+        };
+        format!("{what}, {v}")
+    }
+}
+
+fn displacement(v: [f32; 3], t: f64) -> [f32; 3] {
+    v.map(|c| (c as f64 * t) as f32)
+}
+
+/// The world's obstacles and their per-particle scratch (empty until the first obstacle).
+#[derive(Debug, Clone, Default)]
+pub struct ObstacleSet {
+    list: Vec<Obstacle>,
+    slots: Vec<Vec<f32>>,
+    th: Vec<f32>,
+    reach: Vec<f32>,
+    friction: f32,
+}
+
+impl ObstacleSet {
+    /// Is there no obstacle?
+    pub fn is_empty(&self) -> bool {
+        self.list.is_empty()
+    }
+
+    /// Forgets the per-particle arrays (the particle count changed).
+    pub(crate) fn invalidate(&mut self) {
+        self.th.clear();
+    }
+
+    /// Sizes the per-particle arrays (thickness per cloth, contact slots, face memory).
+    pub(crate) fn prepare(&mut self, particles: &Particles, cloths: &[crate::world::ClothInfo]) {
+        let len = particles.padded_len();
+        if self.th.len() == len && self.slots.len() == self.list.len() {
+            return;
+        }
+        self.th = vec![0.0; len];
+        for c in cloths {
+            let first = c.first as usize;
+            let end = (first + (c.rows * c.cols) as usize).min(len);
+            self.th[first..end].fill(c.thickness);
+        }
+        self.reach = self.th.iter().map(|&t| t + t.max(MIN_MARGIN)).collect();
+        self.slots = vec![vec![0.0; len / LANES * SLOT_BLOCK]; self.list.len()];
+        for o in &mut self.list {
+            if let Geometry::Mesh(m) = &mut o.geometry {
+                m.memory = if m.face_memory { vec![NO_FACE; len] } else { Vec::new() };
+            }
+        }
+    }
+
+    /// Places every obstacle at time `t` and finds the contacts of the step `x -> p` of
+    /// length `h` (module doc, stages 1 and 2).
+    #[allow(clippy::needless_range_loop)] // lane `l` indexes the slot block and the memory alike
+    pub(crate) fn generate(&mut self, particles: &Particles, t: f64, h: f32, parallel: bool, simd: bool) {
+        let n = particles.count();
+        let vel = [&particles.vx[..], &particles.vy[..], &particles.vz[..]];
+        for (o, slots) in self.list.iter_mut().zip(&mut self.slots) {
+            let u = o.velocity;
+            let g = GenInput {
+                x: [&particles.x, &particles.y, &particles.z],
+                p: [&particles.px, &particles.py, &particles.pz],
+                w: &particles.w,
+                th: &self.th,
+                reach: &self.reach,
+                n,
+                shift: u.map(|c| c * h),
+            };
+            match &mut o.geometry {
+                Geometry::Shape(s) => {
+                    let shape = s.translated(displacement(u, t));
+                    for_blocks(slots, &mut [], parallel, |b, out, _, _| {
+                        if simd {
+                            k::shape_block_simd(&shape, &g, b, out)
+                        } else {
+                            k::shape_block_scalar(&shape, &g, b, out)
+                        }
+                        k::fill_approach(out, b, vel, u);
+                    });
+                }
+                Geometry::Mesh(m) => {
+                    m.place(displacement(u, t));
+                    let (mesh, bp, memory) = (&m.mesh, &m.broadphase, &mut m.memory);
+                    let remember = !memory.is_empty();
+                    for_blocks(slots, memory, parallel, |b, out, mem, scratch| {
+                        for l in 0..LANES {
+                            let i = b * LANES + l;
+                            let c = if !g.live(i) {
+                                None
+                            } else {
+                                let (x, p) = g.path(i);
+                                let reach = g.reach[i];
+                                if remember {
+                                    let band = 2.0 * reach;
+                                    contact_with_memory(mesh, bp, &mut mem[l], x, p, reach, band, scratch).contact
+                                } else {
+                                    mesh_contact_with(mesh, bp, x, p, reach, scratch)
+                                }
+                            };
+                            let (pt, nr) = c.map_or(([0.0; 3], [0.0; 3]), |c| (c.point, c.normal));
+                            k::write_slot(out, l, pt, nr);
+                        }
+                        k::fill_approach(out, b, vel, u);
+                    });
+                }
+            }
+        }
+    }
+
+    /// Moves every particle back along its path out of its contacts (stage 2, the paper's
+    /// response; [`k::resolve_along_path`]).
+    pub(crate) fn resolve(&self, particles: &mut Particles, h: f32, parallel: bool) {
+        let shifts: Vec<[f32; 3]> = self.list.iter().map(|o| o.velocity.map(|c| c * h)).collect();
+        let (slots, th) = (&self.slots, &self.th);
+        particles.for_chunks(parallel, |c| {
+            k::resolve_along_path(slots, &shifts, th, c.start, [&*c.x, &*c.y, &*c.z], [c.px, c.py, c.pz])
+        });
+    }
+
+    /// Projects every particle's prediction out of its contacts (stage 3).
+    pub(crate) fn project(&self, particles: &mut Particles, parallel: bool, simd: bool) {
+        let (slots, th) = (&self.slots, &self.th);
+        particles.for_chunks(parallel, |c| {
+            if simd {
+                k::project_simd(slots, th, c.start, [c.px, c.py, c.pz])
+            } else {
+                k::project_scalar(slots, th, c.start, [c.px, c.py, c.pz])
+            }
+        });
+    }
+
+    /// Removes approaching normal velocity and applies friction (stage 4).
+    pub(crate) fn velocity_pass(&self, particles: &mut Particles, parallel: bool) {
+        let motion: Vec<([f32; 3], f32)> = self
+            .list
+            .iter()
+            .map(|o| (o.velocity, o.friction.unwrap_or(self.friction)))
+            .collect();
+        let (slots, th) = (&self.slots, &self.th);
+        particles.for_chunks(parallel, |c| {
+            k::velocity_pass(slots, &motion, th, c.start, [&*c.x, &*c.y, &*c.z], [c.vx, c.vy, c.vz])
+        });
+    }
+
+    /// The obstacles.
+    pub fn list(&self) -> &[Obstacle] {
+        &self.list
+    }
+}
+
+/// Runs `f(block, slots of the block, face memory of the block, scratch)` over every block of
+/// eight particles, in parallel tasks of [`BLOCKS_PER_TASK`] blocks or serially. `memory` is
+/// empty or one entry per particle.
+fn for_blocks<F>(slots: &mut [f32], memory: &mut [u32], parallel: bool, f: F)
+where
+    F: Fn(usize, &mut [f32], &mut [u32], &mut Vec<u32>) + Sync + Send,
+{
+    let task = SLOT_BLOCK * BLOCKS_PER_TASK;
+    let run = |t: usize, chunk: &mut [f32], mem: &mut [u32], scratch: &mut Vec<u32>| {
+        for (j, out) in chunk.chunks_mut(SLOT_BLOCK).enumerate() {
+            let m = if mem.is_empty() {
+                &mut [][..]
+            } else {
+                &mut mem[j * LANES..(j + 1) * LANES]
+            };
+            f(t * BLOCKS_PER_TASK + j, out, m, scratch);
+        }
+    };
+    let mem_task = LANES * BLOCKS_PER_TASK;
+    let tasks = slots.len().div_ceil(task);
+    let mut mems: Vec<&mut [u32]> = if memory.is_empty() {
+        (0..tasks).map(|_| &mut [][..]).collect()
+    } else {
+        memory.chunks_mut(mem_task).collect()
+    };
+    if parallel {
+        slots
+            .par_chunks_mut(task)
+            .zip(mems.par_iter_mut())
+            .enumerate()
+            .for_each_init(Vec::new, |s, (t, (chunk, mem))| run(t, chunk, mem, s));
+    } else {
+        let mut s = Vec::new();
+        for (t, (chunk, mem)) in slots.chunks_mut(task).zip(mems.iter_mut()).enumerate() {
+            run(t, chunk, mem, &mut s);
+        }
+    }
+}
+
+impl World {
+    /// Adds an obstacle; returns its index in [`obstacles`](Self::obstacles).
+    pub fn add_obstacle(&mut self, obstacle: Obstacle) -> Result<usize> {
+        if let Geometry::Shape(s) = &obstacle.geometry {
+            s.validate()?;
+        }
+        self.obstacles.list.push(obstacle);
+        self.obstacles.th.clear();
+        Ok(self.obstacles.list.len() - 1)
+    }
+
+    /// The obstacles, in the order they were added.
+    pub fn obstacles(&self) -> &[Obstacle] {
+        &self.obstacles.list
+    }
+
+    /// Sets the Coulomb friction coefficient of obstacles that have none of their own
+    /// (default 0).
+    pub fn set_friction(&mut self, mu: f32) -> Result<()> {
+        non_negative("friction", mu)?;
+        self.obstacles.friction = mu;
+        Ok(())
+    }
+
+    /// The default obstacle friction coefficient.
+    pub fn friction(&self) -> f32 {
+        self.obstacles.friction
+    }
+}

@@ -1,0 +1,282 @@
+//! Obstacles in the step: no particle ends a step inside a closed obstacle (fast particles
+//! included), cloth comes to rest on a sphere and on the dress form, results do not depend on
+//! the thread count or the backend.
+
+mod common;
+
+use proptest::prelude::*;
+use weft::collide::dressform::dress_form;
+use weft::collide::obstacles::{BroadphaseKind, Obstacle};
+use weft::collide::shapes::Shape;
+use weft::{Backend, ClothDesc, Effects, Fabric, SolverParams, World};
+
+/// Deepest accepted penetration at the end of a step, m (the stand-off is the 1 mm cotton
+/// thickness; this allows rounding only).
+const TOL: f32 = 1e-4;
+
+fn obstacle(which: usize) -> Obstacle {
+    match which {
+        0 => Obstacle::shape(Shape::plane([0.0, 0.0, 0.0], [0.1, 1.0, 0.0]).unwrap()).unwrap(),
+        1 => Obstacle::shape(Shape::Sphere {
+            center: [0.0, 0.4, 0.0],
+            radius: 0.3,
+        })
+        .unwrap(),
+        2 => Obstacle::shape(Shape::Box {
+            center: [0.0, 0.4, 0.0],
+            half: [0.3, 0.1, 0.2],
+            axes: Shape::axes_from_euler_deg([10.0, 30.0, 0.0]),
+        })
+        .unwrap(),
+        _ => Obstacle::mesh(dress_form(800).unwrap(), BroadphaseKind::Grid(None), which == 4).unwrap(),
+    }
+}
+
+/// Sixteen free particles joined by very soft constraints (the obstacle stage alone decides).
+fn loose_world(substeps: u32) -> World {
+    let mut fabric = Fabric::preset("cotton").unwrap();
+    fabric.stretch_compliance = 1e3;
+    let desc = ClothDesc {
+        rows: 4,
+        cols: 4,
+        spacing: 0.1,
+        fabric,
+        shear: false,
+        bend: false,
+        tethers: None,
+        pins: vec![],
+        ..Default::default()
+    };
+    let params = SolverParams {
+        substeps,
+        iterations: 2,
+        threads: 1,
+        ..Default::default()
+    };
+    common::world_with(&desc, params, Effects::gravity())
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+    #[test]
+    fn no_particle_ends_a_step_inside_a_closed_obstacle(
+        which in 0usize..5,
+        substeps in 1u32..3,
+        start in proptest::collection::vec((-0.6f32..0.6, -0.2f32..1.2, -0.6f32..0.6), 16),
+        vel in proptest::collection::vec((-60.0f32..60.0, -60.0f32..60.0, -60.0f32..60.0), 16),
+    ) {
+        let mut w = loose_world(substeps);
+        w.add_obstacle(obstacle(which)).unwrap();
+        // particles that start inside are moved above everything
+        let mut probe = loose_world(1);
+        let (mut x, mut y, mut z) = (vec![], vec![], vec![]);
+        for s in &start {
+            x.push(s.0); y.push(s.1); z.push(s.2);
+        }
+        probe.set_positions([&x, &y, &z]).unwrap();
+        probe.add_obstacle(obstacle(which)).unwrap();
+        for i in 0..16 {
+            let mut one = loose_world(1);
+            let mut xs = vec![3.0; 16];
+            xs[i] = x[i];
+            let (mut ys, mut zs) = (vec![3.0; 16], vec![3.0; 16]);
+            ys[i] = y[i];
+            zs[i] = z[i];
+            one.set_positions([&xs, &ys, &zs]).unwrap();
+            one.add_obstacle(obstacle(which)).unwrap();
+            if one.max_penetration() > 0.0 || which == 0 && y[i] < 0.1 {
+                y[i] = 2.0;
+            }
+        }
+        w.set_positions([&x, &y, &z]).unwrap();
+        let (vx, vy, vz): (Vec<f32>, Vec<f32>, Vec<f32>) = (vel.iter().map(|v| v.0).collect(), vel.iter().map(|v| v.1).collect(), vel.iter().map(|v| v.2).collect());
+        w.set_velocities([&vx, &vy, &vz]).unwrap();
+        for _ in 0..3 {
+            w.step(1.0 / 60.0).unwrap();
+            let d = w.max_penetration();
+            prop_assert!(d <= TOL, "obstacle {} penetration {} m", which, d);
+        }
+    }
+}
+
+fn drape(obstacle: Obstacle, rows: u32, spacing: f32, origin: [f32; 3], steps: usize) -> World {
+    let desc = ClothDesc {
+        rows,
+        cols: rows,
+        spacing,
+        origin,
+        u: [1.0, 0.0, 0.0],
+        v: [0.0, 0.0, 1.0],
+        fabric: Fabric::preset("cotton").unwrap(),
+        pins: vec![],
+        tethers: None,
+        ..Default::default()
+    };
+    let params = SolverParams {
+        dt: 1.0 / 60.0,
+        substeps: 8,
+        iterations: 1,
+        ..Default::default()
+    };
+    let mut w = common::world_with(&desc, params, Effects::gravity());
+    w.set_friction(0.6).unwrap();
+    w.add_obstacle(obstacle).unwrap();
+    w.add_obstacle(Obstacle::shape(Shape::plane([0.0, 0.0, 0.0], [0.0, 1.0, 0.0]).unwrap()).unwrap())
+        .unwrap();
+    for _ in 0..steps {
+        w.step(1.0 / 60.0).unwrap();
+    }
+    w
+}
+
+fn mean_speed(w: &World) -> f32 {
+    let [vx, vy, vz] = w.velocities();
+    (0..vx.len())
+        .map(|i| (vx[i] * vx[i] + vy[i] * vy[i] + vz[i] * vz[i]).sqrt())
+        .sum::<f32>()
+        / vx.len() as f32
+}
+
+#[test]
+fn cloth_drapes_over_a_sphere_and_rests() {
+    let w = drape(
+        Obstacle::shape(Shape::Sphere {
+            center: [0.0, 0.5, 0.0],
+            radius: 0.25,
+        })
+        .unwrap(),
+        25,
+        0.03,
+        [-0.36, 0.85, -0.36],
+        240,
+    );
+    let top = w.positions()[1][12 * 25 + 12];
+    assert!(top > 0.75 && top < 0.76, "centre of the cloth rests on the sphere: y = {top}");
+    assert!(w.max_penetration() < TOL, "penetration {}", w.max_penetration());
+    assert!(mean_speed(&w) < 0.02, "still moving: {} m/s", mean_speed(&w));
+}
+
+#[test]
+fn cloth_drapes_over_the_dress_form_and_rests() {
+    let form = Obstacle::mesh(dress_form(2000).unwrap(), BroadphaseKind::Grid(None), false).unwrap();
+    let w = drape(form, 30, 0.025, [-0.3625, 0.85, -0.3625], 240);
+    let [_, y, _] = w.positions();
+    let top = y[15 * 30 + 15];
+    assert!(top > 0.79 && top < 0.82, "centre of the cloth rests on the neck: y = {top}");
+    assert!(w.max_penetration() < TOL, "penetration {}", w.max_penetration());
+    assert!(mean_speed(&w) < 0.05, "still moving: {} m/s", mean_speed(&w));
+}
+
+fn busy_world(threads: usize, backend: Backend) -> World {
+    let desc = ClothDesc {
+        rows: 72,
+        cols: 72,
+        spacing: 0.012,
+        origin: [-0.43, 0.83, -0.43],
+        u: [1.0, 0.0, 0.0],
+        v: [0.0, 0.0, 1.0],
+        fabric: Fabric::preset("cotton").unwrap(),
+        ..Default::default()
+    };
+    let params = SolverParams {
+        substeps: 2,
+        iterations: 2,
+        threads,
+        backend,
+        ..Default::default()
+    };
+    let mut w = common::world_with(&desc, params, Effects::gravity());
+    w.set_friction(0.4).unwrap();
+    w.add_obstacle(Obstacle::mesh(dress_form(1200).unwrap(), BroadphaseKind::Grid(Some([4, 6, 4])), true).unwrap())
+        .unwrap();
+    w.add_obstacle(
+        Obstacle::mesh(dress_form(600).unwrap(), BroadphaseKind::Hash, false)
+            .unwrap()
+            .with_velocity([0.0, 0.0, 1.0])
+            .unwrap(),
+    )
+    .unwrap();
+    w.add_obstacle(
+        Obstacle::shape(Shape::Sphere {
+            center: [0.2, 0.8, 0.0],
+            radius: 0.1,
+        })
+        .unwrap()
+        .with_velocity([0.0, 1.0, 0.0])
+        .unwrap(),
+    )
+    .unwrap();
+    w.add_obstacle(
+        Obstacle::shape(Shape::plane([0.0, 0.78, 0.0], [0.0, 1.0, 0.2]).unwrap())
+            .unwrap()
+            .with_friction(0.9)
+            .unwrap(),
+    )
+    .unwrap();
+    w.add_obstacle(
+        Obstacle::shape(Shape::Capsule {
+            a: [-0.3, 0.8, 0.0],
+            b: [0.3, 0.8, 0.1],
+            radius: 0.03,
+        })
+        .unwrap(),
+    )
+    .unwrap();
+    w
+}
+
+#[test]
+fn obstacles_one_two_threads_and_scalar_backend_bitwise_equal() {
+    let run = |threads, backend| {
+        let mut w = busy_world(threads, backend);
+        for _ in 0..6 {
+            w.step(1.0 / 60.0).unwrap();
+        }
+        common::state_bits(&w)
+    };
+    let one = run(1, Backend::Simd);
+    assert_eq!(one, run(2, Backend::Simd));
+    assert_eq!(one, run(1, Backend::Scalar));
+}
+
+#[test]
+fn add_obstacle_rejects_bad_input() {
+    let mut w = World::new(SolverParams::default(), Effects::gravity()).unwrap();
+    assert!(Obstacle::shape(Shape::Sphere {
+        center: [f32::NAN, 0.0, 0.0],
+        radius: 1.0
+    })
+    .is_err());
+    assert!(w
+        .add_obstacle(
+            Obstacle::shape(Shape::Sphere {
+                center: [0.0; 3],
+                radius: 0.0
+            })
+            .unwrap_or_else(|_| Obstacle::shape(Shape::Sphere {
+                center: [0.0; 3],
+                radius: 1.0
+            })
+            .unwrap())
+        )
+        .is_ok());
+    assert!(Obstacle::shape(Shape::Sphere {
+        center: [0.0; 3],
+        radius: 1.0
+    })
+    .unwrap()
+    .with_velocity([f32::INFINITY, 0.0, 0.0])
+    .is_err());
+    assert!(Obstacle::shape(Shape::Sphere {
+        center: [0.0; 3],
+        radius: 1.0
+    })
+    .unwrap()
+    .with_friction(-1.0)
+    .is_err());
+    assert!(w.set_friction(f32::NAN).is_err());
+    assert!(Obstacle::mesh(dress_form(400).unwrap(), BroadphaseKind::Grid(Some([0, 1, 1])), false).is_err());
+    // an obstacle with no cloth: stepping is fine
+    w.step(1.0 / 60.0).unwrap();
+    assert_eq!(w.obstacles().len(), 1);
+}
