@@ -55,6 +55,7 @@ pub struct World {
     pub(crate) time: f64,
     pub(crate) steps: u64,
     pub(crate) last_h: f32,
+    pub(crate) embed: crate::embed::EmbedState,
 }
 
 impl World {
@@ -84,6 +85,7 @@ impl World {
             time: 0.0,
             steps: 0,
             last_h: 0.0,
+            embed: Default::default(),
         })
     }
 
@@ -145,6 +147,7 @@ impl World {
         for b in &mut self.backup {
             b.resize(len, 0.0);
         }
+        self.embed_topology_changed();
     }
 
     /// The solver parameters.
@@ -276,6 +279,7 @@ impl World {
             return Err(WeftError::param("inverse mass", bad, "must be finite and zero or greater"));
         }
         self.particles.w[..n].copy_from_slice(w);
+        self.damp_h = f32::NAN;
         Ok(())
     }
 
