@@ -264,7 +264,7 @@ mod tests {
         w.particles
             .extend(&[[0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0], [0.0, 0.0, 1.0]], &[1.0; 4]);
         w.triangles = vec![[0, 1, 2], [0, 2, 3]];
-        let mut nrm = vec![[0.0f32; 3]; 4];
+        let mut nrm = [[0.0f32; 3]; 4];
         w.read_normals(&mut nrm[..]).unwrap();
         // Sum of (0,0,4) and (2,0,0): direction (1, 0, 2) / sqrt(5).
         let s = 5.0f32.sqrt();
