@@ -52,8 +52,11 @@ impl World {
 
     fn in_pool<R: Send>(&mut self, f: impl FnOnce(&mut World) -> R + Send) -> R {
         match self.pool.clone() {
-            Some(pool) if !self.embed.caller_thread_only => pool.install(|| f(self)),
-            _ => f(self),
+            // The scalar backend is single-threaded: no pool to enter.
+            _ if self.embed.caller_thread_only || self.params.backend == Backend::Scalar => f(self),
+            Some(pool) => pool.install(|| f(self)),
+            // Enter the global pool once per step (one injected job instead of one per kernel).
+            None => rayon::scope(|_| f(self)),
         }
     }
 
