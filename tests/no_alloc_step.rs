@@ -101,7 +101,7 @@ fn allocs_in_frames(w: &mut World) -> (usize, Vec<String>) {
         let mut p = w.position(0).unwrap();
         p.x += 1e-4 * (k as f32).sin();
         w.set_pin_position(0, p).unwrap();
-        if k % 2 == 0 {
+        if k.is_multiple_of(2) {
             w.step(dt).unwrap();
         } else {
             w.advance(dt as f64 * 1.01).unwrap();
