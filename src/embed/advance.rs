@@ -38,6 +38,14 @@ impl World {
     /// If a step fails (e.g. [`WeftError::Diverged`]), the error is returned at once; the steps
     /// before it stand and the accumulator still holds the time not yet simulated.
     pub fn advance(&mut self, frame_dt: f64) -> Result<AdvanceReport> {
+        self.advance_with(frame_dt, |_| Ok(()))
+    }
+
+    /// [`advance`](World::advance) that calls `before_step` before every fixed step, so inputs
+    /// that should follow simulated time (kinematic pins, wind changes) are set per step, not
+    /// per frame: then the whole run is independent of the frame times. An error from
+    /// `before_step` stops the call and is returned.
+    pub fn advance_with(&mut self, frame_dt: f64, mut before_step: impl FnMut(&mut World) -> Result<()>) -> Result<AdvanceReport> {
         if !(frame_dt.is_finite() && frame_dt >= 0.0) {
             return Err(WeftError::param("frame_dt", frame_dt, "must be a finite number, zero or greater"));
         }
@@ -54,6 +62,7 @@ impl World {
             self.embed.accumulator -= dropped_time;
         }
         for k in 0..n {
+            before_step(self)?;
             if k + 1 == n {
                 self.save_previous_positions();
             }
