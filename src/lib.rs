@@ -4,6 +4,7 @@ pub mod cloth;
 pub mod collide;
 pub mod constraints;
 pub mod effects;
+pub mod embed;
 pub mod error;
 pub mod export;
 pub mod fabric;
@@ -24,6 +25,7 @@ pub mod world;
 
 pub use cloth::{ClothDesc, PinSpec};
 pub use effects::{Effects, Wind};
+pub use embed::{AdvanceReport, Snapshot, Soa, Vec3Out};
 pub use error::{Result, WeftError};
 pub use fabric::Fabric;
 pub use metrics::Metrics;

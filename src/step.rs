@@ -34,6 +34,7 @@ impl World {
     /// the user's state is never overwritten with NaN.
     pub fn step(&mut self, dt: f32) -> Result<()> {
         positive("dt", dt)?;
+        self.begin_kinematic(dt);
         let guard = self.params.guard;
         if guard {
             self.save_backup();
@@ -46,6 +47,7 @@ impl World {
             let (particle, stage) = found.unwrap_or((self.particles.first_non_finite().unwrap_or(0), "step"));
             return Err(WeftError::Diverged { particle, stage });
         }
+        self.finish_kinematic();
         self.time += dt as f64;
         self.steps += 1;
         Ok(())
@@ -53,8 +55,11 @@ impl World {
 
     fn in_pool<R: Send>(&mut self, f: impl FnOnce(&mut World) -> R + Send) -> R {
         match self.pool.clone() {
+            // The scalar backend is single-threaded: no pool to enter.
+            _ if self.embed.caller_thread_only || self.params.backend == Backend::Scalar => f(self),
             Some(pool) => pool.install(|| f(self)),
-            None => f(self),
+            // Enter the global pool once per step (one injected job instead of one per kernel).
+            None => rayon::scope(|_| f(self)),
         }
     }
 
@@ -87,10 +92,15 @@ impl World {
         let n_sub = self.params.substeps;
         let h = dt / n_sub as f32;
         let simd = self.params.backend == Backend::Simd;
-        let parallel = simd;
+        let parallel = simd && !self.embed.caller_thread_only;
         if self.has_damping && self.damp_h != h {
-            self.damp_factor = self.damping_rate.iter().map(|&c| 1.0 / (1.0 + c * h)).collect();
+            // In place (no allocation once sized). Pinned particles are kinematic: not damped.
+            let (rate, w) = (&self.damping_rate, &self.particles.w);
             self.damp_factor.resize(self.particles.padded_len(), 1.0);
+            for (i, f) in self.damp_factor.iter_mut().enumerate() {
+                let c = rate.get(i).copied().unwrap_or(0.0);
+                *f = if w[i] > 0.0 { 1.0 / (1.0 + c * h) } else { 1.0 };
+            }
             self.damp_h = h;
         }
         let inv_h2 = 1.0 / (h * h);

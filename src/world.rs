@@ -56,6 +56,7 @@ pub struct World {
     pub(crate) steps: u64,
     pub(crate) last_h: f32,
     pub(crate) obstacles: crate::collide::obstacles::ObstacleSet,
+    pub(crate) embed: crate::embed::EmbedState,
 }
 
 impl World {
@@ -86,6 +87,7 @@ impl World {
             steps: 0,
             last_h: 0.0,
             obstacles: Default::default(),
+            embed: Default::default(),
         })
     }
 
@@ -148,6 +150,7 @@ impl World {
         for b in &mut self.backup {
             b.resize(len, 0.0);
         }
+        self.embed_topology_changed();
     }
 
     /// The solver parameters.
@@ -279,6 +282,7 @@ impl World {
             return Err(WeftError::param("inverse mass", bad, "must be finite and zero or greater"));
         }
         self.particles.w[..n].copy_from_slice(w);
+        self.damp_h = f32::NAN;
         Ok(())
     }
 
