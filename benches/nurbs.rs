@@ -19,9 +19,7 @@ fn control(len: usize) -> [Vec<f32>; 4] {
 }
 
 fn params(count: usize) -> Vec<f32> {
-    (0..count)
-        .map(|j| ((j as f64 + 0.5) / count as f64) as f32)
-        .collect()
+    (0..count).map(|j| ((j as f64 + 0.5) / count as f64) as f32).collect()
 }
 
 fn curve_per_point(c: &mut Criterion) {

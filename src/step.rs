@@ -7,6 +7,7 @@
 //!     wind forces per triangle → per particle          [effects]        (if named)
 //!     predict: v += h g + h w f, drag; p = x + h v      [integrate]
 //!     `iterations` sweeps: distance constraints by colour, tethers   [constraints]
+//!       then strands pushed out of their scalps                       [strands::scalp] (if any)
 //!     update: v = (p - x) / h, damping; x = p          [integrate]
 //!   on a non-finite value: restore the copy, replay the step with a check after every stage
 //!   to name the stage and particle, and return `Diverged`
@@ -138,6 +139,14 @@ impl World {
                         self.tethers.solve_scalar(&mut p.px, &mut p.py, &mut p.pz);
                     }
                     checkpoint!("tethers", p.px, p.py, p.pz);
+                }
+                if !self.scalps.is_empty() {
+                    if parallel {
+                        self.scalps.solve(&mut p.px, &mut p.py, &mut p.pz, &p.w);
+                    } else {
+                        self.scalps.solve_scalar(&mut p.px, &mut p.py, &mut p.pz, &p.w);
+                    }
+                    checkpoint!("scalp", p.px, p.py, p.pz);
                 }
             }
             let damp = self.has_damping.then_some(&self.damp_factor[..]);

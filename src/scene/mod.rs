@@ -29,8 +29,10 @@
 
 pub mod checked;
 mod sections;
+mod strands_section;
 
 pub use sections::{EffectsSection, OutputSection, SceneCloth, SolverSection, WindSection};
+pub use strands_section::{ScalpKind, SceneScalp, SceneStrands};
 
 use crate::error::{Result, WeftError};
 use crate::world::World;
@@ -48,6 +50,9 @@ pub struct Scene {
     /// Cloth pieces.
     #[serde(default)]
     pub cloth: Vec<toml::Spanned<SceneCloth>>,
+    /// Hair: strand groups on scalps.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub strands: Vec<toml::Spanned<SceneStrands>>,
     /// What a run writes.
     #[serde(default)]
     pub output: OutputSection,
@@ -104,6 +109,25 @@ impl Scene {
                     })
                     .unwrap_or_default();
                 return Err(WeftError::Scene(format!("{at}cloth {k}: {e}")));
+            }
+        }
+        for (k, s) in self.strands.iter().enumerate() {
+            let added = s.get_ref().desc().and_then(|d| world.add_strands(&d).map(|_| ()));
+            if let Err(e) = added {
+                // A bad scalp is reported at the scalp table, anything else at the strands table.
+                let scalp_err = s.get_ref().scalp.get_ref().scalp().is_err();
+                let start = if scalp_err {
+                    s.get_ref().scalp.span().start
+                } else {
+                    s.span().start
+                };
+                let at = src
+                    .map(|(text, name)| {
+                        let (l, col) = line_col(text, start);
+                        format!("{name} at line {l}, column {col}: ")
+                    })
+                    .unwrap_or_default();
+                return Err(WeftError::Scene(format!("{at}strands {k}: {e}")));
             }
         }
         Ok(world)

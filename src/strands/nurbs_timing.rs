@@ -88,13 +88,9 @@ fn median_ns(samples: usize, mut f: impl FnMut()) -> f64 {
 /// then `degrees`.
 pub fn nurbs_timing(ns: &[usize], degrees: &[usize], samples: usize) -> Vec<NurbsTimingRow> {
     let samples = samples.max(1);
-    let us: Vec<f32> = (0..samples)
-        .map(|j| ((j as f64 + 0.5) / samples as f64) as f32)
-        .collect();
+    let us: Vec<f32> = (0..samples).map(|j| ((j as f64 + 0.5) / samples as f64) as f32).collect();
     // A scattered second coordinate (golden-ratio sequence) so (u, v) covers the square.
-    let vs: Vec<f32> = (0..samples)
-        .map(|j| ((j as f64 * 0.618_033_988_749_895).fract()) as f32)
-        .collect();
+    let vs: Vec<f32> = (0..samples).map(|j| ((j as f64 * 0.618_033_988_749_895).fract()) as f32).collect();
     let fits = |n: usize, p: usize| p < n && p <= MAX_DEGREE && n <= MAX_CONTROL;
     let mut rows = Vec::new();
     for &n in ns {

@@ -62,16 +62,8 @@ pub fn basis_global(kv: &KnotVector, u: f32, out: &mut Vec<f64>) -> Result<()> {
         for i in 0..m - d {
             let a = t(i + d) - t(i);
             let b = t(i + d + 1) - t(i + 1);
-            let left = if a > 0.0 {
-                (uu - t(i)) / a * out[i]
-            } else {
-                0.0
-            };
-            let right = if b > 0.0 {
-                (t(i + d + 1) - uu) / b * out[i + 1]
-            } else {
-                0.0
-            };
+            let left = if a > 0.0 { (uu - t(i)) / a * out[i] } else { 0.0 };
+            let right = if b > 0.0 { (t(i + d + 1) - uu) / b * out[i + 1] } else { 0.0 };
             out[i] = left + right;
         }
     }

@@ -58,13 +58,7 @@ impl NurbsCurve {
     }
 
     /// A curve with a given knot vector (whose degree and control count must fit the arrays).
-    pub fn with_knots(
-        x: Vec<f32>,
-        y: Vec<f32>,
-        z: Vec<f32>,
-        w: Vec<f32>,
-        knots: KnotVector,
-    ) -> Result<Self> {
+    pub fn with_knots(x: Vec<f32>, y: Vec<f32>, z: Vec<f32>, w: Vec<f32>, knots: KnotVector) -> Result<Self> {
         check_control(&x, &y, &z, &w, knots.n_ctrl())?;
         Ok(Self { x, y, z, w, knots })
     }

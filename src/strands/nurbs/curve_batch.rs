@@ -34,13 +34,7 @@ impl NurbsCurve {
     /// parameters; the tail of fewer than eight goes through the scalar twin, which gives the
     /// same bits). All parameters are checked before anything is written; an empty `us` is
     /// fine and writes nothing.
-    pub fn eval_many(
-        &self,
-        us: &[f32],
-        out_x: &mut [f32],
-        out_y: &mut [f32],
-        out_z: &mut [f32],
-    ) -> Result<()> {
+    pub fn eval_many(&self, us: &[f32], out_x: &mut [f32], out_y: &mut [f32], out_z: &mut [f32]) -> Result<()> {
         self.check_batch(us, out_x, out_y, out_z)?;
         let full = us.len() / LANES * LANES;
         for c in (0..full).step_by(LANES) {
@@ -58,13 +52,7 @@ impl NurbsCurve {
     }
 
     /// Scalar twin of [`NurbsCurve::eval_many`]: [`NurbsCurve::eval_local`] point by point.
-    pub fn eval_many_scalar(
-        &self,
-        us: &[f32],
-        out_x: &mut [f32],
-        out_y: &mut [f32],
-        out_z: &mut [f32],
-    ) -> Result<()> {
+    pub fn eval_many_scalar(&self, us: &[f32], out_x: &mut [f32], out_y: &mut [f32], out_z: &mut [f32]) -> Result<()> {
         self.check_batch(us, out_x, out_y, out_z)?;
         for (i, &u) in us.iter().enumerate() {
             let s = self.knots().span_unchecked(u);
@@ -79,11 +67,8 @@ impl NurbsCurve {
         let p = self.degree();
         let t = self.knots().knots();
         let span: [usize; LANES] = u.map(|ul| self.knots().span_unchecked(ul));
-        let gather = |a: &[f32], off: isize| -> F32s {
-            F32s::from(std::array::from_fn::<f32, LANES, _>(|l| {
-                a[(span[l] as isize + off) as usize]
-            }))
-        };
+        let gather =
+            |a: &[f32], off: isize| -> F32s { F32s::from(std::array::from_fn::<f32, LANES, _>(|l| a[(span[l] as isize + off) as usize])) };
         let uv = F32s::from(u);
         let zero = F32s::splat(0.0);
         let mut n = [zero; MAX_ORDER];

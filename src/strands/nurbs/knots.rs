@@ -68,11 +68,7 @@ fn clamped_values(n_ctrl: usize, degree: usize) -> Vec<f32> {
 
 fn check_shape(n_ctrl: usize, degree: usize) -> Result<()> {
     if n_ctrl == 0 {
-        return Err(WeftError::param(
-            "control points",
-            0,
-            "at least one control point is needed",
-        ));
+        return Err(WeftError::param("control points", 0, "at least one control point is needed"));
     }
     if n_ctrl > MAX_CONTROL {
         return Err(WeftError::param(
@@ -82,11 +78,7 @@ fn check_shape(n_ctrl: usize, degree: usize) -> Result<()> {
         ));
     }
     if degree > MAX_DEGREE {
-        return Err(WeftError::param(
-            "degree",
-            degree,
-            format!("must be at most {MAX_DEGREE}"),
-        ));
+        return Err(WeftError::param("degree", degree, format!("must be at most {MAX_DEGREE}")));
     }
     if degree >= n_ctrl {
         return Err(WeftError::param(
@@ -112,11 +104,7 @@ impl KnotVector {
             });
         }
         if let Some(i) = knots.iter().position(|t| !t.is_finite()) {
-            return Err(WeftError::param(
-                format!("knots[{i}]"),
-                knots[i],
-                "must be a finite number",
-            ));
+            return Err(WeftError::param(format!("knots[{i}]"), knots[i], "must be a finite number"));
         }
         if let Some(i) = knots.windows(2).position(|w| w[1] < w[0]) {
             return Err(WeftError::param(
@@ -252,10 +240,7 @@ mod tests {
     #[test]
     fn clamped_uniform_matches_textbook_values() {
         let kv = KnotVector::clamped_uniform(5, 2).unwrap();
-        assert_eq!(
-            kv.knots(),
-            &[0.0, 0.0, 0.0, 1.0 / 3.0, 2.0 / 3.0, 1.0, 1.0, 1.0]
-        );
+        assert_eq!(kv.knots(), &[0.0, 0.0, 0.0, 1.0 / 3.0, 2.0 / 3.0, 1.0, 1.0, 1.0]);
         assert_eq!(kv.domain(), (0.0, 1.0));
         let bez = KnotVector::clamped_uniform(4, 3).unwrap();
         assert_eq!(bez.knots(), &[0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 1.0, 1.0]);
@@ -279,20 +264,9 @@ mod tests {
         ));
         assert!(KnotVector::new(vec![0.0, 0.5, 0.4, 1.0], 1, 2).is_err());
         assert!(KnotVector::new(vec![0.0, f32::NAN, 1.0, 1.0], 1, 2).is_err());
-        assert_eq!(
-            KnotVector::new(vec![-1.0, 0.0, 2.0, 3.0], 1, 2)
-                .unwrap()
-                .domain(),
-            (0.0, 2.0)
-        );
-        assert!(
-            KnotVector::new(vec![0.0, 0.5, 0.5, 1.0], 1, 2).is_err(),
-            "empty domain"
-        );
-        assert!(
-            KnotVector::clamped_uniform(3, 3).is_err(),
-            "degree >= n_ctrl"
-        );
+        assert_eq!(KnotVector::new(vec![-1.0, 0.0, 2.0, 3.0], 1, 2).unwrap().domain(), (0.0, 2.0));
+        assert!(KnotVector::new(vec![0.0, 0.5, 0.5, 1.0], 1, 2).is_err(), "empty domain");
+        assert!(KnotVector::clamped_uniform(3, 3).is_err(), "degree >= n_ctrl");
         assert!(KnotVector::clamped_uniform(0, 0).is_err());
         assert!(KnotVector::clamped_uniform(40, MAX_DEGREE + 1).is_err());
         assert!(KnotVector::clamped_uniform(usize::MAX, 3).is_err());
@@ -307,10 +281,7 @@ mod tests {
             let u = i as f32 / 1000.0;
             let s = kv.find_span(u).unwrap();
             assert!((3..7).contains(&s));
-            assert!(
-                t[s] <= u && (u < t[s + 1] || (u == 1.0 && s == 6)),
-                "u={u} s={s}"
-            );
+            assert!(t[s] <= u && (u < t[s + 1] || (u == 1.0 && s == 6)), "u={u} s={s}");
         }
         assert!(kv.find_span(-0.001).is_err());
         assert!(kv.uniform);
@@ -325,11 +296,7 @@ mod tests {
             let kv = KnotVector::clamped_uniform(n, p).unwrap();
             let mut us: Vec<f32> = (0..=2000).map(|i| i as f32 / 2000.0).collect();
             for &t in kv.knots() {
-                us.extend([
-                    t,
-                    f32::from_bits(t.to_bits().saturating_sub(1)),
-                    t.next_up(),
-                ]);
+                us.extend([t, f32::from_bits(t.to_bits().saturating_sub(1)), t.next_up()]);
             }
             for u in us.into_iter().filter(|u| (0.0..=1.0).contains(u)) {
                 assert_eq!(kv.span_unchecked(u), kv.span_search(u), "n={n} p={p} u={u}");

@@ -40,11 +40,7 @@ pub struct SurfaceMesh {
 /// `count >= 2` equally spaced parameters on `[0, 1]`, with both ends exact.
 fn params(name: &str, count: usize) -> Result<Vec<f32>> {
     if count < 2 {
-        return Err(WeftError::param(
-            name,
-            count,
-            "at least 2 samples are needed",
-        ));
+        return Err(WeftError::param(name, count, "at least 2 samples are needed"));
     }
     let last = (count - 1) as f64;
     Ok((0..count).map(|i| (i as f64 / last) as f32).collect())
@@ -65,13 +61,7 @@ impl NurbsCurve {
     /// unequal lengths or non-finite coordinates.
     pub fn strand(x: &[f32], y: &[f32], z: &[f32], max_degree: usize) -> Result<Self> {
         let degree = fit_degree("strand points", x.len(), max_degree)?;
-        NurbsCurve::new(
-            x.to_vec(),
-            y.to_vec(),
-            z.to_vec(),
-            vec![1.0; x.len()],
-            degree,
-        )
+        NurbsCurve::new(x.to_vec(), y.to_vec(), z.to_vec(), vec![1.0; x.len()], degree)
     }
 
     /// `count >= 2` points at equally spaced parameters from `u = 0` to `u = 1`.
@@ -92,29 +82,13 @@ impl NurbsSurface {
     /// control points, weights are 1, degrees are `min(max_degree, rows - 1)` and
     /// `min(max_degree, cols - 1)`. The sheet passes through the four corner particles and
     /// the boundary curves are the [`NurbsCurve::strand`]s of the boundary rows and columns.
-    pub fn sheet(
-        rows: usize,
-        cols: usize,
-        x: &[f32],
-        y: &[f32],
-        z: &[f32],
-        max_degree: usize,
-    ) -> Result<Self> {
+    pub fn sheet(rows: usize, cols: usize, x: &[f32], y: &[f32], z: &[f32], max_degree: usize) -> Result<Self> {
         let pu = fit_degree("grid rows", rows, max_degree)?;
         let pv = fit_degree("grid cols", cols, max_degree)?;
         let n = rows
             .checked_mul(cols)
             .ok_or_else(|| WeftError::param("grid", "rows * cols", "too many particles"))?;
-        NurbsSurface::new(
-            rows,
-            cols,
-            x.to_vec(),
-            y.to_vec(),
-            z.to_vec(),
-            vec![1.0; n],
-            pu,
-            pv,
-        )
+        NurbsSurface::new(rows, cols, x.to_vec(), y.to_vec(), z.to_vec(), vec![1.0; n], pu, pv)
     }
 
     /// Samples an `ru x rv` grid of points (`ru, rv >= 2`, equally spaced on `[0, 1]^2`) and
@@ -210,11 +184,7 @@ mod tests {
         let m = s.sample(9, 13).unwrap();
         assert_eq!(m.x.len(), 9 * 13);
         assert_eq!(m.triangles.len(), 2 * 8 * 12);
-        assert!(m
-            .triangles
-            .iter()
-            .flatten()
-            .all(|&k| (k as usize) < m.x.len()));
+        assert!(m.triangles.iter().flatten().all(|&k| (k as usize) < m.x.len()));
         let last = m.x.len() - 1;
         assert_eq!([m.x[0], m.y[0], m.z[0]], [0.0, 0.0, 0.0]);
         assert_eq!([m.x[last], m.y[last]], [6.0, 4.0]);
@@ -222,8 +192,7 @@ mod tests {
         // mirrors them: all clockwise in (x, y), none degenerate, so the sheet is not folded.
         for t in &m.triangles {
             let [a, b, c] = t.map(|k| k as usize);
-            let cross =
-                (m.x[b] - m.x[a]) * (m.y[c] - m.y[a]) - (m.y[b] - m.y[a]) * (m.x[c] - m.x[a]);
+            let cross = (m.x[b] - m.x[a]) * (m.y[c] - m.y[a]) - (m.y[b] - m.y[a]) * (m.x[c] - m.x[a]);
             assert!(cross != 0.0);
             assert_eq!(cross.signum(), -1.0);
         }

@@ -44,14 +44,7 @@ impl NurbsSurface {
     }
 
     /// A surface with given knot vectors; the grid is `ku.n_ctrl() x kv.n_ctrl()`.
-    pub fn with_knots(
-        x: Vec<f32>,
-        y: Vec<f32>,
-        z: Vec<f32>,
-        w: Vec<f32>,
-        ku: KnotVector,
-        kv: KnotVector,
-    ) -> Result<Self> {
+    pub fn with_knots(x: Vec<f32>, y: Vec<f32>, z: Vec<f32>, w: Vec<f32>, ku: KnotVector, kv: KnotVector) -> Result<Self> {
         let n = ku
             .n_ctrl()
             .checked_mul(kv.n_ctrl())
@@ -112,12 +105,7 @@ impl NurbsSurface {
     }
 
     /// [`NurbsSurface::eval_global`] reusing `scratch`.
-    pub fn eval_global_with(
-        &self,
-        u: f32,
-        v: f32,
-        scratch: &mut GlobalScratch,
-    ) -> Result<[f64; 3]> {
+    pub fn eval_global_with(&self, u: f32, v: f32, scratch: &mut GlobalScratch) -> Result<[f64; 3]> {
         basis_global(&self.ku, u, &mut scratch.nu)?;
         basis_global(&self.kv, v, &mut scratch.nv)?;
         let cols = self.cols();
@@ -151,13 +139,7 @@ impl NurbsSurface {
     /// The local tensor sum given both spans and basis values; the arithmetic order that the
     /// SIMD grid kernel copies: `nw = (Nu * Nv) * w`, accumulate row by row.
     #[inline]
-    pub(crate) fn sum_in_span(
-        &self,
-        su: usize,
-        nu: &[f32; MAX_ORDER],
-        sv: usize,
-        nv: &[f32; MAX_ORDER],
-    ) -> [f32; 3] {
+    pub(crate) fn sum_in_span(&self, su: usize, nu: &[f32; MAX_ORDER], sv: usize, nv: &[f32; MAX_ORDER]) -> [f32; 3] {
         let (pu, pv) = self.degrees();
         let cols = self.cols();
         let (mut sx, mut sy, mut sz, mut sw) = (0.0f32, 0.0f32, 0.0f32, 0.0f32);

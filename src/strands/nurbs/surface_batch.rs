@@ -163,26 +163,12 @@ impl NurbsSurface {
     /// Evaluates the surface at every `(us[a], vs[b])` into `out[a * vs.len() + b]` (factored
     /// tensor sum, SIMD over control columns). All parameters are checked first; nothing
     /// is written on error. Empty `us` or `vs` is fine and writes nothing.
-    pub fn eval_grid(
-        &self,
-        us: &[f32],
-        vs: &[f32],
-        out_x: &mut [f32],
-        out_y: &mut [f32],
-        out_z: &mut [f32],
-    ) -> Result<()> {
+    pub fn eval_grid(&self, us: &[f32], vs: &[f32], out_x: &mut [f32], out_y: &mut [f32], out_z: &mut [f32]) -> Result<()> {
         self.grid(us, vs, [out_x, out_y, out_z], true)
     }
 
     /// Scalar twin of [`NurbsSurface::eval_grid`]: the same factored sums, one value at a time.
-    pub fn eval_grid_scalar(
-        &self,
-        us: &[f32],
-        vs: &[f32],
-        out_x: &mut [f32],
-        out_y: &mut [f32],
-        out_z: &mut [f32],
-    ) -> Result<()> {
+    pub fn eval_grid_scalar(&self, us: &[f32], vs: &[f32], out_x: &mut [f32], out_y: &mut [f32], out_z: &mut [f32]) -> Result<()> {
         self.grid(us, vs, [out_x, out_y, out_z], false)
     }
 }

@@ -41,10 +41,7 @@ fn uf(lo: f32, hi: f32) -> impl Strategy<Value = f32> + Clone {
 /// `n` random control points scaled by `10^e`, weights in `[0.2, 5]`.
 fn ctrl(n: std::ops::RangeInclusive<usize>) -> impl Strategy<Value = Ctrl> {
     (
-        prop::collection::vec(
-            (uf(-1.0, 1.0), uf(-1.0, 1.0), uf(-1.0, 1.0), uf(0.2, 5.0)),
-            n,
-        ),
+        prop::collection::vec((uf(-1.0, 1.0), uf(-1.0, 1.0), uf(-1.0, 1.0), uf(0.2, 5.0)), n),
         -3i32..=3,
     )
         .prop_map(|(v, e)| {
@@ -283,50 +280,28 @@ fn paper_verbatim_knots_make_the_last_control_point_inert() {
     }
     let c = NurbsCurve::with_knots(x.clone(), y.clone(), z.clone(), w.clone(), paper).unwrap();
     let end = c.eval_global(1.0).unwrap();
-    assert_eq!(
-        end,
-        [x[n - 2] as f64, y[n - 2] as f64, 0.0],
-        "ends at P_(n-1)"
-    );
+    assert_eq!(end, [x[n - 2] as f64, y[n - 2] as f64, 0.0], "ends at P_(n-1)");
     let fixed = NurbsCurve::new(x.clone(), y.clone(), z, w, 2).unwrap();
-    assert_eq!(
-        fixed.eval_global(1.0).unwrap(),
-        [x[n - 1] as f64, y[n - 1] as f64, 0.0]
-    );
+    assert_eq!(fixed.eval_global(1.0).unwrap(), [x[n - 1] as f64, y[n - 1] as f64, 0.0]);
 }
 
 #[test]
 fn bad_inputs_are_errors() {
     let v = |n: usize| vec![0.5f32; n];
-    assert!(
-        NurbsCurve::new(v(3), v(3), v(3), v(3), 3).is_err(),
-        "degree >= n"
-    );
-    assert!(
-        NurbsCurve::new(vec![], vec![], vec![], vec![], 0).is_err(),
-        "empty"
-    );
-    assert!(
-        NurbsCurve::new(v(3), v(3), v(2), v(3), 1).is_err(),
-        "lengths"
-    );
+    assert!(NurbsCurve::new(v(3), v(3), v(3), v(3), 3).is_err(), "degree >= n");
+    assert!(NurbsCurve::new(vec![], vec![], vec![], vec![], 0).is_err(), "empty");
+    assert!(NurbsCurve::new(v(3), v(3), v(2), v(3), 1).is_err(), "lengths");
     for bad in [0.0, -1.0, f32::NAN, f32::INFINITY] {
         let mut w = v(4);
         w[2] = bad;
-        assert!(
-            NurbsCurve::new(v(4), v(4), v(4), w, 2).is_err(),
-            "weight {bad}"
-        );
+        assert!(NurbsCurve::new(v(4), v(4), v(4), w, 2).is_err(), "weight {bad}");
     }
     let mut x = v(4);
     x[1] = f32::NAN;
     assert!(NurbsCurve::new(x, v(4), v(4), v(4), 2).is_err());
     let mut c = NurbsCurve::new(v(4), v(4), v(4), v(4), 2).unwrap();
     for u in [-0.1, 1.1, f32::NAN, f32::INFINITY] {
-        assert!(
-            c.eval_local(u).is_err() && c.eval_global(u).is_err(),
-            "u = {u}"
-        );
+        assert!(c.eval_local(u).is_err() && c.eval_global(u).is_err(), "u = {u}");
     }
     let (mut a, mut b, mut d) = (v(3), v(3), v(2));
     assert!(matches!(
@@ -334,26 +309,19 @@ fn bad_inputs_are_errors() {
         Err(WeftError::BufferLength { .. })
     ));
     let mut d3 = v(3);
-    assert!(c
-        .eval_many(&[0.1, 2.0, 0.3], &mut a, &mut b, &mut d3)
-        .is_err());
+    assert!(c.eval_many(&[0.1, 2.0, 0.3], &mut a, &mut b, &mut d3).is_err());
     assert_eq!(a, v(3), "nothing written on error");
     assert!(c.set_control_point(4, [0.0; 3]).is_err());
     assert!(c.set_control_point(0, [f32::NAN, 0.0, 0.0]).is_err());
     assert!(c.sample(1).is_err());
     assert!(NurbsCurve::strand(&[0.0], &[0.0], &[0.0], 3).is_err());
 
-    assert!(
-        NurbsSurface::new(2, 3, v(6), v(6), v(6), v(6), 2, 1).is_err(),
-        "pu >= rows"
-    );
+    assert!(NurbsSurface::new(2, 3, v(6), v(6), v(6), v(6), 2, 1).is_err(), "pu >= rows");
     assert!(NurbsSurface::new(2, 3, v(6), v(6), v(5), v(6), 1, 1).is_err());
     let s = NurbsSurface::new(2, 3, v(6), v(6), v(6), v(6), 1, 2).unwrap();
     assert!(s.eval_local(0.5, -0.5).is_err() && s.eval_global(f32::NAN, 0.5).is_err());
     let (mut a, mut b, mut d) = (v(4), v(4), v(3));
-    assert!(s
-        .eval_grid(&[0.0, 1.0], &[0.0, 1.0], &mut a, &mut b, &mut d)
-        .is_err());
+    assert!(s.eval_grid(&[0.0, 1.0], &[0.0, 1.0], &mut a, &mut b, &mut d).is_err());
     assert!(s.sample(1, 5).is_err());
     assert!(NurbsSurface::sheet(1, 4, &v(4), &v(4), &v(4), 3).is_err());
 }
