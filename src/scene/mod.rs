@@ -31,7 +31,7 @@ pub mod checked;
 mod sections;
 mod strands_section;
 
-pub use sections::{EffectsSection, OutputSection, SceneCloth, SolverSection, WindSection};
+pub use sections::{ClothSurface, EffectsSection, OutputSection, SceneCloth, SolverSection, WindSection};
 pub use strands_section::{ScalpKind, SceneScalp, SceneStrands};
 
 use crate::error::{Result, WeftError};
