@@ -11,6 +11,11 @@
 //! v_wind(t) = v_wind (1 + gust sin(2π f t))
 //! ```
 //!
+//! Strand points (hair, [`crate::strands::hair`]) have no triangles; each feels a drag from the
+//! air moving past it, `F = ½ ρ C_d A |v_rel| v_rel` with `v_rel = v_wind(t) - v` and `A` its
+//! cross-section (thickness × segment length), added to the same per-particle force arrays. A
+//! world without strands carries no area array and skips the term.
+//!
 //! Wind forces are computed in parallel per triangle, then gathered per particle through a
 //! particle→triangle adjacency in a fixed order, so the sum does not depend on threads. Its
 //! serial path is the scalar twin.
@@ -128,6 +133,9 @@ pub struct WindState {
     pub fy: Vec<f32>,
     /// Per-particle force, N.
     pub fz: Vec<f32>,
+    /// Strand drag cross-section per particle, m² (padded length; empty when the world has no
+    /// strands, and then the drag costs nothing).
+    pub strand_area: Vec<f32>,
 }
 
 impl WindState {
@@ -157,6 +165,7 @@ impl WindState {
             fx: vec![0.0; padded_len],
             fy: vec![0.0; padded_len],
             fz: vec![0.0; padded_len],
+            strand_area: Vec::new(),
         }
     }
 
@@ -178,14 +187,20 @@ impl WindState {
                 *f = one(t);
             }
         }
-        let (first, adj, tf) = (&self.adj_first, &self.adj_tri, &self.tri_force);
+        let (first, adj, tf, area) = (&self.adj_first, &self.adj_tri, &self.tri_force, &self.strand_area);
         let gather = |i: usize| {
             let mut f = [0.0f32; 3];
-            for &k in &adj[first[i] as usize..first[i + 1] as usize] {
-                let g = tf[k as usize];
+            for &t in &adj[first[i] as usize..first[i + 1] as usize] {
+                let g = tf[t as usize];
                 f[0] += g[0];
                 f[1] += g[1];
                 f[2] += g[2];
+            }
+            if !area.is_empty() && area[i] > 0.0 {
+                let d = strand_drag(area[i], [v[0][i], v[1][i], v[2][i]], air, k);
+                f[0] += d[0];
+                f[1] += d[1];
+                f[2] += d[2];
             }
             f
         };
@@ -205,6 +220,18 @@ impl WindState {
             }
         }
     }
+}
+
+/// Wind drag on one strand point: `F = k A |v_rel| v_rel` with `k = ½ ρ C_d`, `A` the point's
+/// cross-section (strand thickness times segment length) and `v_rel = v_wind(t) - v` the air's
+/// velocity relative to the point. The force grows with the relative air velocity (quadratic
+/// drag, like the triangles' law) and vanishes once the point moves with the air.
+#[inline]
+fn strand_drag(area: f32, v: [f32; 3], air: [f32; 3], k: f32) -> [f32; 3] {
+    let rel = [air[0] - v[0], air[1] - v[1], air[2] - v[2]];
+    let speed = (rel[0] * rel[0] + rel[1] * rel[1] + rel[2] * rel[2]).sqrt();
+    let m = k * area * speed;
+    [rel[0] * m, rel[1] * m, rel[2] * m]
 }
 
 /// Force on each corner of one triangle (a third of the triangle's force).

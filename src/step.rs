@@ -9,6 +9,8 @@
 //!     obstacle contacts of x -> p, back along the path  [collide/obstacles] (if any)
 //!     `iterations` sweeps: distance constraints by colour, tethers,
 //!       obstacle projection (if any)                    [constraints, collide]
+//!     `iterations` sweeps: distance constraints by colour, tethers   [constraints]
+//!       then strands pushed out of their scalps                       [strands::scalp] (if any)
 //!     update: v = (p - x) / h, damping; x = p          [integrate]
 //!     obstacle velocity pass: normal part, friction     [collide/obstacles] (if any)
 //!   on a non-finite value: restore the copy, replay the step with a check after every stage
@@ -166,6 +168,14 @@ impl World {
                 if has_obstacles {
                     self.obstacles.project(p, parallel, simd);
                     checkpoint!("obstacles", p.px, p.py, p.pz);
+                }
+                if !self.scalps.is_empty() {
+                    if parallel {
+                        self.scalps.solve(&mut p.px, &mut p.py, &mut p.pz, &p.w);
+                    } else {
+                        self.scalps.solve_scalar(&mut p.px, &mut p.py, &mut p.pz, &p.w);
+                    }
+                    checkpoint!("scalp", p.px, p.py, p.pz);
                 }
             }
             let damp = self.has_damping.then_some(&self.damp_factor[..]);

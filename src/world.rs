@@ -57,6 +57,9 @@ pub struct World {
     pub(crate) last_h: f32,
     pub(crate) obstacles: crate::collide::obstacles::ObstacleSet,
     pub(crate) embed: crate::embed::EmbedState,
+    pub(crate) strands: Vec<crate::strands::StrandInfo>,
+    pub(crate) scalps: crate::strands::scalp::ScalpSet,
+    pub(crate) strand_area: Vec<f32>,
 }
 
 impl World {
@@ -88,6 +91,9 @@ impl World {
             last_h: 0.0,
             obstacles: Default::default(),
             embed: Default::default(),
+            strands: Vec::new(),
+            scalps: Default::default(),
+            strand_area: Vec::new(),
         })
     }
 
@@ -139,18 +145,31 @@ impl World {
     }
 
     /// Re-lays out constraints and scratch after the particle count changed.
-    fn rebuild_topology(&mut self) {
+    pub(crate) fn rebuild_topology(&mut self) {
         let sink = self.particles.sink();
         let len = self.particles.padded_len();
         self.distance = DistanceSet::new(&self.distance_inputs, len, sink);
         self.tethers = TetherSet::new(&self.tether_inputs, sink);
-        self.wind = self.effects.wind.as_ref().map(|_| WindState::new(&self.triangles, len));
+        self.wind = self.new_wind_state();
         self.damp_h = f32::NAN;
         self.obstacles.invalidate();
         for b in &mut self.backup {
             b.resize(len, 0.0);
         }
         self.embed_topology_changed();
+    }
+
+    /// Wind scratch when wind is named: triangle adjacency plus the strand drag areas.
+    fn new_wind_state(&self) -> Option<WindState> {
+        let len = self.particles.padded_len();
+        self.effects.wind.as_ref().map(|_| {
+            let mut w = WindState::new(&self.triangles, len);
+            if !self.strand_area.is_empty() {
+                w.strand_area = self.strand_area.clone();
+                w.strand_area.resize(len, 0.0);
+            }
+            w
+        })
     }
 
     /// The solver parameters.
@@ -177,11 +196,7 @@ impl World {
     pub fn set_effects(&mut self, effects: Effects) -> Result<()> {
         effects.validate()?;
         self.effects = effects;
-        self.wind = self
-            .effects
-            .wind
-            .as_ref()
-            .map(|_| WindState::new(&self.triangles, self.particles.padded_len()));
+        self.wind = self.new_wind_state();
         Ok(())
     }
 

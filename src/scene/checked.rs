@@ -75,3 +75,10 @@ impl<'de> Deserialize<'de> for Count {
         }
     }
 }
+
+checked_f32!(
+    Degrees180,
+    "An angle in degrees between 0 and 180 inclusive.",
+    |f| f.is_finite() && (0.0..=180.0).contains(&f),
+    "must be an angle between 0 and 180 degrees"
+);

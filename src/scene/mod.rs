@@ -30,8 +30,10 @@
 pub mod checked;
 pub mod obstacles;
 mod sections;
+mod strands_section;
 
-pub use sections::{EffectsSection, OutputSection, SceneCloth, SolverSection, WindSection};
+pub use sections::{ClothSurface, EffectsSection, OutputSection, SceneCloth, SolverSection, WindSection};
+pub use strands_section::{ScalpKind, SceneScalp, SceneStrands};
 
 use crate::error::{Result, WeftError};
 use crate::world::World;
@@ -52,6 +54,9 @@ pub struct Scene {
     /// Obstacles (see [`obstacles`]).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub obstacle: Vec<toml::Spanned<obstacles::SceneObstacle>>,
+    /// Hair: strand groups on scalps.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub strands: Vec<toml::Spanned<SceneStrands>>,
     /// What a run writes.
     #[serde(default)]
     pub output: OutputSection,
@@ -117,6 +122,19 @@ impl Scene {
         for (k, o) in self.obstacle.iter().enumerate() {
             if let Err(e) = o.get_ref().obstacle().and_then(|o| world.add_obstacle(o)) {
                 return Err(WeftError::Scene(format!("{}obstacle {k}: {e}", at(o.span()))));
+            }
+        }
+        for (k, s) in self.strands.iter().enumerate() {
+            let added = s.get_ref().desc().and_then(|d| world.add_strands(&d).map(|_| ()));
+            if let Err(e) = added {
+                // A bad scalp is reported at the scalp table, anything else at the strands table.
+                let scalp_err = s.get_ref().scalp.get_ref().scalp().is_err();
+                let start = if scalp_err {
+                    s.get_ref().scalp.span().start
+                } else {
+                    s.span().start
+                };
+                return Err(WeftError::Scene(format!("{}strands {k}: {e}", at(start..start))));
             }
         }
         Ok(world)

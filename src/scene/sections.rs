@@ -251,6 +251,27 @@ pub struct OutputSection {
     pub camera_eye: Option<Vec3>,
     /// Camera target (default: the scene's centre).
     pub camera_target: Option<Vec3>,
+    /// How cloth is drawn: `"triangles"` (default) or `"nurbs"` (a NURBS surface over the
+    /// particle grid).
+    #[serde(default, skip_serializing_if = "ClothSurface::is_default")]
+    pub cloth_surface: ClothSurface,
+}
+
+/// How pictures draw cloth.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ClothSurface {
+    /// The simulation's own triangles.
+    #[default]
+    Triangles,
+    /// A cubic NURBS surface whose control points are the particle grid (SEEDS.md B).
+    Nurbs,
+}
+
+impl ClothSurface {
+    fn is_default(&self) -> bool {
+        *self == ClothSurface::Triangles
+    }
 }
 
 fn default_steps() -> Count {
@@ -277,6 +298,7 @@ impl Default for OutputSection {
             height: default_height(),
             camera_eye: None,
             camera_target: None,
+            cloth_surface: ClothSurface::Triangles,
         }
     }
 }

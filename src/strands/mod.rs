@@ -1,8 +1,20 @@
-//! Strands (hair) and sheets drawn as smooth curves and surfaces.
+//! Strands (hair) on a scalp, and the smooth curves and surfaces they are drawn with.
 //!
-//! Today this holds the NURBS machinery of SEEDS.md B ([`nurbs`]) and the timing function of
-//! its reproduction ([`nurbs_timing`]). Strand physics and AHS root placement (attaching hairs
-//! to a scalp) come later and will build on these curves.
+//! - [`hair`]: the AHS builder (SEEDS.md B): roots spread over a scalp, each strand grown along
+//!   the scalp normal, simulated as particles with stretch and bending distance constraints;
+//! - [`scalp`]: the scalp shape, the Fibonacci root placement and the scalp collision stage;
+//! - [`attach`]: adding strands to a world (`World::add_strands`);
+//! - [`nurbs`]: NURBS curves and surfaces with global and local evaluation, used to draw strands
+//!   and cloth smoothly; [`nurbs_timing`] measures global against local evaluation.
 
+pub mod attach;
+pub mod hair;
 pub mod nurbs;
 pub mod nurbs_timing;
+pub mod scalp;
+#[cfg(test)]
+mod tests;
+
+pub use attach::StrandInfo;
+pub use hair::{StrandsBuild, StrandsDesc};
+pub use scalp::Scalp;

@@ -23,6 +23,19 @@ pub fn describe(scene: &Scene, world: &weft::World) -> String {
     for (k, c) in world.cloths().iter().enumerate() {
         s += &format!("    cloth {k}: {} x {} particles, thickness {} m\n", c.rows, c.cols, c.thickness);
     }
+    s += &format!("  strands       {}\n", world.strands().iter().map(|g| g.count as u64).sum::<u64>());
+    for (k, g) in world.strands().iter().enumerate() {
+        let sc = &g.scalp;
+        let shape = if sc.is_sphere() {
+            format!("sphere r {} m", sc.radii[0])
+        } else {
+            format!("ellipsoid radii {:?} m", sc.radii)
+        };
+        s += &format!(
+            "    strands {k}: {} x {} points on a {shape} at {:?}, polar {:?} deg, thickness {} m\n",
+            g.count, g.points, sc.center, sc.polar_degrees, g.thickness
+        );
+    }
     s += &format!("  particles     {n} (padded to {pad})\n");
     s += &format!(
         "  constraints   {} distance in {} colours, {} tethers\n",

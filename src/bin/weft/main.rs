@@ -4,11 +4,13 @@
 //! weft run scenes/hanging.toml            # simulate, write out/hanging/{final.png,frames.png,summary.json}
 //! weft check scenes/flag.toml             # what the scene will simulate, and its memory
 //! weft run --resume out/big/checkpoint.bin
+//! weft reproduce nurbs [--json]           # a source paper's table (SEEDS.md B)
 //! ```
 
 mod bench;
 mod check;
 mod pictures;
+mod reproduce;
 mod run;
 
 use std::path::PathBuf;
@@ -44,6 +46,9 @@ enum Command {
         #[arg(long, default_value = "scenes")]
         scenes: PathBuf,
     },
+    /// Re-run a source paper's measurement and print its table (e.g. `weft reproduce nurbs`).
+    #[command(subcommand)]
+    Reproduce(reproduce::Reproduce),
 }
 
 fn main() -> ExitCode {
@@ -52,6 +57,7 @@ fn main() -> ExitCode {
         Command::Run(args) => run::run(args),
         Command::Check { scene } => check::check(&scene),
         Command::Bench { json, scenes } => bench::bench(json, &scenes),
+        Command::Reproduce(what) => reproduce::reproduce(what),
     };
     match result {
         Ok(code) => code,

@@ -1,33 +1,122 @@
 //! Turning world states into pictures.
+//!
+//! Cloth is drawn as its triangles, or (with `--nurbs-surface` / `[output] cloth_surface =
+//! "nurbs"`) as a NURBS surface whose control points are the cloth's particle grid. Strands are
+//! drawn as smooth NURBS curves through their simulated points (root and tip exact, the rest
+//! smoothed; SEEDS.md B), and each scalp as a shaded ellipsoid mesh.
 
-use weft::render::{self, Camera, Image, MeshItem, RenderOptions, RenderScene};
+use weft::render::{self, shapes, Camera, Image, LineItem, MeshItem, RenderOptions, RenderScene};
+use weft::strands::nurbs::{NurbsCurve, NurbsSurface};
 
 /// Colours given to successive cloths.
 const CLOTH_COLORS: [[u8; 3]; 4] = [[196, 64, 58], [58, 110, 190], [224, 170, 60], [90, 160, 100]];
+
+/// Base hair colours of successive strand groups (each strand varies around it).
+const HAIR_COLORS: [[u8; 3]; 3] = [[92, 58, 32], [180, 140, 80], [40, 30, 24]];
+
+/// Scalp (skin) colour.
+const SCALP_COLOR: [u8; 3] = [214, 172, 140];
+
+/// Degree of the drawn NURBS curves and surfaces (cubic).
+const DRAW_DEGREE: usize = 3;
+
+/// Samples per simulated point along a drawn strand.
+const STRAND_SAMPLES_PER_POINT: usize = 3;
+
+/// Surface samples per particle along each grid direction (capped at [`MAX_SURFACE_SAMPLES`]).
+const SURFACE_SAMPLES_PER_POINT: usize = 2;
+const MAX_SURFACE_SAMPLES: usize = 400;
+
+/// How a frame is drawn.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Style {
+    /// Draw each cloth as a NURBS surface over its particle grid instead of its triangles.
+    pub nurbs_surface: bool,
+}
 
 /// One recorded frame: interleaved positions.
 pub struct Frame {
     pub positions: Vec<[f32; 3]>,
 }
 
-/// The render scene of a frame.
-pub fn scene_of(world: &weft::World, frame: &Frame) -> RenderScene {
-    let mut meshes = Vec::new();
-    for (k, c) in world.cloths().iter().enumerate() {
-        let first = c.first as usize;
-        let count = (c.rows * c.cols) as usize;
-        let tris = &world.triangles()[c.first_triangle as usize..(c.first_triangle + c.triangle_count) as usize];
-        meshes.push(MeshItem {
-            positions: frame.positions[first..first + count].to_vec(),
-            triangles: tris.iter().map(|t| [t[0] - c.first, t[1] - c.first, t[2] - c.first]).collect(),
-            color: CLOTH_COLORS[k % CLOTH_COLORS.len()],
+fn columns(points: &[[f32; 3]]) -> [Vec<f32>; 3] {
+    [0, 1, 2].map(|k| points.iter().map(|p| p[k]).collect())
+}
+
+/// A cheap deterministic shade variation in `[-1, 1]` per strand.
+fn jitter(s: u32) -> f32 {
+    let h = s.wrapping_mul(0x9E37_79B9).rotate_left(13).wrapping_mul(0x85EB_CA6B);
+    (h >> 8) as f32 / (1u32 << 24) as f32 * 2.0 - 1.0
+}
+
+fn cloth_mesh(world: &weft::World, frame: &Frame, k: usize, style: Style) -> weft::Result<MeshItem> {
+    let c = &world.cloths()[k];
+    let first = c.first as usize;
+    let count = (c.rows * c.cols) as usize;
+    let color = CLOTH_COLORS[k % CLOTH_COLORS.len()];
+    let pts = &frame.positions[first..first + count];
+    if style.nurbs_surface && c.rows >= 2 && c.cols >= 2 {
+        let [x, y, z] = columns(pts);
+        let (rows, cols) = (c.rows as usize, c.cols as usize);
+        let sheet = NurbsSurface::sheet(rows, cols, &x, &y, &z, DRAW_DEGREE)?;
+        let ru = (rows * SURFACE_SAMPLES_PER_POINT).min(MAX_SURFACE_SAMPLES);
+        let rv = (cols * SURFACE_SAMPLES_PER_POINT).min(MAX_SURFACE_SAMPLES);
+        let m = sheet.sample(ru, rv)?;
+        let positions = (0..m.x.len()).map(|i| [m.x[i], m.y[i], m.z[i]]).collect();
+        return Ok(MeshItem {
+            positions,
+            triangles: m.triangles,
+            color,
         });
     }
-    RenderScene {
-        meshes,
-        lines: Vec::new(),
-        background: render::DEFAULT_BACKGROUND,
+    let tris = &world.triangles()[c.first_triangle as usize..(c.first_triangle + c.triangle_count) as usize];
+    Ok(MeshItem {
+        positions: pts.to_vec(),
+        triangles: tris.iter().map(|t| [t[0] - c.first, t[1] - c.first, t[2] - c.first]).collect(),
+        color,
+    })
+}
+
+/// Strands of every group as smooth curves, and the scalps as meshes.
+fn hair(world: &weft::World, frame: &Frame, meshes: &mut Vec<MeshItem>, lines: &mut Vec<LineItem>) -> weft::Result<()> {
+    for (k, g) in world.strands().iter().enumerate() {
+        let sc = &g.scalp;
+        let (pos, tris) = shapes::uv_sphere([0.0; 3], 1.0, 64);
+        let pos = pos.iter().map(|p| [0, 1, 2].map(|a| sc.center[a] + p[a] * sc.radii[a])).collect();
+        meshes.push(MeshItem {
+            positions: pos,
+            triangles: tris,
+            color: SCALP_COLOR,
+        });
+        let base = HAIR_COLORS[k % HAIR_COLORS.len()];
+        let samples = g.points as usize * STRAND_SAMPLES_PER_POINT;
+        for s in 0..g.count {
+            let [x, y, z] = columns(&frame.positions[g.strand_range(s)]);
+            let curve = NurbsCurve::strand(&x, &y, &z, DRAW_DEGREE)?.sample(samples)?;
+            let shade = 1.0 + 0.25 * jitter(s);
+            lines.push(LineItem {
+                points: (0..samples).map(|i| [curve.x[i], curve.y[i], curve.z[i]]).collect(),
+                color: base.map(|c| (c as f32 * shade).clamp(0.0, 255.0) as u8),
+                width_px: 1.0,
+            });
+        }
     }
+    Ok(())
+}
+
+/// The render scene of a frame.
+pub fn scene_of(world: &weft::World, frame: &Frame, style: Style) -> weft::Result<RenderScene> {
+    let mut meshes = Vec::new();
+    let mut lines = Vec::new();
+    for k in 0..world.cloths().len() {
+        meshes.push(cloth_mesh(world, frame, k, style)?);
+    }
+    hair(world, frame, &mut meshes, &mut lines)?;
+    Ok(RenderScene {
+        meshes,
+        lines,
+        background: render::DEFAULT_BACKGROUND,
+    })
 }
 
 /// A camera that frames every frame (so the contact sheet and GIF share one view).
@@ -37,11 +126,12 @@ pub fn shared_camera(
     aspect: f32,
     eye: Option<[f32; 3]>,
     target: Option<[f32; 3]>,
-) -> Option<Camera> {
+    style: Style,
+) -> weft::Result<Option<Camera>> {
     let mut lo = [f32::INFINITY; 3];
     let mut hi = [f32::NEG_INFINITY; 3];
     for f in frames {
-        if let Some((a, b)) = scene_of(world, f).bounds() {
+        if let Some((a, b)) = scene_of(world, f, style)?.bounds() {
             for k in 0..3 {
                 lo[k] = lo[k].min(a[k]);
                 hi[k] = hi[k].max(b[k]);
@@ -49,7 +139,7 @@ pub fn shared_camera(
         }
     }
     if !lo[0].is_finite() {
-        return None;
+        return Ok(None);
     }
     let mut cam = Camera::framing_for_aspect(lo, hi, aspect);
     if let Some(t) = target {
@@ -58,16 +148,23 @@ pub fn shared_camera(
     if let Some(e) = eye {
         cam.eye = e;
     }
-    Some(cam)
+    Ok(Some(cam))
 }
 
 /// Renders one frame.
-pub fn render_frame(world: &weft::World, frame: &Frame, width: u32, height: u32, camera: Option<Camera>) -> weft::Result<Image> {
+pub fn render_frame(
+    world: &weft::World,
+    frame: &Frame,
+    width: u32,
+    height: u32,
+    camera: Option<Camera>,
+    style: Style,
+) -> weft::Result<Image> {
     let opts = RenderOptions {
         width,
         height,
         camera,
         ..RenderOptions::default()
     };
-    render::render(&scene_of(world, frame), &opts)
+    render::render(&scene_of(world, frame, style)?, &opts)
 }

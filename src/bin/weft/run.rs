@@ -10,7 +10,7 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 use weft::checkpoint::{write_atomic, Checkpoint};
-use weft::scene::Scene;
+use weft::scene::{ClothSurface, Scene};
 use weft::{WeftError, World};
 
 use crate::pictures::{self, Frame};
@@ -46,6 +46,10 @@ pub struct RunArgs {
     /// Skip the pictures (for timing runs).
     #[arg(long)]
     no_pictures: bool,
+    /// Draw cloth as a NURBS surface over its particle grid (same as the scene's
+    /// `[output] cloth_surface = "nurbs"`).
+    #[arg(long)]
+    nurbs_surface: bool,
 }
 
 #[derive(Serialize)]
@@ -199,22 +203,26 @@ pub fn run(args: RunArgs) -> weft::Result<ExitCode> {
     }
     if !args.no_pictures && !frames.is_empty() {
         let (w, h) = (scene.output.width.0, scene.output.height.0);
+        let style = pictures::Style {
+            nurbs_surface: args.nurbs_surface || scene.output.cloth_surface == ClothSurface::Nurbs,
+        };
         let cam = pictures::shared_camera(
             &world,
             &frames,
             w as f32 / h as f32,
             scene.output.camera_eye.map(|v| v.0),
             scene.output.camera_target.map(|v| v.0),
-        );
+            style,
+        )?;
         let last = frames.last().expect("non-empty");
-        let img = pictures::render_frame(&world, last, w, h, cam)?;
+        let img = pictures::render_frame(&world, last, w, h, cam, style)?;
         let p = out.join("final.png");
         img.write_png(&p)?;
         files.push(p.display().to_string());
         let (tw, th) = ((w / 2).max(1), (h / 2).max(1));
         let thumbs = frames
             .iter()
-            .map(|f| pictures::render_frame(&world, f, tw, th, cam))
+            .map(|f| pictures::render_frame(&world, f, tw, th, cam, style))
             .collect::<weft::Result<Vec<_>>>()?;
         let cols = (thumbs.len() as f64).sqrt().ceil() as u32;
         let sheet = weft::render::contact_sheet(&thumbs, cols.max(1), true)?;

@@ -1,0 +1,90 @@
+//! Adding strands to a world: particles, constraints in the shared colouring, scalp collision
+//! and the wind's strand drag.
+//!
+//! [`World::add_strands`] appends a [`StrandsDesc`]'s particles after those already present,
+//! puts its stretch and bending constraints into the world's one
+//! [`DistanceSet`](crate::constraints::DistanceSet) (so strands and cloth are coloured and solved
+//! together), registers the particle range with the scalp stage, and records a [`StrandInfo`]
+//! for rendering.
+
+use super::hair::StrandsDesc;
+use super::scalp::Scalp;
+use crate::cloth::ConstraintKind;
+use crate::constraints::distance::DistanceInput;
+use crate::error::{Result, WeftError};
+use crate::world::World;
+
+/// Where one group of strands lives in the world's particle arrays.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StrandInfo {
+    /// Index of the group's first particle (the root of strand 0).
+    pub first: u32,
+    /// Number of strands; strand `s` is `first + s * points .. first + (s + 1) * points`.
+    pub count: u32,
+    /// Points per strand, root first.
+    pub points: u32,
+    /// The scalp the roots sit on.
+    pub scalp: Scalp,
+    /// Strand diameter, m.
+    pub thickness: f32,
+}
+
+impl StrandInfo {
+    /// Particle range of strand `s` (unchecked: `s < count`).
+    pub fn strand_range(&self, s: u32) -> std::ops::Range<usize> {
+        let a = self.first as usize + (s as usize) * self.points as usize;
+        a..a + self.points as usize
+    }
+}
+
+impl World {
+    /// Grows a group of strands (AHS) and adds it; returns its index in
+    /// [`strands`](Self::strands).
+    pub fn add_strands(&mut self, desc: &StrandsDesc) -> Result<usize> {
+        let b = desc.build()?;
+        let total = self.particles.count() as u64 + b.positions.len() as u64 + 16;
+        if total >= u32::MAX as u64 {
+            return Err(WeftError::param("particles", total, "too many particles for u32 indices"));
+        }
+        let first = self.particles.extend(&b.positions, &b.inv_mass);
+        for e in &b.edges {
+            let (a, bb) = (first + e.a, first + e.b);
+            self.distance_inputs.push(DistanceInput {
+                a,
+                b: bb,
+                rest: e.rest,
+                compliance: e.compliance,
+            });
+            if e.kind == ConstraintKind::Stretch {
+                self.stretch.push((a, bb, e.rest));
+            }
+        }
+        let n = self.particles.count();
+        self.damping_rate.resize(n, desc.damping);
+        self.has_damping |= desc.damping > 0.0;
+        let area = desc.thickness * desc.segment_length;
+        self.strand_area.resize(first as usize, 0.0);
+        self.strand_area
+            .extend(b.inv_mass.iter().map(|&w| if w > 0.0 { area } else { 0.0 }));
+        self.scalps.push(first as usize, n, &desc.scalp, 0.5 * desc.thickness);
+        self.strands.push(StrandInfo {
+            first,
+            count: desc.count,
+            points: desc.points,
+            scalp: desc.scalp,
+            thickness: desc.thickness,
+        });
+        self.rebuild_topology();
+        Ok(self.strands.len() - 1)
+    }
+
+    /// The strand groups added so far.
+    pub fn strands(&self) -> &[StrandInfo] {
+        &self.strands
+    }
+
+    /// Number of strand particles kept outside a scalp by the scalp stage.
+    pub fn scalp_particle_count(&self) -> usize {
+        self.scalps.ranges.iter().map(|r| r.end - r.start).sum()
+    }
+}
