@@ -55,6 +55,7 @@ pub struct World {
     pub(crate) time: f64,
     pub(crate) steps: u64,
     pub(crate) last_h: f32,
+    pub(crate) selfcol: crate::collide::self_collision::SelfCollisionData,
 }
 
 impl World {
@@ -84,6 +85,7 @@ impl World {
             time: 0.0,
             steps: 0,
             last_h: 0.0,
+            selfcol: Default::default(),
         })
     }
 
@@ -122,6 +124,9 @@ impl World {
             .extend(b.triangles.iter().map(|t| [first + t[0], first + t[1], first + t[2]]));
         self.damping_rate.resize(self.particles.count(), desc.fabric.damping);
         self.has_damping |= desc.fabric.damping > 0.0;
+        let cloth_index = self.cloths.len() as u32;
+        self.selfcol
+            .add_cloth(&b.positions, cloth_index, desc.spacing, desc.fabric.thickness);
         self.cloths.push(ClothInfo {
             first,
             rows: desc.rows,

@@ -19,6 +19,10 @@
 //! the same canonical result — sorted lists under one shared `f32` predicate — which also
 //! equals the O(n²) brute force [`neighbours::Neighbours::fill_brute_force`]. Every parallel
 //! routine has a `_serial` twin, and the results do not depend on the thread count.
+//!
+//! **Self-collision** ([`self_collision`], settings in [`self_config`], kernels in [`response`]):
+//! particle–particle contacts in the step with the three responses of section A.
+//!
 pub mod bvh;
 pub mod dressform;
 pub mod face_broadphase;
@@ -33,3 +37,6 @@ pub mod mesh_response;
 pub mod narrow;
 pub mod neighbours;
 pub mod particle_tree;
+pub mod response;
+pub mod self_collision;
+pub mod self_config;

@@ -21,6 +21,11 @@
 //! fabric = "cotton"
 //! pins = ["first-row-corners"]
 //!
+//! [effects.self_collision]   # optional: particle–particle contacts
+//! response = "vccpbd"         # or "pbd", "movement-speed"
+//! broadphase = "hash"         # or "aabb-tree"
+//! friction = 0.3
+//!
 //! [output]
 //! steps = 300
 //! ```
@@ -30,7 +35,7 @@
 pub mod checked;
 mod sections;
 
-pub use sections::{EffectsSection, OutputSection, SceneCloth, SolverSection, WindSection};
+pub use sections::{EffectsSection, OutputSection, SceneCloth, SelfCollisionSection, SolverSection, WindSection};
 
 use crate::error::{Result, WeftError};
 use crate::world::World;
@@ -94,6 +99,7 @@ impl Scene {
 
     fn build_world(&self, src: Option<(&str, &str)>) -> Result<World> {
         let mut world = World::new(self.solver.params(), self.effects.effects())?;
+        world.set_self_collision(self.effects.self_collision.as_ref().map(|s| s.config()))?;
         for (k, c) in self.cloth.iter().enumerate() {
             let desc = c.get_ref().desc().and_then(|d| world.add_cloth(&d).map(|_| ()));
             if let Err(e) = desc {
