@@ -3,20 +3,24 @@
 //! ```text
 //! step(dt):
 //!   keep a copy of x, v (guard)
+//!   self-collision pair lists from x (hash or AABB tree)  [self-collision] (if on)
 //!   for each substep h = dt / substeps:
 //!     wind forces per triangle → per particle          [effects]        (if named)
 //!     predict: v += h g + h w f, drag; p = x + h v      [integrate]
 //!     obstacle contacts of x -> p, back along the path  [collide/obstacles] (if any)
-//!     `iterations` sweeps: distance constraints by colour, tethers,
-//!       obstacle projection (if any)                    [constraints, collide]
+//!     speed clamp relative to the mean velocity        [self-collision]  (if on)
 //!     `iterations` sweeps: distance constraints by colour, tethers   [constraints]
-//!       then strands pushed out of their scalps                       [strands::scalp] (if any)
+//!       obstacle projection                             [collide/obstacles] (if any)
+//!       strands pushed out of their scalps              [strands::scalp] (if any)
+//!     pair pass, velocity correction                    [self-collision]  (if on)
 //!     update: v = (p - x) / h, damping; x = p          [integrate]
 //!     obstacle velocity pass: normal part, friction     [collide/obstacles] (if any)
 //!   on a non-finite value: restore the copy, replay the step with a check after every stage
 //!   to name the stage and particle, and return `Diverged`
 //! ```
 
+use crate::collide::response::{apply, clamp_speed, ApplyInput, ApplyMode, ClampParams};
+use crate::collide::self_collision::{mean_velocity, Response, TRAVEL_FACTOR};
 use crate::error::{positive, Result, WeftError};
 use crate::integrate::{predict, update, PredictParams};
 use crate::params::Backend;
@@ -120,6 +124,14 @@ impl World {
         if has_obstacles {
             self.obstacles.prepare(&self.particles, &self.cloths);
         }
+        let sc_start = std::time::Instant::now();
+        let sc = {
+            let p = &self.particles;
+            let steps = self.steps;
+            let on = self.selfcol.begin_step([&p.x, &p.y, &p.z], n, &self.damping_rate, steps, parallel);
+            on.unwrap_or(false).then(|| self.selfcol.active()).flatten()
+        };
+        let mut sc_time = sc_start.elapsed();
         for s in 0..n_sub {
             let t = self.time + (s as f64) * (h as f64);
             if let (Some(w), Some(state)) = (&self.effects.wind, &mut self.wind) {
@@ -147,6 +159,21 @@ impl World {
                 self.obstacles.resolve(&mut self.particles, h, parallel);
                 let p = &self.particles;
                 checkpoint!("obstacles", p.px, p.py, p.pz);
+            }
+            if let Some(a) = sc {
+                let t0 = std::time::Instant::now();
+                let p = &self.particles;
+                let mean = mean_velocity([&p.vx, &p.vy, &p.vz], &p.w, n, parallel);
+                let cp = ClampParams {
+                    mean,
+                    limit: TRAVEL_FACTOR * a.d / n_sub as f32,
+                    h,
+                };
+                self.particles.for_chunks(parallel, |c| clamp_speed(c, &cp, simd));
+                let p = &self.particles;
+                self.selfcol.keep_predictions([&p.px, &p.py, &p.pz]);
+                sc_time += t0.elapsed();
+                checkpoint!("self-collision clamp", p.px, p.py, p.pz, p.vx, p.vy, p.vz);
             }
             self.distance.reset_lambda();
             for _ in 0..self.params.iterations {
@@ -178,6 +205,35 @@ impl World {
                     checkpoint!("scalp", p.px, p.py, p.pz);
                 }
             }
+            if let Some(a) = sc {
+                let t0 = std::time::Instant::now();
+                let p = &self.particles;
+                self.selfcol.pair_pass([&p.x, &p.y, &p.z], [&p.px, &p.py, &p.pz], &p.w, n, parallel);
+                if let Some((sums, q, b)) = self.selfcol.kernel_inputs() {
+                    let mode = if a.response == Response::Vccpbd {
+                        ApplyMode::Vccpbd
+                    } else {
+                        ApplyMode::Plain
+                    };
+                    self.particles.for_chunks(parallel, |c| {
+                        let inp = ApplyInput {
+                            start: c.start,
+                            x: [&*c.x, &*c.y, &*c.z],
+                            w: c.w,
+                            q,
+                            b,
+                            sums,
+                            friction: a.friction,
+                            h,
+                            r: 0.5 * a.d,
+                        };
+                        apply(&inp, [c.px, c.py, c.pz], mode, simd)
+                    });
+                }
+                sc_time += t0.elapsed();
+                let p = &self.particles;
+                checkpoint!("self-collision", p.px, p.py, p.pz);
+            }
             let damp = self.has_damping.then_some(&self.damp_factor[..]);
             self.particles.for_chunks(parallel, |c| update(c, h, damp, simd));
             let p = &self.particles;
@@ -187,6 +243,10 @@ impl World {
                 let p = &self.particles;
                 checkpoint!("obstacles", p.vx, p.vy, p.vz);
             }
+        }
+        if sc.is_some() && !check {
+            self.selfcol.stats.time_s += sc_time.as_secs_f64();
+            self.selfcol.stats.steps += 1;
         }
         None
     }

@@ -60,6 +60,7 @@ pub struct World {
     pub(crate) strands: Vec<crate::strands::StrandInfo>,
     pub(crate) scalps: crate::strands::scalp::ScalpSet,
     pub(crate) strand_area: Vec<f32>,
+    pub(crate) selfcol: crate::collide::self_collision::SelfCollisionData,
 }
 
 impl World {
@@ -94,6 +95,7 @@ impl World {
             strands: Vec::new(),
             scalps: Default::default(),
             strand_area: Vec::new(),
+            selfcol: Default::default(),
         })
     }
 
@@ -132,6 +134,9 @@ impl World {
             .extend(b.triangles.iter().map(|t| [first + t[0], first + t[1], first + t[2]]));
         self.damping_rate.resize(self.particles.count(), desc.fabric.damping);
         self.has_damping |= desc.fabric.damping > 0.0;
+        let cloth_index = self.cloths.len() as u32;
+        self.selfcol
+            .add_cloth(&b.positions, cloth_index, desc.spacing, desc.fabric.thickness);
         self.cloths.push(ClothInfo {
             first,
             rows: desc.rows,

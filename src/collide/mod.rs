@@ -37,4 +37,7 @@ pub mod obstacle_kernels;
 pub mod obstacles;
 pub mod particle_tree;
 pub mod penetration;
+pub mod response;
+pub mod self_collision;
+pub mod self_config;
 pub mod shapes;

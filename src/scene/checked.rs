@@ -37,6 +37,12 @@ checked_f32!(
     |f| f.is_finite() && f >= 0.0,
     "must be a finite number, zero or greater"
 );
+checked_f32!(
+    Fraction,
+    "A number from 0 to 1.",
+    |f| f.is_finite() && (0.0..=1.0).contains(&f),
+    "must be a number from 0 to 1"
+);
 checked_f32!(Finite, "A finite number.", |f| f.is_finite(), "must be a finite number");
 
 /// A 3-vector of finite numbers.

@@ -21,6 +21,11 @@
 //! fabric = "cotton"
 //! pins = ["first-row-corners"]
 //!
+//! [effects.self_collision]   # optional: particle–particle contacts
+//! response = "vccpbd"         # or "pbd", "movement-speed"
+//! broadphase = "hash"         # or "aabb-tree"
+//! friction = 0.3
+//!
 //! [output]
 //! steps = 300
 //! ```
@@ -32,7 +37,7 @@ pub mod obstacles;
 mod sections;
 mod strands_section;
 
-pub use sections::{ClothSurface, EffectsSection, OutputSection, SceneCloth, SolverSection, WindSection};
+pub use sections::{ClothSurface, EffectsSection, OutputSection, SceneCloth, SelfCollisionSection, SolverSection, WindSection};
 pub use strands_section::{ScalpKind, SceneScalp, SceneStrands};
 
 use crate::error::{Result, WeftError};
@@ -110,6 +115,7 @@ impl Scene {
             })
             .unwrap_or_default()
         };
+        world.set_self_collision(self.effects.self_collision.as_ref().map(|s| s.config()))?;
         for (k, c) in self.cloth.iter().enumerate() {
             let desc = c.get_ref().desc().and_then(|d| world.add_cloth(&d).map(|_| ()));
             if let Err(e) = desc {

@@ -2,8 +2,9 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::checked::{Count, NonNegative, Positive, Vec3};
+use super::checked::{Count, Fraction, NonNegative, Positive, Vec3};
 use crate::cloth::{ClothDesc, PinSpec};
+use crate::collide::self_config::{Response, SelfBroadphase, SelfCollision};
 use crate::effects::{Effects, Wind};
 use crate::error::Result;
 use crate::fabric::Fabric;
@@ -94,6 +95,35 @@ pub struct EffectsSection {
     pub wind: Option<WindSection>,
     /// Coulomb friction coefficient against obstacles (default 0; an obstacle may set its own).
     pub friction: Option<NonNegative>,
+    /// Self-collision (particle–particle contacts).
+    pub self_collision: Option<SelfCollisionSection>,
+}
+
+/// `[effects.self_collision]`: every key optional.
+#[derive(Clone, Debug, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SelfCollisionSection {
+    /// Collision distance, m (default: min(thickness, spacing) of the cloths).
+    pub distance: Option<Positive>,
+    /// Friction from 0 to 1 (default 0.3).
+    pub friction: Option<Fraction>,
+    /// `"pbd"`, `"movement-speed"` or `"vccpbd"` (default).
+    pub response: Option<Response>,
+    /// `"hash"` (default) or `"aabb-tree"`.
+    pub broadphase: Option<SelfBroadphase>,
+}
+
+impl SelfCollisionSection {
+    /// The settings.
+    pub fn config(&self) -> SelfCollision {
+        let d = SelfCollision::default();
+        SelfCollision {
+            distance: self.distance.map(|v| v.0),
+            friction: self.friction.map_or(d.friction, |v| v.0),
+            response: self.response.unwrap_or(d.response),
+            broadphase: self.broadphase.unwrap_or(d.broadphase),
+        }
+    }
 }
 
 impl EffectsSection {

@@ -44,8 +44,11 @@ pub fn describe(scene: &Scene, world: &weft::World) -> String {
         world.tether_count()
     );
     s += &format!("  triangles     {}\n", world.triangles().len());
-    let all = ["gravity", "wind", "drag"];
-    let on = world.effects().named();
+    let all = ["gravity", "wind", "drag", "self_collision"];
+    let mut on = world.effects().named();
+    if world.self_collision().is_some() {
+        on.push("self_collision");
+    }
     let off: Vec<_> = all.iter().filter(|e| !on.contains(e)).collect();
     s += &format!(
         "  effects on    {}\n",
@@ -59,6 +62,15 @@ pub fn describe(scene: &Scene, world: &weft::World) -> String {
             off.iter().map(|e| e.to_string()).collect::<Vec<_>>().join(", ")
         }
     );
+    if let Some(c) = world.self_collision() {
+        s += &format!(
+            "  self-collision distance {} m, {} response, {} broadphase, friction {}\n",
+            world.self_collision_distance(),
+            c.response.name(),
+            c.broadphase.name(),
+            c.friction
+        );
+    }
     s += &format!(
         "  solver        dt {} s, {} substeps x {} iterations, {:?} backend, threads {}\n",
         p.dt,

@@ -74,9 +74,24 @@ struct Summary {
     max_strain: f64,
     mean_strain: f64,
     final_energy: weft::Metrics,
+    /// Present when self-collision is on: the paper's average collision and its time.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    self_collision: Option<SelfCollisionSummary>,
     interrupted: bool,
     warnings: Vec<String>,
     files: Vec<String>,
+}
+
+#[derive(Serialize)]
+struct SelfCollisionSummary {
+    response: &'static str,
+    broadphase: &'static str,
+    distance: f32,
+    avg_collision_pct: f64,
+    max_collision_pct: f64,
+    final_collision_pct: f64,
+    collision_ms_per_step: f64,
+    stats: weft::collide::self_config::SelfCollisionStats,
 }
 
 fn percentile(sorted: &[f64], q: f64) -> f64 {
@@ -195,6 +210,23 @@ pub fn run(args: RunArgs) -> weft::Result<ExitCode> {
     }
 
     let m = world.metrics();
+    let self_collision = match world.self_collision().cloned() {
+        Some(c) => {
+            let last = world.measure_self_collision()?;
+            let st = world.self_collision_stats().clone();
+            Some(SelfCollisionSummary {
+                response: c.response.name(),
+                broadphase: c.broadphase.name(),
+                distance: world.self_collision_distance(),
+                avg_collision_pct: st.average_pct,
+                max_collision_pct: st.max_pct,
+                final_collision_pct: last,
+                collision_ms_per_step: st.ms_per_step(),
+                stats: st,
+            })
+        }
+        None => None,
+    };
     if m.max_strain > 0.1 {
         warnings.push(format!(
             "max strain {:.1}% exceeds 10%: consider more substeps or tethers",
@@ -263,6 +295,7 @@ pub fn run(args: RunArgs) -> weft::Result<ExitCode> {
         max_strain: m.max_strain,
         mean_strain: m.mean_strain,
         final_energy: m,
+        self_collision,
         interrupted,
         warnings,
         files,
@@ -280,6 +313,12 @@ pub fn run(args: RunArgs) -> weft::Result<ExitCode> {
             summary.ms_per_step_p95,
             summary.max_strain * 100.0
         );
+        if let Some(c) = &summary.self_collision {
+            println!(
+                "self-collision ({}, {}): average collision {:.3}% (final {:.3}%), {:.3} ms/step",
+                c.response, c.broadphase, c.avg_collision_pct, c.final_collision_pct, c.collision_ms_per_step
+            );
+        }
         for w in &summary.warnings {
             println!("warning: {w}");
         }

@@ -1,0 +1,267 @@
+//! Self-collision kernels over the particle arrays: the speed clamp and the velocity-correction
+//! pass (SEEDS.md sections A and C), each SIMD (`f32x8`) with a scalar twin that the tests hold
+//! to it bit for bit (same operations in the same order, no FMA).
+//!
+//! # Speed clamp (section C)
+//! After predict, a free particle's velocity relative to the mean velocity `m` of the free
+//! particles is limited so that it moves at most `limit` relative to the cloth in one substep:
+//!
+//! ```text
+//! u = v - m;   if |u| h > limit:  v = m + u limit / (|u| h);   p = x + h v
+//! ```
+//!
+//! # Velocity correction (section A, Algorithm 2; section C friction)
+//! The pair pass ([`super::self_collision`]) leaves, per particle `i`, the sums over its
+//! contacts of: the position correction `c`, the partners' displacements `f = Σ (p_j - x_j)`,
+//! the unit contact normals `n` (pointing away from the partners), the signed gaps `g`
+//! (`dist - min_dist`, negative in contact) and the contact count `k`. This kernel applies them
+//! to a free particle with `k > 0` (Jacobi, averaged over the contacts):
+//!
+//! ```text
+//! t = p + c / k + μ (f / k - (p - x)) / 2          projection + friction (all responses)
+//! VcCPBD only, with q the predicted position, r the box radius, n̂ = n / |n|, e = g / k:
+//!   if |t - q| >= r:  p = q                          back to the centre of the particle's box
+//!   else:             β = min(b h, 1)
+//!                     p = t - (β (t - x)·n̂ + β² e / 4) n̂
+//! ```
+//!
+//! The VcCPBD line is the paper's velocity correction `v <- (p - δd) + a dt`, `x <- p` written
+//! on positions (the update stage then sets `v = (p - x) / h`): the damped oscillator
+//! `δd = m x'' + k x + b x'` per unit mass along the contact normal, with `b` the fabric's
+//! damping rate (the paper's damping column), `k/m = b²/4` (critical damping, the paper gives
+//! no stiffness), `x'` the normal velocity `(t - x)·n̂ / h` and `x` the mean gap `e`; the
+//! `m x'' = a` term is the external acceleration of the next substep, which predict adds, so it
+//! is not added twice here. `β = min(b h, 1)` keeps the correction from overshooting.
+
+use crate::lanes::{load, store, F32s, Vec3x8, LANES};
+
+/// Which correction [`apply`] makes (see the module docs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ApplyMode {
+    /// Projection (PBD or movement-speed corrections) plus friction.
+    Plain,
+    /// Projection plus friction plus the VcCPBD box test and oscillator.
+    Vccpbd,
+}
+
+/// Per-particle contact sums from the pair pass, padded to the lane width.
+#[derive(Clone, Debug, Default)]
+pub struct ContactSums {
+    /// Position corrections, summed.
+    pub c: [Vec<f32>; 3],
+    /// Partners' displacements this substep, summed.
+    pub f: [Vec<f32>; 3],
+    /// Unit contact normals, summed.
+    pub n: [Vec<f32>; 3],
+    /// Signed gaps `dist - min_dist`, summed.
+    pub gap: Vec<f32>,
+    /// Number of contacts.
+    pub count: Vec<f32>,
+}
+
+impl ContactSums {
+    /// Sums for `len` particles (a multiple of the lane width), all zero.
+    pub fn new(len: usize) -> Self {
+        let z = || vec![0.0; len];
+        ContactSums {
+            c: [z(), z(), z()],
+            f: [z(), z(), z()],
+            n: [z(), z(), z()],
+            gap: z(),
+            count: z(),
+        }
+    }
+
+    /// Number of entries.
+    pub fn len(&self) -> usize {
+        self.count.len()
+    }
+
+    /// Whether there are no entries.
+    pub fn is_empty(&self) -> bool {
+        self.count.is_empty()
+    }
+}
+
+/// Inputs of [`apply`] for one chunk of particles starting at global index `start`.
+pub struct ApplyInput<'a> {
+    /// Global index of the chunk's first particle.
+    pub start: usize,
+    /// Positions at the start of the substep.
+    pub x: [&'a [f32]; 3],
+    /// Inverse masses.
+    pub w: &'a [f32],
+    /// Predicted positions (box centres), global indexing.
+    pub q: [&'a [f32]; 3],
+    /// Damping rates `b`, 1/s, global indexing.
+    pub b: &'a [f32],
+    /// Contact sums, global indexing.
+    pub sums: &'a ContactSums,
+    /// Friction `μ` in `[0, 1]`.
+    pub friction: f32,
+    /// Substep length, s.
+    pub h: f32,
+    /// Box radius `r`, m.
+    pub r: f32,
+}
+
+/// Applies the contact sums to the predicted positions `p` of one chunk (lengths a multiple of
+/// [`LANES`]): SIMD when `simd`, else the scalar twin. Same bits either way.
+pub fn apply(inp: &ApplyInput<'_>, p: [&mut [f32]; 3], mode: ApplyMode, simd: bool) {
+    match (mode, simd) {
+        (ApplyMode::Plain, true) => apply_simd::<false>(inp, p),
+        (ApplyMode::Vccpbd, true) => apply_simd::<true>(inp, p),
+        (m, false) => apply_scalar(inp, p, m == ApplyMode::Vccpbd),
+    }
+}
+
+fn apply_simd<const VC: bool>(inp: &ApplyInput<'_>, p: [&mut [f32]; 3]) {
+    let [px, py, pz] = p;
+    let s = inp.sums;
+    let zero = F32s::ZERO;
+    let one = F32s::ONE;
+    let half = F32s::splat(0.5);
+    let quarter = F32s::splat(0.25);
+    let mu = F32s::splat(inp.friction);
+    let h = F32s::splat(inp.h);
+    let r2 = F32s::splat(inp.r * inp.r);
+    let tiny = F32s::splat(f32::MIN_POSITIVE);
+    for i in (0..px.len()).step_by(LANES) {
+        let g = inp.start + i;
+        let k = load(&s.count, g);
+        let active = k.simd_gt(zero) & load(inp.w, i).simd_gt(zero);
+        let inv = one / k.max(one);
+        let x = Vec3x8::load(inp.x[0], inp.x[1], inp.x[2], i);
+        let p0 = Vec3x8::load(px, py, pz, i);
+        let c = Vec3x8::load(&s.c[0], &s.c[1], &s.c[2], g);
+        let f = Vec3x8::load(&s.f[0], &s.f[1], &s.f[2], g);
+        let disp = p0 - x;
+        let mut t = p0 + c.scale(inv) + (f.scale(inv) - disp).scale(half).scale(mu);
+        if VC {
+            let n = Vec3x8::load(&s.n[0], &s.n[1], &s.n[2], g);
+            let nl = n.length_sq().sqrt();
+            let nh = n.scale(one / nl.max(tiny));
+            let e = load(&s.gap, g) * inv;
+            let q = Vec3x8::load(inp.q[0], inp.q[1], inp.q[2], g);
+            let back = (t - q).length_sq().simd_ge(r2);
+            let beta = (load(inp.b, g) * h).min(one);
+            let amt = beta * (t - x).dot(nh) + beta * beta * e * quarter;
+            let osc = t - nh.scale(amt);
+            t = Vec3x8::select(back, q, osc);
+        }
+        let out = Vec3x8::select(active, t, p0);
+        store(px, i, out.x);
+        store(py, i, out.y);
+        store(pz, i, out.z);
+    }
+}
+
+/// Scalar twin of the velocity-correction kernel.
+fn apply_scalar(inp: &ApplyInput<'_>, p: [&mut [f32]; 3], vc: bool) {
+    let [px, py, pz] = p;
+    let s = inp.sums;
+    let (mu, h, r2) = (inp.friction, inp.h, inp.r * inp.r);
+    let dot = |a: [f32; 3], b: [f32; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    for i in 0..px.len() {
+        let g = inp.start + i;
+        let k = s.count[g];
+        if !(k > 0.0 && inp.w[i] > 0.0) {
+            continue;
+        }
+        let inv = 1.0 / k.max(1.0);
+        let x = [inp.x[0][i], inp.x[1][i], inp.x[2][i]];
+        let p0 = [px[i], py[i], pz[i]];
+        let mut t = [0.0f32; 3];
+        for a in 0..3 {
+            let disp = p0[a] - x[a];
+            t[a] = p0[a] + s.c[a][g] * inv + (s.f[a][g] * inv - disp) * 0.5 * mu;
+        }
+        if vc {
+            let n = [s.n[0][g], s.n[1][g], s.n[2][g]];
+            let nl = dot(n, n).sqrt();
+            let il = 1.0 / nl.max(f32::MIN_POSITIVE);
+            let nh = n.map(|c| c * il);
+            let e = s.gap[g] * inv;
+            let q = [inp.q[0][g], inp.q[1][g], inp.q[2][g]];
+            let tq = [t[0] - q[0], t[1] - q[1], t[2] - q[2]];
+            if dot(tq, tq) >= r2 {
+                t = q;
+            } else {
+                let beta = (inp.b[g] * h).min(1.0);
+                let tx = [t[0] - x[0], t[1] - x[1], t[2] - x[2]];
+                let amt = beta * dot(tx, nh) + beta * beta * e * 0.25;
+                t = [t[0] - nh[0] * amt, t[1] - nh[1] * amt, t[2] - nh[2] * amt];
+            }
+        }
+        px[i] = t[0];
+        py[i] = t[1];
+        pz[i] = t[2];
+    }
+}
+
+/// Inputs of [`clamp_speed`].
+#[derive(Clone, Copy, Debug)]
+pub struct ClampParams {
+    /// Mean velocity of the free particles, m/s.
+    pub mean: [f32; 3],
+    /// Largest move relative to the mean in one substep, m.
+    pub limit: f32,
+    /// Substep length, s.
+    pub h: f32,
+}
+
+/// The speed clamp on one chunk (`x`, `v`, `p`, `w` chunk-local, lengths a multiple of
+/// [`LANES`]): SIMD when `simd`, else the scalar twin.
+pub fn clamp_speed(c: crate::particles::ParticleChunk<'_>, cp: &ClampParams, simd: bool) {
+    if simd {
+        clamp_simd(c, cp)
+    } else {
+        clamp_scalar(c, cp)
+    }
+}
+
+fn clamp_simd(c: crate::particles::ParticleChunk<'_>, cp: &ClampParams) {
+    let m = Vec3x8::splat(cp.mean);
+    let h = F32s::splat(cp.h);
+    let lim = F32s::splat(cp.limit / cp.h);
+    let lim2 = lim * lim;
+    for i in (0..c.x.len()).step_by(LANES) {
+        let v = Vec3x8::load(c.vx, c.vy, c.vz, i);
+        let u = v - m;
+        let u2 = u.length_sq();
+        let fast = u2.simd_gt(lim2) & load(c.w, i).simd_gt(F32s::ZERO);
+        let scaled = m + u.scale(lim / u2.sqrt());
+        let v = Vec3x8::select(fast, scaled, v);
+        let x = Vec3x8::load(c.x, c.y, c.z, i);
+        let p = x + v.scale(h);
+        let p = Vec3x8::select(fast, p, Vec3x8::load(c.px, c.py, c.pz, i));
+        v.store(c.vx, c.vy, c.vz, i);
+        p.store(c.px, c.py, c.pz, i);
+    }
+}
+
+/// Scalar twin of the speed clamp.
+fn clamp_scalar(c: crate::particles::ParticleChunk<'_>, cp: &ClampParams) {
+    let h = cp.h;
+    let lim = cp.limit / cp.h;
+    let lim2 = lim * lim;
+    for i in 0..c.x.len() {
+        let u = [c.vx[i] - cp.mean[0], c.vy[i] - cp.mean[1], c.vz[i] - cp.mean[2]];
+        let u2 = u[0] * u[0] + u[1] * u[1] + u[2] * u[2];
+        if !(u2 > lim2 && c.w[i] > 0.0) {
+            continue;
+        }
+        let s = lim / u2.sqrt();
+        let v = [cp.mean[0] + u[0] * s, cp.mean[1] + u[1] * s, cp.mean[2] + u[2] * s];
+        c.vx[i] = v[0];
+        c.vy[i] = v[1];
+        c.vz[i] = v[2];
+        c.px[i] = c.x[i] + v[0] * h;
+        c.py[i] = c.y[i] + v[1] * h;
+        c.pz[i] = c.z[i] + v[2] * h;
+    }
+}
+
+#[cfg(test)]
+#[path = "response_tests.rs"]
+mod tests;

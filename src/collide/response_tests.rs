@@ -1,0 +1,166 @@
+use super::*;
+use crate::particles::Particles;
+use proptest::prelude::*;
+
+/// xorshift in [-1, 1).
+fn rng(seed: u64) -> impl FnMut() -> f32 {
+    let mut s = seed | 1;
+    move || {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        (s >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
+    }
+}
+
+fn cloud(n: usize, seed: u64) -> Particles {
+    let mut p = Particles::new();
+    let mut r = rng(seed);
+    for i in 0..n {
+        let w = if i % 7 == 0 { 0.0 } else { 1.0 + r().abs() * 10.0 };
+        p.push([r(), r(), r()], [r() * 5.0, r() * 5.0, r() * 5.0], w);
+    }
+    for i in 0..p.padded_len() {
+        p.px[i] = p.x[i] + 0.01 * r();
+        p.py[i] = p.y[i] + 0.01 * r();
+        p.pz[i] = p.z[i] + 0.01 * r();
+    }
+    p
+}
+
+fn sums(len: usize, seed: u64) -> ContactSums {
+    let mut r = rng(seed ^ 0x9e37);
+    let mut s = ContactSums::new(len);
+    for i in 0..len {
+        let k = ((r() + 1.0) * 2.0) as u32; // 0..=3 contacts, some zero
+        if k == 0 {
+            continue;
+        }
+        s.count[i] = k as f32;
+        for a in 0..3 {
+            s.c[a][i] = 0.005 * r();
+            s.f[a][i] = 0.01 * r();
+            s.n[a][i] = if i % 11 == 0 { 0.0 } else { r() };
+        }
+        s.gap[i] = -0.004 * (r() + 1.0);
+    }
+    s
+}
+
+fn bits(p: &Particles) -> Vec<u32> {
+    [&p.x, &p.y, &p.z, &p.px, &p.py, &p.pz, &p.vx, &p.vy, &p.vz]
+        .iter()
+        .flat_map(|a| a.iter().map(|f| f.to_bits()))
+        .collect()
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(48))]
+    /// The velocity-correction kernel: SIMD (serial and parallel chunks) == scalar twin,
+    /// bitwise, in both modes, for lengths around the lane width and the chunk size.
+    #[test]
+    fn apply_simd_matches_scalar(n in prop_oneof![0usize..40, 4090usize..4110], seed in any::<u64>(),
+            h_milli in 1u32..60, friction_pct in 0u32..=100, r_milli in 1u32..20, vc in any::<bool>()) {
+        let base = cloud(n, seed);
+        let len = base.padded_len();
+        let s = sums(len, seed);
+        let mut rb = rng(seed ^ 77);
+        let b: Vec<f32> = (0..len).map(|_| (rb() + 1.0) * 20.0).collect();
+        let q: Vec<Vec<f32>> = [&base.px, &base.py, &base.pz].iter().map(|a| a.iter().map(|v| v + 0.003 * rb()).collect()).collect();
+        let mode = if vc { ApplyMode::Vccpbd } else { ApplyMode::Plain };
+        let h = h_milli as f32 * 1e-3;
+        let run = |simd: bool, par: bool| {
+            let mut p = base.clone();
+            p.for_chunks(par, |c| {
+                let inp = ApplyInput { start: c.start, x: [&*c.x, &*c.y, &*c.z], w: c.w, q: [&q[0], &q[1], &q[2]], b: &b, sums: &s,
+                    friction: friction_pct as f32 / 100.0, h, r: r_milli as f32 * 1e-3 };
+                apply(&inp, [c.px, c.py, c.pz], mode, simd);
+            });
+            bits(&p)
+        };
+        let reference = run(false, false);
+        prop_assert_eq!(&reference, &run(true, false));
+        prop_assert_eq!(&reference, &run(true, true));
+        prop_assert_eq!(&reference, &run(false, true));
+    }
+
+    /// The speed clamp: SIMD == scalar twin bitwise; afterwards no free particle moves more
+    /// than the limit (plus rounding) relative to the mean in a substep.
+    #[test]
+    fn clamp_simd_matches_scalar(n in prop_oneof![0usize..40, 4090usize..4110], seed in any::<u64>(), limit_milli in 1u32..50, h_milli in 1u32..60) {
+        let base = cloud(n, seed);
+        let cp = ClampParams { mean: [0.5, -1.0, 0.25], limit: limit_milli as f32 * 1e-3, h: h_milli as f32 * 1e-3 };
+        let run = |simd: bool, par: bool| {
+            let mut p = base.clone();
+            p.for_chunks(par, |c| clamp_speed(c, &cp, simd));
+            p
+        };
+        let reference = run(false, false);
+        prop_assert_eq!(bits(&reference), bits(&run(true, false)));
+        prop_assert_eq!(bits(&reference), bits(&run(true, true)));
+        for i in 0..n {
+            if reference.w[i] > 0.0 {
+                let u = [reference.vx[i] - cp.mean[0], reference.vy[i] - cp.mean[1], reference.vz[i] - cp.mean[2]];
+                let m = (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]).sqrt() * cp.h;
+                prop_assert!(m <= cp.limit * 1.0001, "particle {} moves {} > {}", i, m, cp.limit);
+            }
+        }
+    }
+}
+
+#[test]
+fn apply_leaves_pinned_and_contactless_particles_alone() {
+    let base = cloud(20, 5);
+    let len = base.padded_len();
+    let mut s = sums(len, 5);
+    s.count[3] = 0.0;
+    let b = vec![0.8; len];
+    let mut p = base.clone();
+    p.for_chunks(false, |c| {
+        let inp = ApplyInput {
+            start: c.start,
+            x: [&*c.x, &*c.y, &*c.z],
+            w: c.w,
+            q: [&base.px, &base.py, &base.pz],
+            b: &b,
+            sums: &s,
+            friction: 0.3,
+            h: 0.01,
+            r: 0.01,
+        };
+        apply(&inp, [c.px, c.py, c.pz], ApplyMode::Vccpbd, true);
+    });
+    for i in [0, 3, 7, 14] {
+        assert_eq!(p.px[i].to_bits(), base.px[i].to_bits(), "particle {i}");
+    }
+}
+
+#[test]
+fn vccpbd_puts_a_far_moved_particle_back_to_its_box_centre() {
+    let mut p = Particles::new();
+    p.push([0.0; 3], [0.0; 3], 1.0);
+    p.px[0] = 0.0;
+    let len = p.padded_len();
+    let mut s = ContactSums::new(len);
+    s.count[0] = 1.0;
+    s.c[0][0] = 0.5; // a correction far larger than the box radius
+    s.n[0][0] = 1.0;
+    s.gap[0] = -0.001;
+    let q = [vec![0.25; len], vec![0.0; len], vec![0.0; len]];
+    let b = vec![0.8; len];
+    p.for_chunks(false, |c| {
+        let inp = ApplyInput {
+            start: c.start,
+            x: [&*c.x, &*c.y, &*c.z],
+            w: c.w,
+            q: [&q[0], &q[1], &q[2]],
+            b: &b,
+            sums: &s,
+            friction: 0.0,
+            h: 0.01,
+            r: 0.01,
+        };
+        apply(&inp, [c.px, c.py, c.pz], ApplyMode::Vccpbd, false);
+    });
+    assert_eq!(p.px[0], 0.25);
+}

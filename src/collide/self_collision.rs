@@ -1,0 +1,452 @@
+//! Cloth self-collision as particle–particle contacts (SEEDS.md sections C and A).
+//!
+//! # The stage, once per step and once per substep
+//! * **Before the substeps** ([`SelfCollisionData::begin_step`]): the broadphase (spatial hash
+//!   or AABB tree, refitted) finds, from the positions `x` at the start of the step, every pair
+//!   closer than the query radius `q = d + 2 T`, `d` the collision distance and `T = d` the
+//!   relative travel a particle is allowed in one step. The lists are kept for all substeps.
+//! * **After predict** (each substep): the speed clamp ([`super::response`]) limits a free
+//!   particle's velocity relative to the mean velocity of the free particles to `T / substeps`
+//!   a substep, so two particles close in by at most `2T` in a step: any pair that touches
+//!   during the step was in the lists. (The clamp is relative so a falling cloth still falls at
+//!   full speed; section C clamps absolute speed to one cell a substep.)
+//! * **After the constraint sweeps** (each substep): the pair pass below, then the
+//!   velocity-correction kernel [`super::response::apply`].
+//!
+//! # Pair pass
+//! For each particle `i`, over its list (sorted ids, fixed order), with predicted positions `p`:
+//!
+//! ```text
+//! rest rule (section C): same cloth and |p_i - p_j| > |r_i - r_j| (rest grid positions): skip
+//! min_dist = min(d, |r_i - r_j|);   contact if |p_i - p_j| < min_dist
+//! n = (p_i - p_j) / |p_i - p_j|, or for coincident particles (distance 0) the rest direction
+//!     (r_i - r_j) / |r_i - r_j|, or ±(1, 2, 3)/√14 by id order (antisymmetric, never NaN)
+//! PBD, VcCPBD (Algorithm 1 projection):  c_i += w_i / (w_i + w_j) (min_dist - dist) n
+//! movement speed: v_n = ((p_i - x_i) - (p_j - x_j)) · n;  if v_n < 0: c_i -= w_i / (w_i + w_j) v_n n
+//! ```
+//!
+//! Each particle writes only its own sums (a Jacobi pass; the kernel averages over the contact
+//! count), so the result is the same on any number of threads; the serial loop is the twin.
+//! The movement-speed response zeroes the approaching normal velocity (fully inelastic) and
+//! moves the particle along its corrected velocity; it does not push out an existing overlap.
+//!
+//! # Average collision (the paper's metric)
+//! A particle is *in penetration* when a non-neighbour particle (another cloth, or rest distance
+//! above `1.5 d`) lies closer than `(1 - PENETRATION_TOLERANCE) d`. The percentage is measured
+//! on the positions the next step's broadphase is built from (so it costs one pass over the
+//! lists) and averaged over the steps ([`SelfCollisionStats`]).
+
+use rayon::prelude::*;
+
+use super::hash::SpatialHash;
+use super::neighbours::Neighbours;
+use super::particle_tree::{ParticleTree, TreeShape};
+use super::response::ContactSums;
+use crate::error::{positive, Result, WeftError};
+
+pub use super::self_config::{Response, SelfBroadphase, SelfCollision, SelfCollisionStats, PENETRATION_TOLERANCE};
+
+/// Particles one parallel task handles in the pair pass (fixed: the split never depends on the
+/// thread count).
+const PAIR_CHUNK: usize = 256;
+
+/// Leaf size of the AABB tree (the paper's depth 5 gives ~312 particles a leaf at 10 000
+/// particles; 16 queries much faster and gives the same pairs).
+const TREE_LEAF: u32 = 16;
+
+/// Query radius over collision distance: `q = d + 2 T` with the step's relative travel `T = d`.
+pub const QUERY_FACTOR: f32 = 3.0;
+
+/// Hash cell side over the query radius (section C uses 1).
+pub const CELL_FACTOR: f32 = 1.0;
+
+/// Relative travel allowed in one step over the collision distance (`T / d`).
+pub const TRAVEL_FACTOR: f32 = 1.0;
+
+/// Rest data of the cloths and the runtime state of self-collision, owned by the world.
+#[derive(Clone, Debug, Default)]
+pub struct SelfCollisionData {
+    pub(crate) config: Option<SelfCollision>,
+    rest: [Vec<f32>; 3],
+    cloth_of: Vec<u32>,
+    /// Smallest `min(thickness, spacing)` over the cloths (the default distance).
+    default_distance: f32,
+    state: Option<State>,
+    pub(crate) stats: SelfCollisionStats,
+    last_measured: Option<u64>,
+}
+
+#[derive(Clone, Debug)]
+struct State {
+    hash: SpatialHash,
+    tree: Option<ParticleTree>,
+    lists: Neighbours,
+    ready: bool,
+    pub(crate) sums: ContactSums,
+    pub(crate) pred: [Vec<f32>; 3],
+    pub(crate) damping: Vec<f32>,
+}
+
+/// Contact sums, predicted positions (box centres) and damping rates.
+pub(crate) type KernelInputs<'a> = (&'a ContactSums, [&'a [f32]; 3], &'a [f32]);
+
+/// What the step needs each substep.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Active {
+    pub d: f32,
+    pub response: Response,
+    pub friction: f32,
+}
+
+impl SelfCollisionData {
+    /// Records the rest (grid) positions of a new cloth with index `cloth`.
+    pub(crate) fn add_cloth(&mut self, rest: &[[f32; 3]], cloth: u32, spacing: f32, thickness: f32) {
+        for p in rest {
+            for (r, c) in self.rest.iter_mut().zip(p) {
+                r.push(*c);
+            }
+            self.cloth_of.push(cloth);
+        }
+        let d = thickness.min(spacing);
+        self.default_distance = if cloth == 0 { d } else { self.default_distance.min(d) };
+        self.state = None;
+    }
+
+    /// The collision distance in use: the configured one, or `min(thickness, spacing)`.
+    pub fn distance(&self) -> f32 {
+        self.config.as_ref().and_then(|c| c.distance).unwrap_or(self.default_distance)
+    }
+
+    /// The active settings, if self-collision is on and the distance is positive.
+    pub(crate) fn active(&self) -> Option<Active> {
+        let c = self.config.as_ref()?;
+        let d = self.distance();
+        (d > 0.0 && d.is_finite()).then_some(Active {
+            d,
+            response: c.response,
+            friction: c.friction,
+        })
+    }
+
+    /// Rebuilds the pair lists from the positions at the start of a step, and measures the
+    /// penetration of that state (once per step count `steps`, skipping the initial state).
+    /// Returns `false` (nothing to do this step) when off.
+    pub(crate) fn begin_step(&mut self, x: [&[f32]; 3], n: usize, damping: &[f32], steps: u64, parallel: bool) -> Result<bool> {
+        if !self.build_lists(x, n)? {
+            return Ok(false);
+        }
+        if let Some(st) = &mut self.state {
+            st.damping.clear();
+            st.damping.extend_from_slice(&damping[..n.min(damping.len())]);
+            st.damping.resize(st.sums.len(), 0.0);
+        }
+        if steps > 0 && self.last_measured != Some(steps) {
+            let pct = self.penetration_pct(x, n, parallel);
+            self.stats.record(pct);
+            self.last_measured = Some(steps);
+        }
+        Ok(true)
+    }
+
+    /// Measures (and records, once per step count) the penetration of the state `x`.
+    pub(crate) fn measure(&mut self, x: [&[f32]; 3], n: usize, steps: u64, parallel: bool) -> Result<f64> {
+        if self.last_measured == Some(steps) {
+            return Ok(self.stats.last_pct);
+        }
+        if !self.build_lists(x, n)? {
+            return Ok(0.0);
+        }
+        let pct = self.penetration_pct(x, n, parallel);
+        self.stats.record(pct);
+        self.last_measured = Some(steps);
+        Ok(pct)
+    }
+
+    /// Runs the broadphase on `x` with the query radius `3 d`; `false` when off.
+    fn build_lists(&mut self, x: [&[f32]; 3], n: usize) -> Result<bool> {
+        let Some(a) = self.active() else { return Ok(false) };
+        let broadphase = self.config.as_ref().map(|c| c.broadphase).unwrap_or_default();
+        let len = crate::lanes::round_up(n + 1);
+        let st = self.state.get_or_insert_with(|| State {
+            hash: SpatialHash::new(n),
+            tree: None,
+            lists: Neighbours::new(),
+            ready: false,
+            sums: ContactSums::new(len),
+            pred: [vec![0.0; len], vec![0.0; len], vec![0.0; len]],
+            damping: vec![0.0; len],
+        });
+        if st.sums.len() != len {
+            st.sums = ContactSums::new(len);
+            st.pred = [vec![0.0; len], vec![0.0; len], vec![0.0; len]];
+            st.damping = vec![0.0; len];
+        }
+        let q = QUERY_FACTOR * a.d;
+        st.ready = false;
+        match broadphase {
+            SelfBroadphase::Hash => {
+                st.hash.build(x[0], x[1], x[2], n, q * CELL_FACTOR)?;
+                st.hash.query_all(x[0], x[1], x[2], n, q, &mut st.lists)?;
+            }
+            SelfBroadphase::AabbTree => {
+                match &mut st.tree {
+                    Some(t) if t.len() == n => t.refit(x[0], x[1], x[2], n)?,
+                    t => *t = Some(ParticleTree::build(x[0], x[1], x[2], n, TreeShape::LeafSize(TREE_LEAF))?),
+                }
+                let t = st
+                    .tree
+                    .as_ref()
+                    .ok_or_else(|| WeftError::param("broadphase", "aabb-tree", "tree missing"))?;
+                t.query_all(x[0], x[1], x[2], n, q, &mut st.lists)?;
+            }
+        }
+        st.ready = true;
+        Ok(true)
+    }
+
+    /// Percentage of particles in penetration in the state the lists were built from.
+    fn penetration_pct(&self, x: [&[f32]; 3], n: usize, parallel: bool) -> f64 {
+        let Some(st) = self.state.as_ref().filter(|s| s.ready) else {
+            return 0.0;
+        };
+        let d = self.distance();
+        let lim = d * (1.0 - PENETRATION_TOLERANCE);
+        let far2 = (1.5 * d) * (1.5 * d);
+        let hit = |i: usize| -> bool {
+            st.lists.of(i).iter().any(|&j| {
+                let j = j as usize;
+                if self.cloth_of[i] == self.cloth_of[j] && dist2(&self.rest, i, j) <= far2 {
+                    return false;
+                }
+                dist2(&x, i, j) < lim * lim
+            })
+        };
+        let count = if parallel {
+            (0..n).into_par_iter().filter(|&i| hit(i)).count()
+        } else {
+            (0..n).filter(|&i| hit(i)).count()
+        };
+        if n == 0 {
+            0.0
+        } else {
+            100.0 * count as f64 / n as f64
+        }
+    }
+
+    /// Copies the predicted positions (the VcCPBD box centres) after the speed clamp.
+    pub(crate) fn keep_predictions(&mut self, p: [&[f32]; 3]) {
+        if let Some(st) = &mut self.state {
+            for (dst, src) in st.pred.iter_mut().zip(p) {
+                let m = dst.len().min(src.len());
+                dst[..m].copy_from_slice(&src[..m]);
+            }
+        }
+    }
+
+    /// The pair pass: fills the contact sums from the predicted positions `p`, start positions
+    /// `x` and inverse masses `w` (see the module docs). Parallel over fixed chunks when
+    /// `parallel`; the serial loop is its twin.
+    pub(crate) fn pair_pass(&mut self, x: [&[f32]; 3], p: [&[f32]; 3], w: &[f32], n: usize, parallel: bool) {
+        let Some(a) = self.active() else { return };
+        let Some(st) = self.state.as_mut().filter(|s| s.ready) else {
+            return;
+        };
+        let ctx = PairCtx {
+            x,
+            p,
+            w,
+            rest: [&self.rest[0], &self.rest[1], &self.rest[2]],
+            cloth_of: &self.cloth_of,
+            lists: &st.lists,
+            d: a.d,
+            movement: a.response == Response::MovementSpeed,
+        };
+        let s = &mut st.sums;
+        let len = s.len();
+        let body = |start: usize, out: [&mut [f32]; 11]| {
+            let [c0, c1, c2, f0, f1, f2, n0, n1, n2, g, k] = out;
+            for o in 0..c0.len() {
+                let i = start + o;
+                let r = if i < n { ctx.sums(i) } else { [0.0; 11] };
+                let dst = [
+                    &mut c0[o], &mut c1[o], &mut c2[o], &mut f0[o], &mut f1[o], &mut f2[o], &mut n0[o], &mut n1[o], &mut n2[o], &mut g[o],
+                    &mut k[o],
+                ];
+                for (d, v) in dst.into_iter().zip(r) {
+                    *d = v;
+                }
+            }
+        };
+        let [c0, c1, c2] = &mut s.c;
+        let [f0, f1, f2] = &mut s.f;
+        let [n0, n1, n2] = &mut s.n;
+        if parallel && len > PAIR_CHUNK {
+            (
+                c0.par_chunks_mut(PAIR_CHUNK),
+                c1.par_chunks_mut(PAIR_CHUNK),
+                c2.par_chunks_mut(PAIR_CHUNK),
+                f0.par_chunks_mut(PAIR_CHUNK),
+                f1.par_chunks_mut(PAIR_CHUNK),
+                f2.par_chunks_mut(PAIR_CHUNK),
+                n0.par_chunks_mut(PAIR_CHUNK),
+                n1.par_chunks_mut(PAIR_CHUNK),
+                n2.par_chunks_mut(PAIR_CHUNK),
+                s.gap.par_chunks_mut(PAIR_CHUNK),
+                s.count.par_chunks_mut(PAIR_CHUNK),
+            )
+                .into_par_iter()
+                .enumerate()
+                .for_each(|(k, (a, b, c, d, e, f, g, h, i, j, l))| body(k * PAIR_CHUNK, [a, b, c, d, e, f, g, h, i, j, l]));
+        } else {
+            body(0, [c0, c1, c2, f0, f1, f2, n0, n1, n2, &mut s.gap, &mut s.count]);
+        }
+    }
+
+    /// Contact sums, predictions and damping rates for the velocity-correction kernel.
+    pub(crate) fn kernel_inputs(&self) -> Option<KernelInputs<'_>> {
+        let st = self.state.as_ref().filter(|s| s.ready)?;
+        Some((&st.sums, [&st.pred[0], &st.pred[1], &st.pred[2]], &st.damping))
+    }
+
+    /// The pair lists of the current step (empty before the first step with self-collision).
+    pub fn lists(&self) -> Option<&Neighbours> {
+        self.state.as_ref().filter(|s| s.ready).map(|s| &s.lists)
+    }
+}
+
+/// Mean velocity of the free particles (`w > 0`) among the first `n`: f64 partial sums over
+/// fixed chunks, added in chunk order, so parallel and serial give the same bits.
+pub(crate) fn mean_velocity(v: [&[f32]; 3], w: &[f32], n: usize, parallel: bool) -> [f32; 3] {
+    const C: usize = 4096;
+    let part = |k: usize| {
+        let mut s = [0.0f64; 4];
+        for i in k * C..((k + 1) * C).min(n) {
+            if w[i] > 0.0 {
+                s[0] += v[0][i] as f64;
+                s[1] += v[1][i] as f64;
+                s[2] += v[2][i] as f64;
+                s[3] += 1.0;
+            }
+        }
+        s
+    };
+    let chunks = n.div_ceil(C);
+    let parts: Vec<[f64; 4]> = if parallel {
+        (0..chunks).into_par_iter().map(part).collect()
+    } else {
+        (0..chunks).map(part).collect()
+    };
+    let mut t = [0.0f64; 4];
+    for p in parts {
+        for a in 0..4 {
+            t[a] += p[a];
+        }
+    }
+    if t[3] > 0.0 {
+        [(t[0] / t[3]) as f32, (t[1] / t[3]) as f32, (t[2] / t[3]) as f32]
+    } else {
+        [0.0; 3]
+    }
+}
+
+fn dist2(a: &[impl AsRef<[f32]>; 3], i: usize, j: usize) -> f32 {
+    let d = |k: usize| a[k].as_ref()[i] - a[k].as_ref()[j];
+    let (dx, dy, dz) = (d(0), d(1), d(2));
+    dx * dx + dy * dy + dz * dz
+}
+
+struct PairCtx<'a> {
+    x: [&'a [f32]; 3],
+    p: [&'a [f32]; 3],
+    w: &'a [f32],
+    rest: [&'a [f32]; 3],
+    cloth_of: &'a [u32],
+    lists: &'a Neighbours,
+    d: f32,
+    movement: bool,
+}
+
+/// Unit direction separating coincident particles with no rest direction: `(1, 2, 3)/√14`.
+const COINCIDENT: [f32; 3] = [0.267_261_24, 0.534_522_5, 0.801_783_7];
+
+impl PairCtx<'_> {
+    /// `[c(3), f(3), n(3), gap, count]` of particle `i`.
+    fn sums(&self, i: usize) -> [f32; 11] {
+        let mut out = [0.0f32; 11];
+        let wi = self.w[i];
+        if wi <= 0.0 {
+            return out;
+        }
+        let pi = [self.p[0][i], self.p[1][i], self.p[2][i]];
+        let di = [pi[0] - self.x[0][i], pi[1] - self.x[1][i], pi[2] - self.x[2][i]];
+        for &j in self.lists.of(i) {
+            let j = j as usize;
+            let v = [pi[0] - self.p[0][j], pi[1] - self.p[1][j], pi[2] - self.p[2][j]];
+            let dist2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+            let same = self.cloth_of[i] == self.cloth_of[j];
+            let r = [
+                self.rest[0][i] - self.rest[0][j],
+                self.rest[1][i] - self.rest[1][j],
+                self.rest[2][i] - self.rest[2][j],
+            ];
+            let rest2 = if same {
+                r[0] * r[0] + r[1] * r[1] + r[2] * r[2]
+            } else {
+                f32::INFINITY
+            };
+            if dist2 > rest2 {
+                continue;
+            }
+            let md = if rest2 < self.d * self.d { rest2.sqrt() } else { self.d };
+            if dist2.is_nan() || dist2 >= md * md {
+                continue;
+            }
+            let dist = dist2.sqrt();
+            let nrm = if dist2 > 0.0 {
+                v.map(|c| c / dist)
+            } else if same && rest2 > 0.0 {
+                let rl = rest2.sqrt();
+                r.map(|c| c / rl)
+            } else {
+                let s = if i < j { 1.0 } else { -1.0 };
+                COINCIDENT.map(|c| c * s)
+            };
+            let wj = self.w[j];
+            let share = wi / (wi + wj);
+            let dj = [
+                self.p[0][j] - self.x[0][j],
+                self.p[1][j] - self.x[1][j],
+                self.p[2][j] - self.x[2][j],
+            ];
+            let amount = if self.movement {
+                let vn = (di[0] - dj[0]) * nrm[0] + (di[1] - dj[1]) * nrm[1] + (di[2] - dj[2]) * nrm[2];
+                if vn < 0.0 {
+                    -vn * share
+                } else {
+                    0.0
+                }
+            } else {
+                (md - dist) * share
+            };
+            for a in 0..3 {
+                out[a] += nrm[a] * amount;
+                out[3 + a] += dj[a];
+                out[6 + a] += nrm[a];
+            }
+            out[9] += dist - md;
+            out[10] += 1.0;
+        }
+        out
+    }
+}
+
+/// Checks a configuration (the scene parser checks ranges too; this guards the library API).
+pub(crate) fn validate(c: &SelfCollision) -> Result<()> {
+    if let Some(d) = c.distance {
+        positive("self_collision.distance", d)?;
+    }
+    if !(c.friction.is_finite() && (0.0..=1.0).contains(&c.friction)) {
+        return Err(WeftError::param("self_collision.friction", c.friction, "must be between 0 and 1"));
+    }
+    Ok(())
+}
