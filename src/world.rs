@@ -308,19 +308,8 @@ impl World {
 
     /// Sets the position of every real particle (predictions follow).
     pub fn set_positions(&mut self, x: [&[f32]; 3]) -> Result<()> {
+        check_vec3_buffers(["x", "y", "z"], x, self.particles.count(), "positions must be finite")?;
         let n = self.particles.count();
-        for (name, s) in [("x", x[0]), ("y", x[1]), ("z", x[2])] {
-            if s.len() != n {
-                return Err(WeftError::BufferLength {
-                    name,
-                    got: s.len(),
-                    expected: n,
-                });
-            }
-            if let Some(bad) = s.iter().find(|f| !f.is_finite()) {
-                return Err(WeftError::param(name, bad, "positions must be finite"));
-            }
-        }
         let p = &mut self.particles;
         p.x[..n].copy_from_slice(x[0]);
         p.y[..n].copy_from_slice(x[1]);
@@ -333,19 +322,8 @@ impl World {
 
     /// Sets the velocity of every real particle (e.g. initial conditions in tests).
     pub fn set_velocities(&mut self, v: [&[f32]; 3]) -> Result<()> {
+        check_vec3_buffers(["vx", "vy", "vz"], v, self.particles.count(), "velocities must be finite")?;
         let n = self.particles.count();
-        for (name, s) in [("vx", v[0]), ("vy", v[1]), ("vz", v[2])] {
-            if s.len() != n {
-                return Err(WeftError::BufferLength {
-                    name,
-                    got: s.len(),
-                    expected: n,
-                });
-            }
-            if let Some(bad) = s.iter().find(|f| !f.is_finite()) {
-                return Err(WeftError::param(name, bad, "velocities must be finite"));
-            }
-        }
         self.particles.vx[..n].copy_from_slice(v[0]);
         self.particles.vy[..n].copy_from_slice(v[1]);
         self.particles.vz[..n].copy_from_slice(v[2]);
@@ -362,4 +340,21 @@ fn make_pool(threads: usize) -> Result<Option<Arc<rayon::ThreadPool>>> {
         .build()
         .map(|p| Some(Arc::new(p)))
         .map_err(|e| WeftError::param("solver.threads", threads, format!("cannot start the thread pool: {e}")))
+}
+
+/// Checks three caller buffers: length `n` each, every value finite.
+fn check_vec3_buffers(names: [&'static str; 3], b: [&[f32]; 3], n: usize, reason: &str) -> Result<()> {
+    for (name, s) in names.into_iter().zip(b) {
+        if s.len() != n {
+            return Err(WeftError::BufferLength {
+                name,
+                got: s.len(),
+                expected: n,
+            });
+        }
+        if let Some(bad) = s.iter().find(|f| !f.is_finite()) {
+            return Err(WeftError::param(name, bad, reason));
+        }
+    }
+    Ok(())
 }

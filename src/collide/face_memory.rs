@@ -113,10 +113,7 @@ mod tests {
     use super::*;
     use crate::collide::face_broadphase::BruteForce;
 
-    fn square() -> TriMesh {
-        let v = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
-        TriMesh::new(v, vec![[0, 1, 2], [0, 2, 3]]).unwrap().0
-    }
+    use crate::collide::mesh::unit_square as square;
 
     #[test]
     fn memory_set_used_and_cleared() {

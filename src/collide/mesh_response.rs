@@ -62,10 +62,7 @@ mod tests {
     use crate::collide::mesh::TriMesh;
     use crate::collide::narrow::mesh_contact;
 
-    fn square() -> TriMesh {
-        let v = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
-        TriMesh::new(v, vec![[0, 1, 2], [0, 2, 3]]).unwrap().0
-    }
+    use crate::collide::mesh::unit_square as square;
 
     #[test]
     fn back_along_the_path_to_thickness() {
