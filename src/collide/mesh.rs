@@ -293,6 +293,13 @@ impl TriMesh {
     }
 }
 
+/// Test fixture: the unit square in the xy-plane as two triangles.
+#[cfg(test)]
+pub(crate) fn unit_square() -> TriMesh {
+    let v = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
+    TriMesh::new(v, vec![[0, 1, 2], [0, 2, 3]]).expect("valid square").0
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -368,11 +375,4 @@ mod tests {
         assert!(m.translate([f32::NAN, 0.0, 0.0]).is_err());
         assert!(m.translate([f32::MAX, 0.0, 0.0]).is_err());
     }
-}
-
-/// Test fixture: the unit square in the xy-plane as two triangles.
-#[cfg(test)]
-pub(crate) fn unit_square() -> TriMesh {
-    let v = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
-    TriMesh::new(v, vec![[0, 1, 2], [0, 2, 3]]).expect("valid square").0
 }

@@ -59,7 +59,6 @@ pub fn resolve_velocity(v: [f32; 3], normal: [f32; 3], mu: f32) -> [f32; 3] {
 mod tests {
     use super::*;
     use crate::collide::face_broadphase::BruteForce;
-    use crate::collide::mesh::TriMesh;
     use crate::collide::narrow::mesh_contact;
 
     use crate::collide::mesh::unit_square as square;
