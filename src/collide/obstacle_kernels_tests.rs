@@ -104,12 +104,7 @@ fn velocity_pass_removes_approach_and_applies_friction() {
     assert_eq!((vx[0], vy[0]), (2.5, 0.0));
     // the approach speed measured before the projection sets the friction
     let (vx2, vy2, vz2) = (vec![3.0; LANES], vec![0.0; LANES], vec![0.0; LANES]);
-    fill_approach(
-        &mut slots[0],
-        0,
-        [&[0.0; LANES], &[-4.0; LANES], &[0.0; LANES]],
-        [0.0; 3],
-    );
+    fill_approach(&mut slots[0], 0, [&[0.0; LANES], &[-4.0; LANES], &[0.0; LANES]], [0.0; 3]);
     assert_eq!(read_approach(&slots[0], 0), 4.0);
     let w = contact_velocity([vx2[0], vy2[0], vz2[0]], [0.0, 1.0, 0.0], 4.0, 0.5);
     assert!((w[0] - 1.0).abs() < 1e-6 && w[1] == 0.0 && w[2] == 0.0, "{w:?}");
