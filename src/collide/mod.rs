@@ -17,6 +17,7 @@ pub mod mesh_obj;
 pub mod mesh_response;
 pub mod narrow;
 pub mod obstacle_kernels;
+pub mod obstacle_mesh;
 pub mod obstacles;
 pub mod penetration;
 pub mod shapes;

@@ -10,7 +10,9 @@
 //! above the form's neck, so it falls on the form and drapes over it while being timed. The
 //! forms are our procedural ones (`weft::collide::dressform`: exactly 4800, and 8352 faces).
 //!
-//! Each row times the whole step (cloth constraints included) on all cores and reports the
+//! Each row times the whole step (cloth constraints included) on all cores: `seconds` is wall
+//! time, `cpu_seconds` the process's CPU time over the same steps (on a machine shared with
+//! other work the wall time includes waiting; the CPU time does not). It also reports the
 //! deepest particle inside the form at the end (`max_penetration`, m). Beyond the paper's
 //! rows: the BVH and hash broadphases and an automatically sized grid (no hand-tuned cells),
 //! and the paper's face memory on the best grids, to show what it saves and what it costs in
@@ -62,6 +64,7 @@ struct Row {
     cells: Option<[usize; 3]>,
     face_memory: bool,
     seconds: f64,
+    cpu_seconds: Option<f64>,
     paper_seconds: Option<f64>,
     speedup: Option<f64>,
     max_penetration: f32,
@@ -134,17 +137,28 @@ fn world(s: &Spec) -> weft::Result<World> {
     Ok(w)
 }
 
-/// Runs one row: `(seconds measured, final positions, world)`.
-fn measure(s: &Spec, steps: u32) -> weft::Result<(f64, Vec<[f32; 3]>, World)> {
+/// CPU time of this process so far (user + system, all threads), s: Linux `/proc/self/stat`
+/// fields 14 and 15 in clock ticks of 1/100 s. `None` elsewhere.
+fn cpu_seconds() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    let rest = &stat[stat.rfind(')')? + 2..];
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    let ticks = f.get(11)?.parse::<f64>().ok()? + f.get(12)?.parse::<f64>().ok()?;
+    Some(ticks / 100.0)
+}
+
+/// Runs one row: `(wall seconds, cpu seconds, final positions, world)`.
+fn measure(s: &Spec, steps: u32) -> weft::Result<(f64, Option<f64>, Vec<[f32; 3]>, World)> {
     let mut w = world(s)?;
-    let t0 = Instant::now();
+    let (t0, c0) = (Instant::now(), cpu_seconds());
     for _ in 0..steps {
         w.step(DT)?;
     }
     let secs = t0.elapsed().as_secs_f64();
+    let cpu = cpu_seconds().zip(c0).map(|(b, a)| b - a);
     let mut pos = Vec::new();
     w.positions_interleaved(&mut pos);
-    Ok((secs, pos, w))
+    Ok((secs, cpu, pos, w))
 }
 
 pub fn run(args: &Args) -> weft::Result<ExitCode> {
@@ -157,14 +171,15 @@ pub fn run(args: &Args) -> weft::Result<ExitCode> {
             println!("QUICK: every row runs a tenth of its iterations; seconds are the measured time x 10");
         }
         println!(
-            "{:>9} {:>6} {:>6} {:<22} {:>10} {:>8} {:>9} {:>12} {:>10}",
-            "particles", "faces", "iters", "broadphase", "ours (s)", "paper", "speedup", "max pen (m)", "deviation"
+            "{:>9} {:>6} {:>6} {:<30} {:>9} {:>8} {:>8} {:>8} {:>11} {:>9}",
+            "particles", "faces", "iters", "broadphase", "ours (s)", "cpu (s)", "paper", "speedup", "max pen (m)", "deviation"
         );
     }
     for s in specs() {
         let steps = (s.iterations / scale).max(1);
-        let (secs, pos, w) = measure(&s, steps)?;
+        let (secs, cpu, pos, w) = measure(&s, steps)?;
         let seconds = secs * (s.iterations as f64 / steps as f64);
+        let cpu_seconds = cpu.map(|c| c * (s.iterations as f64 / steps as f64));
         let om = &w.obstacles()[0];
         let (faces, label, cells) = match om.geometry() {
             weft::collide::obstacles::Geometry::Mesh(m) => {
@@ -197,6 +212,7 @@ pub fn run(args: &Args) -> weft::Result<ExitCode> {
             cells,
             face_memory: s.face_memory,
             seconds,
+            cpu_seconds,
             paper_seconds: s.paper_seconds,
             speedup: s.paper_seconds.map(|p| p / seconds),
             max_penetration: w.max_penetration(),
@@ -204,12 +220,13 @@ pub fn run(args: &Args) -> weft::Result<ExitCode> {
         };
         if !args.json {
             println!(
-                "{:>9} {:>6} {:>6} {:<22} {:>10.3} {:>8} {:>9} {:>12.2e} {:>10}",
+                "{:>9} {:>6} {:>6} {:<30} {:>9.3} {:>8} {:>8} {:>8} {:>11.2e} {:>9}",
                 row.particles,
                 row.faces,
                 row.iterations,
                 row.broadphase,
                 row.seconds,
+                row.cpu_seconds.map_or("-".into(), |c| format!("{c:.2}")),
                 row.paper_seconds.map_or("-".into(), |p| format!("{p}")),
                 row.speedup.map_or("-".into(), |x| format!("{x:.0}x")),
                 row.max_penetration,
