@@ -147,8 +147,11 @@ fn cpu_seconds() -> Option<f64> {
     Some(ticks / 100.0)
 }
 
-/// Runs one row: `(wall seconds, cpu seconds, final positions, world)`.
-fn measure(s: &Spec, steps: u32) -> weft::Result<(f64, Option<f64>, Vec<[f32; 3]>, World)> {
+/// What one row's run gives: wall seconds, CPU seconds, final positions, the world.
+type Measured = (f64, Option<f64>, Vec<[f32; 3]>, World);
+
+/// Runs one row.
+fn measure(s: &Spec, steps: u32) -> weft::Result<Measured> {
     let mut w = world(s)?;
     let (t0, c0) = (Instant::now(), cpu_seconds());
     for _ in 0..steps {
