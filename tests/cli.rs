@@ -174,3 +174,25 @@ fn ctrl_c_leaves_a_checkpoint_and_a_valid_summary() {
     assert_eq!(c.steps, s["steps"].as_u64().unwrap());
     assert!(c.steps > 0);
 }
+
+#[test]
+fn check_lists_obstacles_and_refuses_unknown_keys() {
+    let dir = tmp("obstacles");
+    let text = format!(
+        "{SMALL}\n[[obstacle]]\nkind = \"sphere\"\ncenter = [0.3, 0.0, 0.3]\nradius = 0.2\n\n[[obstacle]]\nkind = \"mesh\"\ndress_form = 400\nbroadphase = \"hash\"\nface_memory = true\n"
+    );
+    let scene = write_scene(&dir, &text);
+    let o = weft().arg("check").arg(&scene).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("obstacles     2"), "{out}");
+    assert!(
+        out.contains("obstacle 0: sphere") && out.contains("obstacle 1: mesh of 400 faces, hash"),
+        "{out}"
+    );
+    assert!(out.contains("face memory"), "{out}");
+    let bad = write_scene(&dir, &text.replace("radius = 0.2", "radius = 0.2\nheight = 1.0"));
+    let o = weft().arg("check").arg(&bad).output().unwrap();
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("height"));
+}

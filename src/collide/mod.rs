@@ -34,6 +34,7 @@ pub mod mesh_response;
 pub mod narrow;
 pub mod neighbours;
 pub mod obstacle_kernels;
+pub mod obstacle_mesh;
 pub mod obstacles;
 pub mod particle_tree;
 pub mod penetration;

@@ -10,7 +10,7 @@
 //!    blocks of eight particles; each particle writes only its own slot, so the result does not
 //!    depend on the thread count. The particle's path is taken in the obstacle's frame,
 //!    `x - u h -> p`, so a moving obstacle cannot sweep through a resting particle. Contacts are
-//!    kept within `reach = Th + max(Th, 1 mm)` so that the constraint solve, which moves the
+//!    kept within `reach = Th + max(Th, 3 mm)` so that the constraint solve, which moves the
 //!    particles after the contacts were found, still meets a contact plane.
 //!    Then the paper's response: each particle goes back along its path until it stands the
 //!    thickness off the contact plane (the point lies before the first crossing, so outside).
@@ -30,11 +30,11 @@ use rayon::prelude::*;
 use super::bvh::Bvh;
 use super::face_broadphase::FaceBroadphase;
 use super::face_hash::FaceHash;
-use super::face_memory::{contact_with_memory, NO_FACE};
+use super::face_memory::NO_FACE;
 use super::grid::UniformGrid;
 use super::mesh::TriMesh;
-use super::narrow::mesh_contact_with;
 use super::obstacle_kernels::{self as k, GenInput, SLOT_BLOCK};
+use super::obstacle_mesh::{step_contact, step_contact_remembered};
 use super::shapes::Shape;
 use crate::error::{finite3, non_negative, Result};
 use crate::lanes::LANES;
@@ -42,7 +42,7 @@ use crate::particles::Particles;
 use crate::world::World;
 
 /// Smallest contact margin beyond the thickness, m.
-pub const MIN_MARGIN: f32 = 1e-3;
+pub const MIN_MARGIN: f32 = 3e-3;
 /// Blocks of eight particles per parallel task.
 const BLOCKS_PER_TASK: usize = 32;
 
@@ -337,9 +337,9 @@ impl ObstacleSet {
                                 let reach = g.reach[i];
                                 if remember {
                                     let band = 2.0 * reach;
-                                    contact_with_memory(mesh, bp, &mut mem[l], x, p, reach, band, scratch).contact
+                                    step_contact_remembered(mesh, bp, &mut mem[l], x, p, reach, band, scratch)
                                 } else {
-                                    mesh_contact_with(mesh, bp, x, p, reach, scratch)
+                                    step_contact(mesh, bp, x, p, reach, scratch)
                                 }
                             };
                             let (pt, nr) = c.map_or(([0.0; 3], [0.0; 3]), |c| (c.point, c.normal));

@@ -15,8 +15,8 @@ use super::obstacles::Geometry;
 use super::shapes::Shape;
 use crate::world::World;
 
-/// First search radius around a point, m (the whole mesh box is searched when it finds nothing
-/// and the point is inside the box).
+/// Search radius around a point, m (every face is searched when no face is this close and the
+/// point is inside the mesh box).
 const PROBE: f32 = 0.02;
 
 /// Signed distance of `q` to a closed mesh (module doc); `None` for an open mesh or when no
@@ -25,11 +25,10 @@ pub fn mesh_signed_distance<B: FaceBroadphase + ?Sized>(mesh: &TriMesh, bp: &B, 
     let side = mesh.solid_side()? as f64;
     let (lo, hi) = mesh.bounds();
     let inside_box = (0..3).all(|k| q[k] >= lo[k] && q[k] <= hi[k]);
-    let nearest = |r: f32, scratch: &mut Vec<u32>| {
-        bp.candidates(mesh, q.map(|c| c - r), q.map(|c| c + r), scratch);
-        let qd = q.map(|c| c as f64);
+    let qd = q.map(|c| c as f64);
+    let nearest = |faces: &mut dyn Iterator<Item = u32>| {
         let mut best: Option<(f64, u32, [f64; 3])> = None;
-        for &f in scratch.iter() {
+        for f in faces {
             let [a, b, c] = mesh.corners(f).map(|v| v.map(|x| x as f64));
             let cp = closest_point_on_triangle(qd, a, b, c);
             let d2: f64 = (0..3).map(|k| (qd[k] - cp[k]) * (qd[k] - cp[k])).sum();
@@ -43,13 +42,19 @@ pub fn mesh_signed_distance<B: FaceBroadphase + ?Sized>(mesh: &TriMesh, bp: &B, 
             (if s < 0.0 { -d2.sqrt() } else { d2.sqrt() }) as f32
         })
     };
-    match nearest(PROBE, scratch) {
+    let (plo, phi) = (q.map(|c| c - PROBE), q.map(|c| c + PROBE));
+    bp.candidates(mesh, plo, phi, scratch);
+    // only faces that can be within the probe: the same set whatever the broadphase
+    let near = nearest(
+        &mut scratch
+            .iter()
+            .copied()
+            .filter(|&f| (f as usize) < mesh.face_count() && mesh.face_overlaps(f, plo, phi)),
+    );
+    match near {
         Some(d) if d.abs() <= PROBE => Some(d),
-        _ if inside_box => {
-            let r = (0..3).map(|k| hi[k] - lo[k]).fold(0.0f32, f32::max);
-            nearest(r, scratch)
-        }
-        other => other,
+        _ if inside_box => nearest(&mut (0..mesh.face_count() as u32)),
+        _ => None,
     }
 }
 

@@ -44,6 +44,18 @@ pub fn describe(scene: &Scene, world: &weft::World) -> String {
         world.tether_count()
     );
     s += &format!("  triangles     {}\n", world.triangles().len());
+    if world.obstacles().is_empty() {
+        s += "  obstacles     none\n";
+    } else {
+        s += &format!(
+            "  obstacles     {} (default friction {})\n",
+            world.obstacles().len(),
+            world.friction()
+        );
+        for (k, o) in world.obstacles().iter().enumerate() {
+            s += &format!("    obstacle {k}: {}\n", o.describe());
+        }
+    }
     let all = ["gravity", "wind", "drag", "self_collision"];
     let mut on = world.effects().named();
     if world.self_collision().is_some() {

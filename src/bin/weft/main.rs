@@ -5,6 +5,7 @@
 //! weft check scenes/flag.toml             # what the scene will simulate, and its memory
 //! weft run --resume out/big/checkpoint.bin
 //! weft reproduce nurbs [--json]           # a source paper's table (SEEDS.md B)
+//! weft reproduce landovsky --quick        # our seconds beside the paper's (SEEDS.md D)
 //! ```
 
 mod bench;

@@ -5,8 +5,13 @@
 //! drawn as smooth NURBS curves through their simulated points (root and tip exact, the rest
 //! smoothed; SEEDS.md B), and each scalp as a shaded ellipsoid mesh.
 
+use weft::collide::obstacles::Geometry;
+use weft::collide::shapes::Shape;
 use weft::render::{self, shapes, Camera, Image, LineItem, MeshItem, RenderOptions, RenderScene};
 use weft::strands::nurbs::{NurbsCurve, NurbsSurface};
+
+/// Colour of obstacles: a neutral grey.
+const OBSTACLE_COLOR: [u8; 3] = [170, 170, 165];
 
 /// Colours given to successive cloths.
 const CLOTH_COLORS: [[u8; 3]; 4] = [[196, 64, 58], [58, 110, 190], [224, 170, 60], [90, 160, 100]];
@@ -34,9 +39,52 @@ pub struct Style {
     pub nurbs_surface: bool,
 }
 
-/// One recorded frame: interleaved positions.
+/// One recorded frame: interleaved positions and the obstacles where they were.
 pub struct Frame {
     pub positions: Vec<[f32; 3]>,
+    pub obstacles: Vec<MeshItem>,
+}
+
+/// Render meshes of the world's obstacles at the world's current time. Planes are drawn as a
+/// square as large as the cloth's extent (twice, at least 1 m).
+pub fn obstacle_items(world: &weft::World) -> Vec<MeshItem> {
+    let [x, y, z] = world.positions();
+    let extent = [x, y, z]
+        .iter()
+        .map(|a| {
+            let (lo, hi) = a
+                .iter()
+                .fold((f32::INFINITY, f32::NEG_INFINITY), |(l, h), v| (l.min(*v), h.max(*v)));
+            if hi >= lo {
+                hi - lo
+            } else {
+                0.0
+            }
+        })
+        .fold(0.0f32, f32::max);
+    let half = extent.max(1.0);
+    world
+        .obstacles()
+        .iter()
+        .map(|o| {
+            let shape = match (o.shape_at(world.time()), o.geometry()) {
+                (Some(Shape::Plane { point, normal }), _) => shapes::plane_quad(point, normal, half),
+                (Some(Shape::Sphere { center, radius }), _) => shapes::uv_sphere(center, radius, 48),
+                (Some(Shape::Capsule { a, b, radius }), _) => shapes::capsule(a, b, radius, 32),
+                (Some(Shape::Box { center, half, axes }), _) => {
+                    let (v, t) = shapes::box_mesh([0.0; 3], half);
+                    let v = v
+                        .iter()
+                        .map(|l| [0, 1, 2].map(|k| center[k] + axes[0][k] * l[0] + axes[1][k] * l[1] + axes[2][k] * l[2]))
+                        .collect();
+                    (v, t)
+                }
+                (None, Geometry::Mesh(m)) => (m.mesh().vertices().to_vec(), m.mesh().faces().to_vec()),
+                _ => (Vec::new(), Vec::new()),
+            };
+            MeshItem::from_shape(shape, OBSTACLE_COLOR)
+        })
+        .collect()
 }
 
 fn columns(points: &[[f32; 3]]) -> [Vec<f32>; 3] {
@@ -111,6 +159,7 @@ pub fn scene_of(world: &weft::World, frame: &Frame, style: Style) -> weft::Resul
     for k in 0..world.cloths().len() {
         meshes.push(cloth_mesh(world, frame, k, style)?);
     }
+    meshes.extend(frame.obstacles.iter().cloned());
     hair(world, frame, &mut meshes, &mut lines)?;
     Ok(RenderScene {
         meshes,

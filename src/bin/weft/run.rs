@@ -169,7 +169,10 @@ pub fn run(args: RunArgs) -> weft::Result<ExitCode> {
             weft::export::write_obj(&p, &positions, world.triangles())?;
             files.push(p.display().to_string());
         }
-        frames.push(Frame { positions });
+        frames.push(Frame {
+            positions,
+            obstacles: pictures::obstacle_items(world),
+        });
         Ok(())
     };
     if frame_steps.contains(&world.steps()) {

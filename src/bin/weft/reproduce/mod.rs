@@ -1,25 +1,30 @@
-//! `weft reproduce PAPER`: re-run a source paper's measurement and print its table.
-//!
-//! One file per paper (SEEDS.md section in brackets):
+//! `weft reproduce PAPER`: rebuild a source paper's experiment and print our figures beside
+//! the paper's. One file per paper (SEEDS.md section in brackets):
+//! - `landovsky` ([`landovsky`], D): cloth dropped on dress forms, time per broadphase.
 //! - `nurbs` ([`nurbs`], B): NURBS global against local evaluation cost.
 
+mod landovsky;
 pub mod nurbs;
 
 use std::process::ExitCode;
 
 use clap::Subcommand;
 
-/// The papers that can be reproduced.
+/// The papers whose experiments can be reproduced.
 #[derive(Subcommand)]
 pub enum Reproduce {
+    /// Landovskaya, Landovsky & Frolovsky (SEEDS.md section D): cloth dropped on dress forms,
+    /// time per broadphase, the paper's five rows plus our BVH, hash and face-memory rows.
+    Landovsky(landovsky::Args),
     /// NURBS curves and surfaces (SEEDS.md B): time per evaluated point, global (all n control
     /// points) against local (the k+1 non-zero basis functions), for n = 8 .. 4096 and degree 2..4.
     Nurbs(nurbs::NurbsArgs),
 }
 
-/// Runs one reproduction.
+/// Runs the chosen reproduction.
 pub fn reproduce(what: Reproduce) -> weft::Result<ExitCode> {
     match what {
+        Reproduce::Landovsky(args) => landovsky::run(&args),
         Reproduce::Nurbs(args) => nurbs::run(args),
     }
 }
