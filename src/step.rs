@@ -2,6 +2,7 @@
 //!
 //! ```text
 //! step(dt):
+//!   kinematic pins: stop last step's moves, v = (target - x) / dt    [embed::kinematic]
 //!   keep a copy of x, v (guard)
 //!   for each substep h = dt / substeps:
 //!     wind forces per triangle → per particle          [effects]        (if named)
@@ -10,6 +11,7 @@
 //!     update: v = (p - x) / h, damping; x = p          [integrate]
 //!   on a non-finite value: restore the copy, replay the step with a check after every stage
 //!   to name the stage and particle, and return `Diverged`
+//!   kinematic pins land exactly on their targets                     [embed::kinematic]
 //! ```
 
 use crate::error::{positive, Result, WeftError};
