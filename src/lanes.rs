@@ -39,12 +39,16 @@ pub fn store(s: &mut [f32], i: usize, v: F32s) {
 /// Eight 3-vectors, one per lane.
 #[derive(Clone, Copy, Debug)]
 pub struct Vec3x8 {
+    /// x components.
     pub x: F32s,
+    /// y components.
     pub y: F32s,
+    /// z components.
     pub z: F32s,
 }
 
 impl Vec3x8 {
+    /// The same vector in every lane.
     #[inline(always)]
     pub fn splat(v: [f32; 3]) -> Self {
         Self {
@@ -53,6 +57,7 @@ impl Vec3x8 {
             z: F32s::splat(v[2]),
         }
     }
+    /// Loads lanes `i..i + 8` of three arrays.
     #[inline(always)]
     pub fn load(x: &[f32], y: &[f32], z: &[f32], i: usize) -> Self {
         Self {
@@ -61,20 +66,24 @@ impl Vec3x8 {
             z: load(z, i),
         }
     }
+    /// Stores into lanes `i..i + 8` of three arrays.
     #[inline(always)]
     pub fn store(self, x: &mut [f32], y: &mut [f32], z: &mut [f32], i: usize) {
         store(x, i, self.x);
         store(y, i, self.y);
         store(z, i, self.z);
     }
+    /// Lane-wise dot product.
     #[inline(always)]
     pub fn dot(self, o: Self) -> F32s {
         self.x * o.x + self.y * o.y + self.z * o.z
     }
+    /// Lane-wise squared length.
     #[inline(always)]
     pub fn length_sq(self) -> F32s {
         self.dot(self)
     }
+    /// Lane-wise scaling by `s`.
     #[inline(always)]
     pub fn scale(self, s: F32s) -> Self {
         Self {

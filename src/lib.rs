@@ -1,4 +1,7 @@
 #![doc = include_str!("../README.md")]
+#![warn(missing_docs)]
+#[cfg(feature = "capi")]
+pub mod capi;
 pub mod checkpoint;
 pub mod cloth;
 pub mod collide;

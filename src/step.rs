@@ -2,6 +2,7 @@
 //!
 //! ```text
 //! step(dt):
+//!   kinematic pins: stop last step's moves, v = (target - x) / dt    [embed::kinematic]
 //!   keep a copy of x, v (guard)
 //!   self-collision pair lists from x (hash or AABB tree)  [self-collision] (if on)
 //!   for each substep h = dt / substeps:
@@ -17,6 +18,7 @@
 //!     obstacle velocity pass: normal part, friction     [collide/obstacles] (if any)
 //!   on a non-finite value: restore the copy, replay the step with a check after every stage
 //!   to name the stage and particle, and return `Diverged`
+//!   kinematic pins land exactly on their targets                     [embed::kinematic]
 //! ```
 
 use crate::collide::response::{apply, clamp_speed, ApplyInput, ApplyMode, ClampParams};

@@ -4,9 +4,11 @@
 //! The time is added to an accumulator `A` (f64), and whole steps of the fixed length
 //! `dt = params.dt` are taken while `A >= dt`, each subtracting `dt`. Every step therefore has
 //! the same `dt` whatever the frame times were, so the physics after `k` steps is the same bits
-//! for 60 even frames or 60 ragged ones; only *when* a step happens moves. What is left,
-//! `alpha = A / dt` in `[0, 1)`, tells how far the display time has gone past the last step,
-//! and [`World::interpolated_positions`] blends the last two states by it.
+//! for 60 even frames or 60 ragged ones; only *when* a step happens moves. (A step within
+//! [`STEP_SLACK`] of being owed is taken, so rounding between an f64 frame time and the f32
+//! `dt` does not skip a frame.) What is left, `alpha = A / dt` in `[0, 1)`, tells how far the
+//! display time has gone past the last step, and [`World::interpolated_positions`] blends the
+//! last two states by it.
 //!
 //! Spiral of death: if steps take longer than the frames they simulate, the debt grows
 //! without bound. A call takes at most `max_steps_per_advance` steps (default
@@ -16,6 +18,9 @@
 
 use crate::error::{Result, WeftError};
 use crate::world::World;
+
+/// Fraction of a step by which the accumulator may fall short and still owe that step.
+pub const STEP_SLACK: f64 = 1e-6;
 
 /// What one [`World::advance`] call did.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -52,7 +57,9 @@ impl World {
         let dt = self.params.dt;
         let dt64 = dt as f64;
         self.embed.accumulator += frame_dt;
-        let owed = (self.embed.accumulator / dt64).floor();
+        // A millionth of a step of slack: 60 Hz frames (1/60 in f64) with dt = 1/60 in f32
+        // (larger by 7e-10 s) take one step each instead of none on the first frame.
+        let owed = (self.embed.accumulator / dt64 + STEP_SLACK).floor();
         let cap = self.embed.max_steps;
         let (n, capped) = if owed > cap as f64 { (cap, true) } else { (owed as u32, false) };
         let mut dropped_time = 0.0;
@@ -138,6 +145,20 @@ mod tests {
         assert_eq!(w.steps(), 3);
         let r = w.advance(0.0).unwrap();
         assert_eq!((r.steps, r.capped), (0, false));
+    }
+
+    #[test]
+    fn sixty_hertz_frames_take_one_step_each() {
+        let params = SolverParams {
+            dt: 1.0 / 60.0,
+            substeps: 1,
+            ..Default::default()
+        };
+        let mut w = World::new(params, Effects::gravity()).unwrap();
+        w.add_cloth(&ClothDesc::default()).unwrap();
+        for _ in 0..100 {
+            assert_eq!(w.advance(1.0 / 60.0).unwrap().steps, 1);
+        }
     }
 
     #[test]

@@ -18,6 +18,7 @@ impl World {
     /// Errors if `i` is out of range, `p` is not finite, or the particle is not pinned
     /// (inverse mass > 0; pin it first with [`set_inverse_masses`](World::set_inverse_masses)
     /// or a [`PinSpec`](crate::PinSpec)). Calling it again before the step replaces the target.
+    /// If the step fails (e.g. diverges), the target stays pending for the next step.
     pub fn set_pin_position(&mut self, i: usize, p: mint::Point3<f32>) -> Result<()> {
         let t = self.check_pin(i, p)?;
         self.embed.pending.push((i as u32, t));
