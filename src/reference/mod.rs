@@ -1,7 +1,7 @@
 //! The scalar reference step: plain loops, `f64`, no SIMD, no threads.
 //!
 //! It follows the same stages as [`World::step`](crate::World::step) — wind, predict, colour by
-//! colour constraint sweeps, tethers, update, damping — on a copy of a world's state and
+//! colour constraint sweeps, tethers, scalp collision of strands, update, damping — on a copy of a world's state and
 //! topology, so the fast kernels can be held to it with a stated tolerance. It is deliberately
 //! naive: a second, independent reading of the method, not a copy of the kernels.
 
@@ -32,6 +32,8 @@ pub struct ReferenceWorld {
     colours: Vec<Vec<Dist>>,
     tethers: Vec<(usize, usize, f64)>,
     triangles: Vec<[usize; 3]>,
+    strand_area: Vec<f64>,
+    scalps: Vec<(usize, usize, [f64; 3], [f64; 3])>,
     effects: Effects,
     substeps: u32,
     iterations: u32,
@@ -70,6 +72,13 @@ impl ReferenceWorld {
                 .map(|t| (t.particle as usize, t.anchor as usize, t.max_len as f64))
                 .collect(),
             triangles: world.triangles().iter().map(|t| t.map(|i| i as usize)).collect(),
+            strand_area: world.strand_area.iter().map(|&a| a as f64).collect(),
+            scalps: world
+                .scalps
+                .ranges
+                .iter()
+                .map(|r| (r.start, r.end, r.center.map(f64::from), r.radii.map(f64::from)))
+                .collect(),
             effects: world.effects().clone(),
             substeps: world.params().substeps,
             iterations: world.params().iterations,
@@ -138,6 +147,21 @@ impl ReferenceWorld {
                         }
                     }
                 }
+                // Scalp: strand points outside the inflated ellipsoid, along the scaled ray.
+                for &(start, end, c, r) in &self.scalps {
+                    for i in start..end {
+                        if self.w[i] <= 0.0 {
+                            continue;
+                        }
+                        let d = sub(p[i], c);
+                        let s = norm([d[0] / r[0], d[1] / r[1], d[2] / r[2]]);
+                        if s < 1e-6 {
+                            p[i] = [c[0], c[1] + r[1], c[2]];
+                        } else if s < 1.0 {
+                            p[i] = std::array::from_fn(|k| c[k] + d[k] / s);
+                        }
+                    }
+                }
             }
             for i in 0..n {
                 let kd = if self.damping.is_empty() {
@@ -174,6 +198,16 @@ impl ReferenceWorld {
             for i in [a, b, c] {
                 for k in 0..3 {
                     f[i][k] += nh[k] * m;
+                }
+            }
+        }
+        // Strand points: quadratic drag on their cross-section.
+        for (i, &area) in self.strand_area.iter().enumerate() {
+            if area > 0.0 {
+                let rel = sub(air, self.v[i]);
+                let m = k * area * norm(rel);
+                for c in 0..3 {
+                    f[i][c] += rel[c] * m;
                 }
             }
         }

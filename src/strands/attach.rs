@@ -78,6 +78,38 @@ impl World {
         Ok(self.strands.len() - 1)
     }
 
+    /// Moves strand group `group`'s scalp so its centre is at `center`: the roots (kinematic,
+    /// `w = 0`) are translated with it, so the strands follow through their constraints, and
+    /// the scalp stage collides against the moved shape from the next step on. Checkpoints
+    /// do not record a moved scalp (they rebuild the world from its scene).
+    pub fn set_scalp_center(&mut self, group: usize, center: [f32; 3]) -> Result<()> {
+        let len = self.strands.len();
+        let info = self.strands.get_mut(group).ok_or(WeftError::IndexOutOfRange {
+            name: "strand group",
+            index: group,
+            len,
+        })?;
+        crate::error::finite3("scalp center", center)?;
+        let d = [0, 1, 2].map(|k| center[k] - info.scalp.center[k]);
+        if !d.iter().all(|c| c.is_finite()) {
+            return Err(WeftError::param("scalp center", format!("{center:?}"), "the move is too large"));
+        }
+        info.scalp.center = center;
+        let p = &mut self.particles;
+        for s in 0..info.count {
+            let r = info.strand_range(s).start;
+            if p.w[r] == 0.0 {
+                p.x[r] += d[0];
+                p.y[r] += d[1];
+                p.z[r] += d[2];
+                (p.px[r], p.py[r], p.pz[r]) = (p.x[r], p.y[r], p.z[r]);
+            }
+        }
+        // Strand groups and their scalp ranges are pushed together, so indices agree.
+        self.scalps.ranges[group].center = center;
+        Ok(())
+    }
+
     /// The strand groups added so far.
     pub fn strands(&self) -> &[StrandInfo] {
         &self.strands

@@ -14,6 +14,8 @@ pub mod nurbs_timing;
 pub mod scalp;
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_paths;
 
 pub use attach::StrandInfo;
 pub use hair::{StrandsBuild, StrandsDesc};

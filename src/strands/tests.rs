@@ -4,7 +4,6 @@
 use super::scalp::ScalpSet;
 use super::*;
 use crate::params::Backend;
-use crate::scene::Scene;
 use crate::{Effects, SolverParams, Wind, World};
 
 fn dist(a: [f32; 3], b: [f32; 3]) -> f32 {
@@ -134,7 +133,7 @@ fn bad_strand_descriptions_are_errors() {
     }
 }
 
-fn strand_world(count: u32, points: u32, effects: Effects, params: SolverParams) -> World {
+pub(super) fn strand_world(count: u32, points: u32, effects: Effects, params: SolverParams) -> World {
     let mut w = World::new(params, effects).unwrap();
     w.add_strands(&StrandsDesc {
         scalp: head(),
@@ -347,56 +346,4 @@ fn wind_blows_strands_downwind_and_costs_nothing_without_strands() {
     let area = &w.wind.as_ref().unwrap().strand_area;
     assert!(area[..first as usize].iter().all(|&a| a == 0.0));
     assert!(area[first as usize + 1] > 0.0 && area[first as usize] == 0.0);
-}
-
-const HAIR: &str = r#"
-[effects]
-gravity = [0.0, -9.81, 0.0]
-
-[[strands]]
-count = 50
-points = 8
-segment_length = 0.01
-bend_compliance = 0.001
-scalp = { kind = "sphere", center = [0.0, 1.6, 0.0], radius = 0.1, polar_degrees = [0.0, 100.0] }
-
-[[strands]]
-count = 20
-points = 4
-segment_length = 0.02
-scalp = { kind = "ellipsoid", center = [0.5, 1.6, 0.0], radii = [0.08, 0.1, 0.09] }
-"#;
-
-#[test]
-fn strands_scene_parses_and_builds() {
-    let s = Scene::parse(HAIR, "hair.toml").unwrap();
-    let w = s.world().unwrap();
-    assert_eq!(w.strands().len(), 2);
-    assert_eq!(w.particle_count(), 50 * 8 + 20 * 4);
-    assert_eq!(w.constraint_count(), 50 * (7 + 6) + 20 * (3 + 2));
-    assert_eq!(w.strands()[1].scalp.radii, [0.08, 0.1, 0.09]);
-    assert_eq!(w.strands()[0].scalp.polar_degrees, [0.0, 100.0]);
-    let text = s.to_toml().unwrap();
-    assert_eq!(Scene::parse(&text, "back.toml").unwrap(), s);
-}
-
-#[test]
-fn bad_strand_scenes_are_errors_with_line_and_column() {
-    let cases = [
-        ("count = 50", "count = 0", "line 6, column 9"),
-        ("segment_length = 0.01", "segment_length = -0.01", "line 8, column 18"),
-        ("radius = 0.1,", "radius = -0.1,", "line 10, column 63"),
-        ("polar_degrees = [0.0, 100.0]", "polar_degrees = [0.0, 200.0]", "line 10, column 84"),
-        // Cross-field problems: at the scalp table, or at the strands table.
-        ("radius = 0.1,", "radii = [0.1, 0.1, 0.1],", "line 10, column 9"),
-        ("points = 8", "points = 1", "line 5, column 1"),
-        ("bend_compliance = 0.001", "bend = 0.001", "line 9, column 1"),
-        ("kind = \"sphere\"", "kind = \"cube\"", "line 10, column 18"),
-    ];
-    for (from, to, at) in cases {
-        let text = HAIR.replacen(from, to, 1);
-        assert_ne!(text, HAIR);
-        let e = Scene::parse(&text, "bad.toml").unwrap_err().to_string();
-        assert!(e.contains(at), "{to}: {e}");
-    }
 }

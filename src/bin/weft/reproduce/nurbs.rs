@@ -26,6 +26,9 @@ pub struct NurbsArgs {
     /// Parameters evaluated per measurement (each measurement is the median of several runs).
     #[arg(long, default_value_t = 256)]
     samples: usize,
+    /// Largest n timed (for a quick look; the full table goes to 4096).
+    #[arg(long, default_value_t = 4096)]
+    max_n: usize,
 }
 
 #[derive(Serialize)]
@@ -86,7 +89,11 @@ pub fn run(args: NurbsArgs) -> weft::Result<ExitCode> {
     if args.samples == 0 {
         return Err(WeftError::param("--samples", 0, "at least one sample is needed"));
     }
-    let rows = nurbs_timing(&NS, &DEGREES, args.samples);
+    let ns: Vec<usize> = NS.iter().copied().filter(|&n| n <= args.max_n).collect();
+    if ns.is_empty() {
+        return Err(WeftError::param("--max-n", args.max_n, format!("must be at least {}", NS[0])));
+    }
+    let rows = nurbs_timing(&ns, &DEGREES, args.samples);
     if args.json {
         let json: Vec<JsonRow> = rows
             .iter()
