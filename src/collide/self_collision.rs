@@ -26,7 +26,7 @@
 //! ```
 //!
 //! Each particle writes only its own sums (a Jacobi pass; the kernel averages over the contact
-//! count), so the result is the same on any number of threads; the serial loop is the twin.
+//! count, the movement-speed correction over the approaching contacts), so the result is the same on any number of threads; the serial loop is the twin.
 //! The movement-speed response zeroes the approaching normal velocity (fully inelastic) and
 //! moves the particle along its corrected velocity; it does not push out an existing overlap.
 //!
@@ -379,6 +379,7 @@ impl PairCtx<'_> {
         }
         let pi = [self.p[0][i], self.p[1][i], self.p[2][i]];
         let di = [pi[0] - self.x[0][i], pi[1] - self.x[1][i], pi[2] - self.x[2][i]];
+        let mut approaching = 0.0f32;
         for &j in self.lists.of(i) {
             let j = j as usize;
             let v = [pi[0] - self.p[0][j], pi[1] - self.p[1][j], pi[2] - self.p[2][j]];
@@ -421,6 +422,7 @@ impl PairCtx<'_> {
             let amount = if self.movement {
                 let vn = (di[0] - dj[0]) * nrm[0] + (di[1] - dj[1]) * nrm[1] + (di[2] - dj[2]) * nrm[2];
                 if vn < 0.0 {
+                    approaching += 1.0;
                     -vn * share
                 } else {
                     0.0
@@ -435,6 +437,14 @@ impl PairCtx<'_> {
             }
             out[9] += dist - md;
             out[10] += 1.0;
+        }
+        if approaching > 0.0 {
+            // The kernel divides by all contacts; the velocity response averages over the
+            // approaching ones only.
+            let scale = out[10] / approaching;
+            for c in &mut out[..3] {
+                *c *= scale;
+            }
         }
         out
     }

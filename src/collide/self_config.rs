@@ -136,6 +136,12 @@ impl World {
         self.selfcol.distance()
     }
 
+    /// The pair lists of the last step (pairs within `3 d` at the step's start), if
+    /// self-collision has run.
+    pub fn self_collision_pairs(&self) -> Option<&super::neighbours::Neighbours> {
+        self.selfcol.lists()
+    }
+
     /// Average-collision statistics and self-collision time so far.
     pub fn self_collision_stats(&self) -> &SelfCollisionStats {
         &self.selfcol.stats

@@ -4,10 +4,12 @@
 //! weft run scenes/hanging.toml            # simulate, write out/hanging/{final.png,frames.png,summary.json}
 //! weft check scenes/flag.toml             # what the scene will simulate, and its memory
 //! weft run --resume out/big/checkpoint.bin
+//! weft reproduce vccpbd --quick           # the VcCPBD paper's table, ours beside theirs
 //! ```
 
 mod check;
 mod pictures;
+mod reproduce;
 mod run;
 
 use std::path::PathBuf;
@@ -33,6 +35,9 @@ enum Command {
         /// The scene file (TOML).
         scene: PathBuf,
     },
+    /// Rerun a source paper's experiment; print our figures beside the paper's.
+    #[command(subcommand)]
+    Reproduce(reproduce::Reproduce),
 }
 
 fn main() -> ExitCode {
@@ -40,6 +45,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Run(args) => run::run(args),
         Command::Check { scene } => check::check(&scene),
+        Command::Reproduce(which) => reproduce::run(which),
     };
     match result {
         Ok(code) => code,
