@@ -380,10 +380,15 @@ impl PairCtx<'_> {
         let pi = [self.p[0][i], self.p[1][i], self.p[2][i]];
         let di = [pi[0] - self.x[0][i], pi[1] - self.x[1][i], pi[2] - self.x[2][i]];
         let mut approaching = 0.0f32;
+        let d2 = self.d * self.d;
         for &j in self.lists.of(i) {
             let j = j as usize;
             let v = [pi[0] - self.p[0][j], pi[1] - self.p[1][j], pi[2] - self.p[2][j]];
             let dist2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+            // min_dist <= d: most listed pairs end here, before the rest data is read.
+            if dist2.is_nan() || dist2 >= d2 {
+                continue;
+            }
             let same = self.cloth_of[i] == self.cloth_of[j];
             let r = [
                 self.rest[0][i] - self.rest[0][j],

@@ -94,6 +94,7 @@ pub struct SelfCollisionStats {
     pub time_s: f64,
     /// Steps that ran self-collision.
     pub steps: u64,
+    #[serde(skip)]
     sum_pct: f64,
 }
 
