@@ -171,7 +171,8 @@ impl World {
             if let Some(a) = sc {
                 let t0 = std::time::Instant::now();
                 let p = &self.particles;
-                self.selfcol.pair_pass([&p.x, &p.y, &p.z], [&p.px, &p.py, &p.pz], &p.w, n, parallel);
+                self.selfcol
+                    .pair_pass([&p.x, &p.y, &p.z], [&p.px, &p.py, &p.pz], &p.w, n, parallel, simd);
                 if let Some((sums, q, b)) = self.selfcol.kernel_inputs() {
                     let mode = if a.response == Response::Vccpbd {
                         ApplyMode::Vccpbd
