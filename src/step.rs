@@ -16,7 +16,7 @@
 //! ```
 
 use crate::collide::response::{apply, clamp_speed, ApplyInput, ApplyMode, ClampParams};
-use crate::collide::self_collision::{mean_velocity, Response, TRAVEL_FACTOR};
+use crate::collide::self_collision::{mean_velocity, Response, BOX_RADIUS, TRAVEL_FACTOR};
 use crate::error::{positive, Result, WeftError};
 use crate::integrate::{predict, update, PredictParams};
 use crate::params::Backend;
@@ -189,7 +189,7 @@ impl World {
                             sums,
                             friction: a.friction,
                             h,
-                            r: 0.5 * a.d,
+                            r: BOX_RADIUS * a.d,
                         };
                         apply(&inp, [c.px, c.py, c.pz], mode, simd)
                     });

@@ -61,6 +61,9 @@ pub const QUERY_FACTOR: f32 = 3.0;
 /// Hash cell side over the query radius (section C uses 1).
 pub const CELL_FACTOR: f32 = 1.0;
 
+/// VcCPBD box radius over the collision distance (`r / d`).
+pub const BOX_RADIUS: f32 = 1.0;
+
 /// Relative travel allowed in one step over the collision distance (`T / d`).
 pub const TRAVEL_FACTOR: f32 = 1.0;
 
