@@ -22,7 +22,7 @@
 //! ```
 
 use crate::collide::response::{apply, clamp_speed, ApplyInput, ApplyMode, ClampParams};
-use crate::collide::self_collision::{mean_velocity, Response, TRAVEL_FACTOR};
+use crate::collide::self_collision::{mean_velocity, Response, BOX_RADIUS, TRAVEL_FACTOR};
 use crate::error::{positive, Result, WeftError};
 use crate::integrate::{predict, update, PredictParams};
 use crate::params::Backend;
@@ -210,7 +210,8 @@ impl World {
             if let Some(a) = sc {
                 let t0 = std::time::Instant::now();
                 let p = &self.particles;
-                self.selfcol.pair_pass([&p.x, &p.y, &p.z], [&p.px, &p.py, &p.pz], &p.w, n, parallel);
+                self.selfcol
+                    .pair_pass([&p.x, &p.y, &p.z], [&p.px, &p.py, &p.pz], &p.w, n, parallel, simd);
                 if let Some((sums, q, b)) = self.selfcol.kernel_inputs() {
                     let mode = if a.response == Response::Vccpbd {
                         ApplyMode::Vccpbd
@@ -227,7 +228,7 @@ impl World {
                             sums,
                             friction: a.friction,
                             h,
-                            r: 0.5 * a.d,
+                            r: BOX_RADIUS * a.d,
                         };
                         apply(&inp, [c.px, c.py, c.pz], mode, simd)
                     });

@@ -26,7 +26,7 @@
 //! ```
 //!
 //! Each particle writes only its own sums (a Jacobi pass; the kernel averages over the contact
-//! count), so the result is the same on any number of threads; the serial loop is the twin.
+//! count, the movement-speed correction over the approaching contacts), so the result is the same on any number of threads; the serial loop is the twin.
 //! The movement-speed response zeroes the approaching normal velocity (fully inelastic) and
 //! moves the particle along its corrected velocity; it does not push out an existing overlap.
 //!
@@ -43,6 +43,7 @@ use super::neighbours::Neighbours;
 use super::particle_tree::{ParticleTree, TreeShape};
 use super::response::ContactSums;
 use crate::error::{positive, Result, WeftError};
+use crate::lanes::{F32s, Vec3x8, LANES};
 
 pub use super::self_config::{Response, SelfBroadphase, SelfCollision, SelfCollisionStats, PENETRATION_TOLERANCE};
 
@@ -59,6 +60,9 @@ pub const QUERY_FACTOR: f32 = 3.0;
 
 /// Hash cell side over the query radius (section C uses 1).
 pub const CELL_FACTOR: f32 = 1.0;
+
+/// VcCPBD box radius over the collision distance (`r / d`).
+pub const BOX_RADIUS: f32 = 1.0;
 
 /// Relative travel allowed in one step over the collision distance (`T / d`).
 pub const TRAVEL_FACTOR: f32 = 1.0;
@@ -246,7 +250,7 @@ impl SelfCollisionData {
     /// The pair pass: fills the contact sums from the predicted positions `p`, start positions
     /// `x` and inverse masses `w` (see the module docs). Parallel over fixed chunks when
     /// `parallel`; the serial loop is its twin.
-    pub(crate) fn pair_pass(&mut self, x: [&[f32]; 3], p: [&[f32]; 3], w: &[f32], n: usize, parallel: bool) {
+    pub(crate) fn pair_pass(&mut self, x: [&[f32]; 3], p: [&[f32]; 3], w: &[f32], n: usize, parallel: bool, simd: bool) {
         let Some(a) = self.active() else { return };
         let Some(st) = self.state.as_mut().filter(|s| s.ready) else {
             return;
@@ -267,7 +271,7 @@ impl SelfCollisionData {
             let [c0, c1, c2, f0, f1, f2, n0, n1, n2, g, k] = out;
             for o in 0..c0.len() {
                 let i = start + o;
-                let r = if i < n { ctx.sums(i) } else { [0.0; 11] };
+                let r = if i < n { ctx.sums(i, simd) } else { [0.0; 11] };
                 let dst = [
                     &mut c0[o], &mut c1[o], &mut c2[o], &mut f0[o], &mut f1[o], &mut f2[o], &mut n0[o], &mut n1[o], &mut n2[o], &mut g[o],
                     &mut k[o],
@@ -371,7 +375,7 @@ const COINCIDENT: [f32; 3] = [0.267_261_24, 0.534_522_5, 0.801_783_7];
 
 impl PairCtx<'_> {
     /// `[c(3), f(3), n(3), gap, count]` of particle `i`.
-    fn sums(&self, i: usize) -> [f32; 11] {
+    fn sums(&self, i: usize, simd: bool) -> [f32; 11] {
         let mut out = [0.0f32; 11];
         let wi = self.w[i];
         if wi <= 0.0 {
@@ -379,10 +383,59 @@ impl PairCtx<'_> {
         }
         let pi = [self.p[0][i], self.p[1][i], self.p[2][i]];
         let di = [pi[0] - self.x[0][i], pi[1] - self.x[1][i], pi[2] - self.x[2][i]];
-        for &j in self.lists.of(i) {
-            let j = j as usize;
+        let mut approaching = 0.0f32;
+        let d2 = self.d * self.d;
+        let ids = self.lists.of(i);
+        // Filter: eight candidates at a time (gathered, the scalar distance's operations), a
+        // lane passes when it may be within d (a 1e-4 margin, so the scalar test below makes
+        // every decision and the result equals the plain loop bit for bit).
+        let mut k = 0;
+        if simd {
+            let pv = Vec3x8::splat(pi);
+            let lim = F32s::splat(d2 * 1.0001);
+            while k + LANES <= ids.len() {
+                let g = |a: &[f32]| F32s::from(std::array::from_fn::<f32, LANES, _>(|l| a[ids[k + l] as usize]));
+                let v = pv
+                    - Vec3x8 {
+                        x: g(self.p[0]),
+                        y: g(self.p[1]),
+                        z: g(self.p[2]),
+                    };
+                let mut bits = v.length_sq().simd_lt(lim).to_bitmask();
+                while bits != 0 {
+                    let j = ids[k + bits.trailing_zeros() as usize] as usize;
+                    bits &= bits - 1;
+                    self.contact(i, j, pi, di, d2, &mut out, &mut approaching);
+                }
+                k += LANES;
+            }
+        }
+        for &j in &ids[k..] {
+            self.contact(i, j as usize, pi, di, d2, &mut out, &mut approaching);
+        }
+        if approaching > 0.0 {
+            // The kernel divides by all contacts; the velocity response averages over the
+            // approaching ones only.
+            let scale = out[10] / approaching;
+            for c in &mut out[..3] {
+                *c *= scale;
+            }
+        }
+        out
+    }
+
+    /// Adds the contact of `i` with `j`, if any, to `out`.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn contact(&self, i: usize, j: usize, pi: [f32; 3], di: [f32; 3], d2: f32, out: &mut [f32; 11], approaching: &mut f32) {
+        let wi = self.w[i];
+        {
             let v = [pi[0] - self.p[0][j], pi[1] - self.p[1][j], pi[2] - self.p[2][j]];
             let dist2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+            // min_dist <= d: most listed pairs end here, before the rest data is read.
+            if dist2.is_nan() || dist2 >= d2 {
+                return;
+            }
             let same = self.cloth_of[i] == self.cloth_of[j];
             let r = [
                 self.rest[0][i] - self.rest[0][j],
@@ -395,11 +448,11 @@ impl PairCtx<'_> {
                 f32::INFINITY
             };
             if dist2 > rest2 {
-                continue;
+                return;
             }
             let md = if rest2 < self.d * self.d { rest2.sqrt() } else { self.d };
             if dist2.is_nan() || dist2 >= md * md {
-                continue;
+                return;
             }
             let dist = dist2.sqrt();
             let nrm = if dist2 > 0.0 {
@@ -421,6 +474,7 @@ impl PairCtx<'_> {
             let amount = if self.movement {
                 let vn = (di[0] - dj[0]) * nrm[0] + (di[1] - dj[1]) * nrm[1] + (di[2] - dj[2]) * nrm[2];
                 if vn < 0.0 {
+                    *approaching += 1.0;
                     -vn * share
                 } else {
                     0.0
@@ -436,7 +490,6 @@ impl PairCtx<'_> {
             out[9] += dist - md;
             out[10] += 1.0;
         }
-        out
     }
 }
 

@@ -94,6 +94,7 @@ pub struct SelfCollisionStats {
     pub time_s: f64,
     /// Steps that ran self-collision.
     pub steps: u64,
+    #[serde(skip)]
     sum_pct: f64,
 }
 
@@ -134,6 +135,12 @@ impl World {
     /// The collision distance in use (configured or `min(thickness, spacing)`), m.
     pub fn self_collision_distance(&self) -> f32 {
         self.selfcol.distance()
+    }
+
+    /// The pair lists of the last step (pairs within `3 d` at the step's start), if
+    /// self-collision has run.
+    pub fn self_collision_pairs(&self) -> Option<&super::neighbours::Neighbours> {
+        self.selfcol.lists()
     }
 
     /// Average-collision statistics and self-collision time so far.

@@ -6,6 +6,7 @@
 //! weft run --resume out/big/checkpoint.bin
 //! weft reproduce nurbs [--json]           # a source paper's table (SEEDS.md B)
 //! weft reproduce landovsky --quick        # our seconds beside the paper's (SEEDS.md D)
+//! weft reproduce vccpbd --quick           # the VcCPBD paper's table, ours beside theirs (SEEDS.md A)
 //! ```
 
 mod bench;

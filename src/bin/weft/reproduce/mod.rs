@@ -2,9 +2,11 @@
 //! the paper's. One file per paper (SEEDS.md section in brackets):
 //! - `landovsky` ([`landovsky`], D): cloth dropped on dress forms, time per broadphase.
 //! - `nurbs` ([`nurbs`], B): NURBS global against local evaluation cost.
+//! - `vccpbd` ([`vccpbd`], A and C): self-collision responses on the paper's cloths.
 
 mod landovsky;
 pub mod nurbs;
+mod vccpbd;
 
 use std::process::ExitCode;
 
@@ -19,6 +21,9 @@ pub enum Reproduce {
     /// NURBS curves and surfaces (SEEDS.md B): time per evaluated point, global (all n control
     /// points) against local (the k+1 non-zero basis functions), for n = 8 .. 4096 and degree 2..4.
     Nurbs(nurbs::NurbsArgs),
+    /// Shapri, Sulaiman & Bade (SEEDS.md A, with the hash of section C): collision ms per step of
+    /// PBD, movement-speed and VcCPBD responses on the paper's 12 cloths, ours beside theirs.
+    Vccpbd(vccpbd::VccpbdArgs),
 }
 
 /// Runs the chosen reproduction.
@@ -26,5 +31,6 @@ pub fn reproduce(what: Reproduce) -> weft::Result<ExitCode> {
     match what {
         Reproduce::Landovsky(args) => landovsky::run(&args),
         Reproduce::Nurbs(args) => nurbs::run(args),
+        Reproduce::Vccpbd(args) => vccpbd::run(args),
     }
 }

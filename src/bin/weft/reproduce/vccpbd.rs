@@ -1,0 +1,206 @@
+//! `weft reproduce vccpbd`: the collision-time table of Shapri, Sulaiman & Bade (2016),
+//! "Velocity Correction Position Based Dynamic to optimize collision computation in cloth
+//! simulation" (SEEDS.md section A).
+//!
+//! The paper times the collision stage of a cloth falling and folding onto itself, for three
+//! grid sizes and four fabric presets (its dt, particle mass and damping), with three
+//! responses. Our experiment: a 1 m square cloth, horizontal, hung over a line (its middle row
+//! pinned) so both halves fall, swing under the line and fold against each other face to face.
+//! Collision distance = thickness = grid spacing. Per row we report the self-collision time
+//! per step (broadphase, speed clamp, pair pass, velocity correction), the whole step, and the
+//! paper's "average collision" (percentage of particles in penetration after each step).
+//! The paper's machine was a Core 2 Duo at 1.5 GHz running C#/XNA; ours is whatever runs this.
+
+use std::process::ExitCode;
+use std::time::Instant;
+
+use clap::Args;
+use serde::Serialize;
+use weft::collide::self_config::{Response, SelfBroadphase, SelfCollision};
+use weft::{ClothDesc, Effects, Fabric, PinSpec, SolverParams, WeftError, World};
+
+/// Options of `weft reproduce vccpbd`.
+#[derive(Args)]
+pub struct VccpbdArgs {
+    /// Fewer steps (a smoke run: figures are noisier).
+    #[arg(long)]
+    quick: bool,
+    /// Print one JSON array instead of the table.
+    #[arg(long)]
+    json: bool,
+    /// Steps per row (default 150, or 30 with --quick).
+    #[arg(long)]
+    steps: Option<u32>,
+}
+
+/// One row of the result.
+#[derive(Serialize, Clone, Debug)]
+struct Row {
+    particles: usize,
+    fabric: &'static str,
+    response: &'static str,
+    broadphase: &'static str,
+    collision_ms: f64,
+    step_ms: f64,
+    avg_collision_pct: f64,
+    paper_ms: f64,
+}
+
+const SIZES: [u32; 3] = [34, 50, 100];
+const FABRICS: [&str; 4] = ["basic", "cotton", "wool", "polyester"];
+const RESPONSES: [Response; 3] = [Response::MovementSpeed, Response::Pbd, Response::Vccpbd];
+
+/// The paper's collision time a step, ms: `[size][fabric][movement speed, PBD, VcCPBD]`.
+const PAPER_MS: [[[f64; 3]; 4]; 3] = [
+    [
+        [2.290, 2.325, 2.281],
+        [2.283, 2.191, 2.173],
+        [2.322, 2.215, 2.173],
+        [2.350, 2.316, 2.193],
+    ],
+    [
+        [5.370, 5.310, 5.245],
+        [5.131, 5.107, 5.097],
+        [5.840, 5.301, 5.208],
+        [5.585, 5.900, 5.396],
+    ],
+    [
+        [28.331, 27.337, 24.232],
+        [31.771, 28.631, 25.513],
+        [36.497, 30.080, 26.788],
+        [29.516, 29.589, 26.723],
+    ],
+];
+
+/// The paper's average collision, %: movement speed, PBD, VcCPBD.
+const PAPER_AVG_PCT: [f64; 3] = [1.995, 1.151, 1.018];
+
+/// Substeps of the paper's (large) time step.
+const SUBSTEPS: u32 = 10;
+
+fn world(size: u32, fabric: &str, response: Response, broadphase: SelfBroadphase) -> weft::Result<(World, f32)> {
+    let preset = Fabric::preset(fabric)?;
+    let spacing = 1.0 / (size - 1) as f32;
+    let fab = Fabric {
+        thickness: spacing,
+        ..preset
+    };
+    let dt = fab.dt;
+    let params = SolverParams {
+        dt,
+        substeps: SUBSTEPS,
+        iterations: 1,
+        ..Default::default()
+    };
+    let mut w = World::new(params, Effects::gravity())?;
+    w.add_cloth(&ClothDesc {
+        rows: size,
+        cols: size,
+        spacing,
+        origin: [-0.5, 1.5, -0.5],
+        u: [1.0, 0.0, 0.0],
+        v: [0.0, 0.0, 1.0],
+        fabric: fab,
+        pins: vec![PinSpec::Row(size / 2)],
+        shear: true,
+        bend: true,
+        tethers: None,
+    })?;
+    w.set_self_collision(Some(SelfCollision {
+        response,
+        broadphase,
+        ..SelfCollision::default()
+    }))?;
+    Ok((w, dt))
+}
+
+fn measure(size: u32, fi: usize, ri: usize, broadphase: SelfBroadphase, steps: u32) -> weft::Result<Row> {
+    let response = RESPONSES[ri];
+    let (mut w, dt) = world(size, FABRICS[fi], response, broadphase)?;
+    let t0 = Instant::now();
+    for _ in 0..steps {
+        w.step(dt)?;
+    }
+    let wall = t0.elapsed().as_secs_f64();
+    w.measure_self_collision()?;
+    let st = w.self_collision_stats();
+    let si = SIZES.iter().position(|&s| s == size).unwrap_or(0);
+    Ok(Row {
+        particles: w.particle_count(),
+        fabric: FABRICS[fi],
+        response: response.name(),
+        broadphase: broadphase.name(),
+        collision_ms: st.ms_per_step(),
+        step_ms: wall * 1e3 / steps.max(1) as f64,
+        avg_collision_pct: st.average_pct,
+        paper_ms: PAPER_MS[si][fi][ri],
+    })
+}
+
+/// Runs the experiment and prints the table (or JSON).
+pub fn run(args: VccpbdArgs) -> weft::Result<ExitCode> {
+    let steps = args.steps.unwrap_or(if args.quick { 30 } else { 150 }).max(1);
+    let mut rows = Vec::new();
+    for &size in &SIZES {
+        for fi in 0..FABRICS.len() {
+            for ri in 0..RESPONSES.len() {
+                rows.push(measure(size, fi, ri, SelfBroadphase::Hash, steps)?);
+            }
+            rows.push(measure(size, fi, 2, SelfBroadphase::AabbTree, steps)?);
+        }
+    }
+    if args.json {
+        let s = serde_json::to_string_pretty(&rows).map_err(|e| WeftError::Scene(e.to_string()))?;
+        println!("{s}");
+        return Ok(ExitCode::SUCCESS);
+    }
+    println!("VcCPBD (Shapri et al. 2016): cloth hung over a line folding onto itself, {steps} steps a row, {SUBSTEPS} substeps");
+    println!("collision = self-collision ms/step (ours) vs the paper's collision ms/step; ratio = paper / ours");
+    println!();
+    println!(
+        "{:>9} {:>9} {:>14} {:>9} {:>12} {:>9} {:>10} {:>9} {:>8}",
+        "particles", "fabric", "response", "broad", "collision", "step", "avg coll%", "paper ms", "ratio"
+    );
+    for r in &rows {
+        println!(
+            "{:>9} {:>9} {:>14} {:>9} {:>12.3} {:>9.3} {:>10.3} {:>9.3} {:>7.1}x",
+            r.particles,
+            r.fabric,
+            r.response,
+            r.broadphase,
+            r.collision_ms,
+            r.step_ms,
+            r.avg_collision_pct,
+            r.paper_ms,
+            r.paper_ms / r.collision_ms.max(1e-9)
+        );
+    }
+    println!();
+    for (ri, resp) in RESPONSES.iter().enumerate() {
+        let mine: Vec<&Row> = rows
+            .iter()
+            .filter(|r| r.response == resp.name() && r.broadphase == "hash")
+            .collect();
+        let avg = mine.iter().map(|r| r.avg_collision_pct).sum::<f64>() / mine.len().max(1) as f64;
+        println!(
+            "average collision, {:>14}: ours {:.3}%  paper {:.3}%",
+            resp.name(),
+            avg,
+            PAPER_AVG_PCT[ri]
+        );
+    }
+    let big: Vec<&Row> = rows.iter().filter(|r| r.particles == 10_000 && r.broadphase == "hash").collect();
+    let worst = big
+        .iter()
+        .map(|r| r.paper_ms / r.collision_ms.max(1e-9))
+        .fold(f64::INFINITY, f64::min);
+    let best_avg = big.iter().map(|r| r.avg_collision_pct).fold(0.0, f64::max);
+    println!();
+    println!(
+        "goal: 100x100 rows at least 50x faster than the paper: slowest ratio {worst:.1}x ({}); \
+         average collision below 1.018%: worst 100x100 row {best_avg:.3}% ({})",
+        if worst >= 50.0 { "met" } else { "NOT met" },
+        if best_avg < 1.018 { "met" } else { "NOT met" }
+    );
+    Ok(ExitCode::SUCCESS)
+}
