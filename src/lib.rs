@@ -1,4 +1,5 @@
 #![doc = include_str!("../README.md")]
+pub mod accuracy;
 pub mod checkpoint;
 pub mod cloth;
 pub mod collide;
@@ -25,5 +26,5 @@ pub use effects::{Effects, Wind};
 pub use error::{Result, WeftError};
 pub use fabric::Fabric;
 pub use metrics::Metrics;
-pub use params::{Backend, SolverParams};
+pub use params::{Backend, Method, SolverParams};
 pub use world::World;

@@ -55,6 +55,8 @@ pub struct World {
     pub(crate) time: f64,
     pub(crate) steps: u64,
     pub(crate) last_h: f32,
+    /// Scratch of the force-based integrators (force arrays, implicit factorisation).
+    pub(crate) ms: crate::integrate::mass_spring::MassSpringState,
 }
 
 impl World {
@@ -84,6 +86,7 @@ impl World {
             time: 0.0,
             steps: 0,
             last_h: 0.0,
+            ms: Default::default(),
         })
     }
 
@@ -142,6 +145,7 @@ impl World {
         self.tethers = TetherSet::new(&self.tether_inputs, sink);
         self.wind = self.effects.wind.as_ref().map(|_| WindState::new(&self.triangles, len));
         self.damp_h = f32::NAN;
+        self.ms = Default::default();
         for b in &mut self.backup {
             b.resize(len, 0.0);
         }

@@ -30,7 +30,7 @@
 pub mod checked;
 mod sections;
 
-pub use sections::{EffectsSection, OutputSection, SceneCloth, SolverSection, WindSection};
+pub use sections::{EffectsSection, OutputSection, SceneCloth, SolverSection, TetherSetting, WindSection};
 
 use crate::error::{Result, WeftError};
 use crate::world::World;

@@ -7,7 +7,7 @@ use crate::cloth::{ClothDesc, PinSpec};
 use crate::effects::{Effects, Wind};
 use crate::error::Result;
 use crate::fabric::Fabric;
-use crate::params::{Backend, SolverParams};
+use crate::params::{Backend, Method, SolverParams};
 
 /// `[solver]`.
 #[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
@@ -25,6 +25,12 @@ pub struct SolverSection {
     /// Threads (0 = all cores).
     #[serde(default)]
     pub threads: u16,
+    /// Integrator: `"xpbd"` (default), `"symplectic-euler"`, `"leapfrog"`, `"implicit-euler"`.
+    #[serde(default)]
+    pub method: Method,
+    /// Spring stiffness, N/m, of zero-compliance constraints in the force-based methods
+    /// (default [`DEFAULT_STIFFNESS`](crate::params::DEFAULT_STIFFNESS)).
+    pub stiffness: Option<Positive>,
     /// `"simd"` (default) or `"scalar"`.
     #[serde(default)]
     pub backend: Backend,
@@ -48,6 +54,8 @@ impl Default for SolverSection {
             iterations: default_iterations(),
             threads: 0,
             backend: Backend::Simd,
+            method: Method::Xpbd,
+            stiffness: None,
         }
     }
 }
@@ -61,6 +69,8 @@ impl SolverSection {
             iterations: self.iterations.0,
             threads: self.threads as usize,
             backend: self.backend,
+            method: self.method,
+            stiffness: self.stiffness.map_or(crate::params::DEFAULT_STIFFNESS, |s| s.0),
             ..SolverParams::default()
         }
     }

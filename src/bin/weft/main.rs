@@ -4,10 +4,14 @@
 //! weft run scenes/hanging.toml            # simulate, write out/hanging/{final.png,frames.png,summary.json}
 //! weft check scenes/flag.toml             # what the scene will simulate, and its memory
 //! weft run --resume out/big/checkpoint.bin
+//! weft accuracy scenes/hanging.toml --plot out/hanging/accuracy.svg
+//! weft reproduce small-steps
 //! ```
 
+mod accuracy;
 mod check;
 mod pictures;
+mod reproduce;
 mod run;
 
 use std::path::PathBuf;
@@ -33,6 +37,11 @@ enum Command {
         /// The scene file (TOML).
         scene: PathBuf,
     },
+    /// Time against error for a grid of integrators and settings, against a cached reference.
+    Accuracy(accuracy::AccuracyArgs),
+    /// Rerun an experiment from a source paper, ours beside theirs.
+    #[command(subcommand)]
+    Reproduce(reproduce::Reproduce),
 }
 
 fn main() -> ExitCode {
@@ -40,6 +49,8 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Run(args) => run::run(args),
         Command::Check { scene } => check::check(&scene),
+        Command::Accuracy(args) => accuracy::accuracy(args),
+        Command::Reproduce(r) => reproduce::reproduce(r),
     };
     match result {
         Ok(code) => code,
