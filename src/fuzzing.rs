@@ -72,6 +72,7 @@ pub fn step_bytes(data: &[u8]) {
         threads: b.small(3) as usize,
         backend: if b.one_in(2) { Backend::Simd } else { Backend::Scalar },
         guard: true,
+        ..SolverParams::default()
     };
     let effects = Effects {
         gravity: b.one_in(2).then(|| [b.f32(), b.f32(), b.f32()]),

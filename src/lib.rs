@@ -1,5 +1,6 @@
 #![doc = include_str!("../README.md")]
 #![warn(missing_docs)]
+pub mod accuracy;
 #[cfg(feature = "capi")]
 pub mod capi;
 pub mod checkpoint;
@@ -32,5 +33,5 @@ pub use embed::{AdvanceReport, Snapshot, Soa, Vec3Out};
 pub use error::{Result, WeftError};
 pub use fabric::Fabric;
 pub use metrics::Metrics;
-pub use params::{Backend, SolverParams};
+pub use params::{Backend, Method, SolverParams};
 pub use world::World;

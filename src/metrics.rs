@@ -12,7 +12,8 @@ pub struct Metrics {
     /// Elastic energy stored in compliant constraints, J: `Σ ½ α f²` with the constraint force
     /// `f = λ / h²` the solver applied in the last substep. For a converged solve this equals
     /// `Σ C² / (2α)`; unlike that form it stays meaningful (and bounded) for stiff constraints
-    /// that a few iterations leave slightly violated.
+    /// that a few iterations leave slightly violated. With a force-based
+    /// [`Method`](crate::params::Method) it is the springs' `Σ ½ k (l - rest)²`.
     pub elastic: f64,
     /// Sum of the three, J.
     pub total: f64,
@@ -45,7 +46,11 @@ impl World {
             ((p.x[b] as f64 - p.x[a] as f64).powi(2) + (p.y[b] as f64 - p.y[a] as f64).powi(2) + (p.z[b] as f64 - p.z[a] as f64).powi(2))
                 .sqrt()
         };
-        if self.last_h > 0.0 {
+        if self.params.method != crate::params::Method::Xpbd {
+            // Force-based methods: the springs' energy at the current positions.
+            let p = &self.particles;
+            m.elastic = crate::integrate::springs::spring_energy(&self.distance, [&p.x, &p.y, &p.z], self.params.stiffness);
+        } else if self.last_h > 0.0 {
             let inv_h2 = 1.0 / (self.last_h as f64 * self.last_h as f64);
             for col in &self.distance.colours {
                 for k in 0..col.real {

@@ -13,6 +13,40 @@ pub enum Backend {
     Scalar,
 }
 
+/// Which integrator advances the cloth. All four run on the same particles and the same
+/// distance constraints; the three force-based methods read each constraint as a spring (see
+/// [`integrate::mass_spring`](crate::integrate::mass_spring)). Tethers are position limits and
+/// only the XPBD method applies them.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Method {
+    /// XPBD with `substeps` substeps of `iterations` sweeps (PBD = one substep, zero compliance).
+    #[default]
+    Xpbd,
+    /// Explicit mass-spring, symplectic (semi-implicit) Euler: kick with `F(x_n)`, then drift.
+    SymplecticEuler,
+    /// Explicit mass-spring, leapfrog (kick-drift-kick, second order).
+    Leapfrog,
+    /// Implicit (backward) Euler on the mass-spring model, Baraff–Witkin linearisation, solved
+    /// with a sparse Cholesky factorisation (faer).
+    ImplicitEuler,
+}
+
+impl Method {
+    /// Every method, in the order reports list them.
+    pub const ALL: [Method; 4] = [Method::Xpbd, Method::SymplecticEuler, Method::Leapfrog, Method::ImplicitEuler];
+
+    /// The scene-file name (`"xpbd"`, `"symplectic-euler"`, `"leapfrog"`, `"implicit-euler"`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Xpbd => "xpbd",
+            Method::SymplecticEuler => "symplectic-euler",
+            Method::Leapfrog => "leapfrog",
+            Method::ImplicitEuler => "implicit-euler",
+        }
+    }
+}
+
 /// How a step is solved.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -21,8 +55,13 @@ pub struct SolverParams {
     pub dt: f32,
     /// Substeps per step (XPBD small steps). PBD is `substeps = 1` with zero compliance.
     pub substeps: u32,
-    /// Solver sweeps per substep.
+    /// Solver sweeps per substep (XPBD only; the force-based methods ignore it).
     pub iterations: u32,
+    /// The integrator.
+    pub method: Method,
+    /// Spring stiffness, N/m, that the force-based methods give constraints of zero compliance
+    /// (rigid in XPBD); a constraint of compliance `α > 0` becomes a spring of stiffness `1/α`.
+    pub stiffness: f32,
     /// Worker threads: 0 = the global rayon pool, k > 0 = a pool of k threads owned by the
     /// world. Results are identical for every value.
     pub threads: usize,
@@ -39,12 +78,17 @@ impl Default for SolverParams {
             dt: 1.0 / 60.0,
             substeps: 8,
             iterations: 1,
+            method: Method::Xpbd,
+            stiffness: DEFAULT_STIFFNESS,
             threads: 0,
             backend: Backend::Simd,
             guard: true,
         }
     }
 }
+
+/// Spring stiffness of rigid constraints in the force-based methods when none is given, N/m.
+pub const DEFAULT_STIFFNESS: f32 = 1e4;
 
 /// Largest number of substeps or iterations accepted (a typo guard, not a physical limit).
 pub const MAX_SWEEPS: u32 = 100_000;
@@ -53,6 +97,7 @@ impl SolverParams {
     /// Checks every field.
     pub fn validate(&self) -> Result<()> {
         positive("solver.dt", self.dt)?;
+        positive("solver.stiffness", self.stiffness)?;
         if self.substeps == 0 || self.substeps > MAX_SWEEPS {
             return Err(WeftError::param(
                 "solver.substeps",

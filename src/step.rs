@@ -16,6 +16,8 @@
 //!     pair pass, velocity correction                    [self-collision]  (if on)
 //!     update: v = (p - x) / h, damping; x = p          [integrate]
 //!     obstacle velocity pass: normal part, friction     [collide/obstacles] (if any)
+//!   (solver.method = symplectic-euler | leapfrog | implicit-euler: the force-based step of
+//!    integrate::mass_spring / integrate::implicit replaces the substep loop above)
 //!   on a non-finite value: restore the copy, replay the step with a check after every stage
 //!   to name the stage and particle, and return `Diverged`
 //!   kinematic pins land exactly on their targets                     [embed::kinematic]
@@ -25,7 +27,7 @@ use crate::collide::response::{apply, clamp_speed, ApplyInput, ApplyMode, ClampP
 use crate::collide::self_collision::{mean_velocity, Response, BOX_RADIUS, TRAVEL_FACTOR};
 use crate::error::{positive, Result, WeftError};
 use crate::integrate::{predict, update, PredictParams};
-use crate::params::Backend;
+use crate::params::{Backend, Method};
 use crate::world::World;
 
 /// Index of the first entry below `n` that is not finite in any of `arrays`.
@@ -47,7 +49,23 @@ impl World {
         if guard {
             self.save_backup();
         }
-        self.in_pool(|w| w.run_substeps(dt, false));
+        let method = self.params.method;
+        let ran = match method {
+            Method::Xpbd => {
+                self.in_pool(|w| w.run_substeps(dt, false));
+                Ok(())
+            }
+            m => self.in_pool(|w| w.run_mass_spring(dt, m)),
+        };
+        if guard && method != Method::Xpbd && (ran.is_err() || self.particles.first_non_finite().is_some()) {
+            let particle = self.particles.first_non_finite().unwrap_or(0);
+            self.restore_backup();
+            return Err(ran.err().unwrap_or(WeftError::Diverged {
+                particle,
+                stage: method.name(),
+            }));
+        }
+        ran?;
         if guard && self.particles.first_non_finite().is_some() {
             self.restore_backup();
             let found = self.in_pool(|w| w.run_substeps(dt, true));

@@ -61,6 +61,8 @@ pub struct World {
     pub(crate) scalps: crate::strands::scalp::ScalpSet,
     pub(crate) strand_area: Vec<f32>,
     pub(crate) selfcol: crate::collide::self_collision::SelfCollisionData,
+    /// Scratch of the force-based integrators (force arrays, implicit factorisation).
+    pub(crate) ms: crate::integrate::mass_spring::MassSpringState,
 }
 
 impl World {
@@ -96,6 +98,7 @@ impl World {
             scalps: Default::default(),
             strand_area: Vec::new(),
             selfcol: Default::default(),
+            ms: Default::default(),
         })
     }
 
@@ -158,6 +161,7 @@ impl World {
         self.wind = self.new_wind_state();
         self.damp_h = f32::NAN;
         self.obstacles.invalidate();
+        self.ms = Default::default();
         for b in &mut self.backup {
             b.resize(len, 0.0);
         }

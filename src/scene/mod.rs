@@ -37,7 +37,9 @@ pub mod obstacles;
 mod sections;
 mod strands_section;
 
-pub use sections::{ClothSurface, EffectsSection, OutputSection, SceneCloth, SelfCollisionSection, SolverSection, WindSection};
+pub use sections::{
+    ClothSurface, EffectsSection, OutputSection, SceneCloth, SelfCollisionSection, SolverSection, TetherSetting, WindSection,
+};
 pub use strands_section::{ScalpKind, SceneScalp, SceneStrands};
 
 use crate::error::{Result, WeftError};

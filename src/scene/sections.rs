@@ -8,7 +8,7 @@ use crate::collide::self_config::{Response, SelfBroadphase, SelfCollision};
 use crate::effects::{Effects, Wind};
 use crate::error::Result;
 use crate::fabric::Fabric;
-use crate::params::{Backend, SolverParams};
+use crate::params::{Backend, Method, SolverParams};
 
 /// `[solver]`.
 #[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
@@ -26,6 +26,12 @@ pub struct SolverSection {
     /// Threads (0 = all cores).
     #[serde(default)]
     pub threads: u16,
+    /// Integrator: `"xpbd"` (default), `"symplectic-euler"`, `"leapfrog"`, `"implicit-euler"`.
+    #[serde(default)]
+    pub method: Method,
+    /// Spring stiffness, N/m, of zero-compliance constraints in the force-based methods
+    /// (default [`DEFAULT_STIFFNESS`](crate::params::DEFAULT_STIFFNESS)).
+    pub stiffness: Option<Positive>,
     /// `"simd"` (default) or `"scalar"`.
     #[serde(default)]
     pub backend: Backend,
@@ -49,6 +55,8 @@ impl Default for SolverSection {
             iterations: default_iterations(),
             threads: 0,
             backend: Backend::Simd,
+            method: Method::Xpbd,
+            stiffness: None,
         }
     }
 }
@@ -62,6 +70,8 @@ impl SolverSection {
             iterations: self.iterations.0,
             threads: self.threads as usize,
             backend: self.backend,
+            method: self.method,
+            stiffness: self.stiffness.map_or(crate::params::DEFAULT_STIFFNESS, |s| s.0),
             ..SolverParams::default()
         }
     }

@@ -7,8 +7,11 @@
 //! weft reproduce nurbs [--json]           # a source paper's table (SEEDS.md B)
 //! weft reproduce landovsky --quick        # our seconds beside the paper's (SEEDS.md D)
 //! weft reproduce vccpbd --quick           # the VcCPBD paper's table, ours beside theirs (SEEDS.md A)
+//! weft reproduce small-steps              # Macklin et al. 2019 chain: substeps against iterations
+//! weft accuracy scenes/hanging.toml --plot out/hanging/accuracy.svg
 //! ```
 
+mod accuracy;
 mod bench;
 mod check;
 mod pictures;
@@ -48,6 +51,8 @@ enum Command {
         #[arg(long, default_value = "scenes")]
         scenes: PathBuf,
     },
+    /// Time against error for a grid of integrators and settings, against a cached reference.
+    Accuracy(accuracy::AccuracyArgs),
     /// Re-run a source paper's measurement and print its table (e.g. `weft reproduce nurbs`).
     #[command(subcommand)]
     Reproduce(reproduce::Reproduce),
@@ -59,6 +64,7 @@ fn main() -> ExitCode {
         Command::Run(args) => run::run(args),
         Command::Check { scene } => check::check(&scene),
         Command::Bench { json, scenes } => bench::bench(json, &scenes),
+        Command::Accuracy(args) => accuracy::accuracy(args),
         Command::Reproduce(what) => reproduce::reproduce(what),
     };
     match result {

@@ -3,9 +3,11 @@
 //! - `landovsky` ([`landovsky`], D): cloth dropped on dress forms, time per broadphase.
 //! - `nurbs` ([`nurbs`], B): NURBS global against local evaluation cost.
 //! - `vccpbd` ([`vccpbd`], A and C): self-collision responses on the paper's cloths.
+//! - `small-steps` ([`small_steps`], Macklin et al. 2019): substeps against iterations on a chain.
 
 mod landovsky;
 pub mod nurbs;
+pub mod small_steps;
 mod vccpbd;
 
 use std::process::ExitCode;
@@ -24,6 +26,9 @@ pub enum Reproduce {
     /// Shapri, Sulaiman & Bade (SEEDS.md A, with the hash of section C): collision ms per step of
     /// PBD, movement-speed and VcCPBD responses on the paper's 12 cloths, ours beside theirs.
     Vccpbd(vccpbd::VccpbdArgs),
+    /// Macklin et al. 2019 "Small Steps in Physics Simulation": a 20-particle chain with a
+    /// 1:100000 mass ratio, 100 iterations x 1 substep against 1 iteration x 100 substeps.
+    SmallSteps(small_steps::SmallStepsArgs),
 }
 
 /// Runs the chosen reproduction.
@@ -32,5 +37,6 @@ pub fn reproduce(what: Reproduce) -> weft::Result<ExitCode> {
         Reproduce::Landovsky(args) => landovsky::run(&args),
         Reproduce::Nurbs(args) => nurbs::run(args),
         Reproduce::Vccpbd(args) => vccpbd::run(args),
+        Reproduce::SmallSteps(args) => small_steps::small_steps(args),
     }
 }

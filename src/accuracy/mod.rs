@@ -1,0 +1,58 @@
+//! What accuracy costs in time: run a scene under a grid of solver settings and measure each
+//! run against a reference solution.
+//!
+//! For every [`Setting`] (method × substeps × iterations × precision) the scene is simulated for
+//! a fixed number of steps of its `dt`, timing only the steps, and compared after every step with
+//! the cached f64 [`Reference`]:
+//!
+//! - **rms_error** — `sqrt(mean over steps and particles of |x - x_ref|²)`, m;
+//! - **max_error** — the largest `|x - x_ref|` over the run, m;
+//! - **max_strain** — the largest relative stretch of a stretch constraint over the run;
+//! - **energy_drift** — `E(T) - E(0)`, J, with `E` = kinetic + gravitational + spring energy
+//!   `Σ ½ k (l - rest)²` (the same energy for every method; [`Report::reference_drift`] is the
+//!   reference's own change, which damping and drag make negative);
+//! - **max_penetration / penetration_count** — always 0 here: this branch's world has no
+//!   obstacles or self-collision in its step yet, so nothing can penetrate. They are kept so the
+//!   report's columns stay the same once collisions join the step.
+//!
+//! A run whose step reports [`WeftError::Diverged`](crate::WeftError::Diverged), or whose RMS
+//! error passes [`DIVERGED_RMS`], is reported as diverged with no numbers. The Pareto front is
+//! the set of converged runs that no other run beats on both ms/step and rms error.
+//!
+//! Tethers are position limits with no force counterpart, so [`prepare_scene`] switches them off
+//! and every method integrates the same equations.
+
+pub mod reference;
+pub mod run;
+
+pub use reference::{fnv1a, MakeWorld, Reference};
+pub use run::{default_grid, model_energy, reference_drift, run_grid, run_setting, Outcome, Precision, Report, Setting};
+
+use crate::scene::{Scene, TetherSetting};
+
+/// RMS position error, m, past which a run counts as diverged even if it stayed finite.
+pub const DIVERGED_RMS: f64 = 1e3;
+
+/// The scene as the accuracy report simulates it: tethers off (see the module docs).
+pub fn prepare_scene(scene: &Scene) -> Scene {
+    let mut s = scene.clone();
+    for c in &mut s.cloth {
+        c.get_mut().tethers = Some(TetherSetting::Switch(false));
+    }
+    s
+}
+
+/// Indices of the Pareto front of `(time, error)` points: those no other point matches or beats
+/// on both with one strictly better. `None` entries (diverged) are never on the front.
+pub fn pareto(points: &[Option<(f64, f64)>]) -> Vec<bool> {
+    points
+        .iter()
+        .map(|p| {
+            let Some((t, e)) = *p else { return false };
+            !points.iter().flatten().any(|&(t2, e2)| t2 <= t && e2 <= e && (t2 < t || e2 < e))
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests;

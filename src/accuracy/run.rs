@@ -1,0 +1,264 @@
+//! Running one setting, or a grid of them, against a reference.
+
+use std::time::Instant;
+
+use crate::accuracy::reference::{MakeWorld, Reference};
+use crate::accuracy::{pareto, DIVERGED_RMS};
+use crate::error::{Result, WeftError};
+use crate::params::{Backend, Method, SolverParams};
+use crate::reference::ReferenceWorld;
+use crate::world::World;
+
+/// Arithmetic of a run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Precision {
+    /// The world's f32 SIMD kernels on its thread pool.
+    F32,
+    /// The scalar f64 XPBD step of [`crate::reference`] (XPBD only).
+    F64,
+}
+
+/// One point of the grid.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Setting {
+    /// Integrator.
+    pub method: Method,
+    /// Substeps per step.
+    pub substeps: u32,
+    /// Iterations per substep (XPBD; 1 for the other methods).
+    pub iterations: u32,
+    /// Arithmetic.
+    pub precision: Precision,
+}
+
+/// What one setting measured; error fields are `None` when the run diverged.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Outcome {
+    /// Method name as in scene files.
+    pub method: &'static str,
+    /// Substeps per step.
+    pub substeps: u32,
+    /// Iterations per substep.
+    pub iterations: u32,
+    /// `"f32"` or `"f64"`.
+    pub precision: Precision,
+    /// `"ok"` or `"diverged"`.
+    pub status: &'static str,
+    /// Wall time per step, ms (until divergence for diverged runs).
+    pub ms_per_step: f64,
+    /// RMS position error over particles and steps, m.
+    pub rms_error: Option<f64>,
+    /// Largest position error over the run, m.
+    pub max_error: Option<f64>,
+    /// Largest relative stretch over the run.
+    pub max_strain: Option<f64>,
+    /// `E(T) - E(0)`, J.
+    pub energy_drift: Option<f64>,
+    /// Deepest penetration, m (0: no obstacles in this world's step yet).
+    pub max_penetration: Option<f64>,
+    /// Penetrating particles at the end (0: no obstacles in this world's step yet).
+    pub penetration_count: Option<u64>,
+    /// On the Pareto front of (ms_per_step, rms_error).
+    pub pareto: bool,
+}
+
+/// A whole report.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Report {
+    /// Steps simulated.
+    pub steps: usize,
+    /// Step length, s.
+    pub dt: f32,
+    /// Substeps of the reference's finer run.
+    pub reference_substeps: u32,
+    /// The reference's own error estimate, m (see [`Reference::self_error`]).
+    pub reference_self_error: f64,
+    /// `E(T) - E(0)` of the reference, J.
+    pub reference_drift: f64,
+    /// One entry per setting.
+    pub outcomes: Vec<Outcome>,
+}
+
+/// The default grid: XPBD (f32: substeps 1–64 × iterations 1–16; f64: substeps 1–64),
+/// symplectic Euler and leapfrog (64–4096 substeps) and implicit Euler (1–16 substeps).
+pub fn default_grid() -> Vec<Setting> {
+    let s = |method, substeps, iterations, precision| Setting {
+        method,
+        substeps,
+        iterations,
+        precision,
+    };
+    let mut g = Vec::new();
+    for sub in [1, 4, 16, 64] {
+        for it in [1, 4, 16] {
+            g.push(s(Method::Xpbd, sub, it, Precision::F32));
+        }
+    }
+    for sub in [1, 4, 16, 64] {
+        g.push(s(Method::Xpbd, sub, 1, Precision::F64));
+    }
+    for m in [Method::SymplecticEuler, Method::Leapfrog] {
+        for sub in [64, 512, 4096] {
+            g.push(s(m, sub, 1, Precision::F32));
+        }
+    }
+    for sub in [1, 4, 16] {
+        g.push(s(Method::ImplicitEuler, sub, 1, Precision::F32));
+    }
+    g
+}
+
+/// Kinetic + gravitational + spring energy of `world`'s model at state `(x, v)`, J.
+pub fn model_energy(world: &World, x: &[[f64; 3]], v: &[[f64; 3]]) -> f64 {
+    let p = world.particles();
+    let g = world.effects().gravity.map(|g| g.map(f64::from)).unwrap_or([0.0; 3]);
+    let mut e = 0.0;
+    for i in 0..x.len() {
+        if p.w[i] > 0.0 {
+            let m = 1.0 / p.w[i] as f64;
+            e += 0.5 * m * (v[i][0] * v[i][0] + v[i][1] * v[i][1] + v[i][2] * v[i][2]);
+            e -= m * (g[0] * x[i][0] + g[1] * x[i][1] + g[2] * x[i][2]);
+        }
+    }
+    let stiffness = world.params().stiffness;
+    for col in &world.distance_set().colours {
+        for k in 0..col.real {
+            let (a, b) = (col.a[k] as usize, col.b[k] as usize);
+            let l = dist(x[a], x[b]);
+            let ks = crate::integrate::springs::spring_stiffness(col.compliance[k], stiffness) as f64;
+            e += 0.5 * ks * (l - col.rest[k] as f64).powi(2);
+        }
+    }
+    e
+}
+
+fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+}
+
+fn state64(w: &World) -> (Vec<[f64; 3]>, Vec<[f64; 3]>) {
+    let p = w.particles();
+    let n = w.particle_count();
+    (
+        (0..n).map(|i| p.position(i).map(f64::from)).collect(),
+        (0..n).map(|i| p.velocity(i).map(f64::from)).collect(),
+    )
+}
+
+fn max_strain(w: &World, x: &[[f64; 3]]) -> f64 {
+    w.stretch
+        .iter()
+        .map(|&(a, b, rest)| (dist(x[a as usize], x[b as usize]) - rest as f64) / rest as f64)
+        .fold(0.0, f64::max)
+}
+
+/// Runs one setting for `steps` steps against `reference`.
+pub fn run_setting(make: MakeWorld<'_>, reference: &Reference, setting: Setting, steps: usize) -> Result<Outcome> {
+    if reference.frames.len() < steps + 1 {
+        return Err(WeftError::param("steps", steps, "the reference is shorter than the run"));
+    }
+    let mut w = make()?;
+    let params = SolverParams {
+        method: setting.method,
+        substeps: setting.substeps,
+        iterations: setting.iterations,
+        backend: Backend::Simd,
+        guard: true,
+        ..w.params().clone()
+    };
+    let dt = params.dt;
+    w.set_params(params)?;
+    let (x0, v0) = state64(&w);
+    let e0 = model_energy(&w, &x0, &v0);
+    let mut f64_world = match setting.precision {
+        Precision::F32 => None,
+        Precision::F64 if setting.method == Method::Xpbd => Some(ReferenceWorld::from_world(&w)),
+        Precision::F64 => return Err(WeftError::param("precision", "f64", "is available for the xpbd method only")),
+    };
+    let (mut sum2, mut max_err, mut strain, mut seconds) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
+    let mut done = 0usize;
+    let mut diverged = false;
+    let mut last = (x0, v0);
+    for k in 0..steps {
+        let t0 = Instant::now();
+        let ok = match &mut f64_world {
+            Some(r) => {
+                r.step(dt as f64);
+                r.x.iter().flatten().all(|v| v.is_finite())
+            }
+            None => match w.step(dt) {
+                Ok(()) => true,
+                Err(WeftError::Diverged { .. }) => false,
+                Err(e) => return Err(e),
+            },
+        };
+        seconds += t0.elapsed().as_secs_f64();
+        done += 1;
+        if !ok {
+            diverged = true;
+            break;
+        }
+        last = match &f64_world {
+            Some(r) => (r.x.clone(), r.v.clone()),
+            None => state64(&w),
+        };
+        for (a, b) in last.0.iter().zip(&reference.frames[k + 1]) {
+            let d = dist(*a, *b);
+            sum2 += d * d;
+            max_err = max_err.max(d);
+        }
+        strain = strain.max(max_strain(&w, &last.0));
+    }
+    let n = w.particle_count().max(1);
+    let rms = (sum2 / (n * done.max(1)) as f64).sqrt();
+    diverged |= rms.is_nan() || rms >= DIVERGED_RMS;
+    let some = |v: f64| (!diverged).then_some(v);
+    Ok(Outcome {
+        method: setting.method.name(),
+        substeps: setting.substeps,
+        iterations: setting.iterations,
+        precision: setting.precision,
+        status: if diverged { "diverged" } else { "ok" },
+        ms_per_step: 1e3 * seconds / done.max(1) as f64,
+        rms_error: some(rms),
+        max_error: some(max_err),
+        max_strain: some(strain),
+        energy_drift: some(model_energy(&w, &last.0, &last.1) - e0),
+        max_penetration: some(0.0),
+        penetration_count: (!diverged).then_some(0),
+        pareto: false,
+    })
+}
+
+/// Runs every setting, calling `progress(i, outcome)` after each, and marks the Pareto front.
+pub fn run_grid(
+    make: MakeWorld<'_>,
+    reference: &Reference,
+    grid: &[Setting],
+    steps: usize,
+    mut progress: impl FnMut(usize, &Outcome),
+) -> Result<Vec<Outcome>> {
+    let mut out = Vec::with_capacity(grid.len());
+    for (i, s) in grid.iter().enumerate() {
+        let o = run_setting(make, reference, *s, steps)?;
+        progress(i, &o);
+        out.push(o);
+    }
+    let front = pareto(&out.iter().map(|o| o.rms_error.map(|e| (o.ms_per_step, e))).collect::<Vec<_>>());
+    for (o, f) in out.iter_mut().zip(front) {
+        o.pareto = f;
+    }
+    Ok(out)
+}
+
+/// `E(T) - E(0)` of the reference, J.
+pub fn reference_drift(make: MakeWorld<'_>, reference: &Reference) -> Result<f64> {
+    let w = make()?;
+    let (x0, v0) = state64(&w);
+    let last = reference
+        .frames
+        .last()
+        .ok_or_else(|| WeftError::param("reference", "empty", "has no frames"))?;
+    Ok(model_energy(&w, last, &reference.final_velocity) - model_energy(&w, &x0, &v0))
+}

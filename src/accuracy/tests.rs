@@ -1,0 +1,122 @@
+//! Tests of the accuracy report: reference cache, convergence, divergence, Pareto front.
+
+use super::*;
+use crate::params::Method;
+use crate::scene::Scene;
+use crate::world::World;
+
+const SCENE: &str = r#"
+[solver]
+dt = 0.02
+[effects]
+gravity = [0.0, -9.81, 0.0]
+[[cloth]]
+rows = 6
+cols = 6
+spacing = 0.05
+origin = [0.0, 1.0, 0.0]
+v = [0.0, 0.0, 1.0]
+fabric = "cotton"
+stretch_compliance = 1e-2
+shear_compliance = 1e-2
+bend_compliance = 1e-2
+pins = ["first-row-corners"]
+"#;
+
+fn scene() -> Scene {
+    prepare_scene(&Scene::parse(SCENE, "test").unwrap())
+}
+
+fn setting(method: Method, substeps: u32) -> Setting {
+    Setting {
+        method,
+        substeps,
+        iterations: 1,
+        precision: Precision::F32,
+    }
+}
+
+#[test]
+fn pareto_front_keeps_only_undominated_points() {
+    let pts = [
+        Some((1.0, 5.0)),
+        Some((2.0, 1.0)),
+        Some((3.0, 2.0)),
+        None,
+        Some((1.0, 5.0)),
+        Some((0.5, 9.0)),
+    ];
+    assert_eq!(pareto(&pts), [true, true, false, false, true, true]);
+}
+
+#[test]
+fn reference_is_cached_and_reloaded_identically() {
+    let s = scene();
+    let make = || s.world();
+    let dir = std::env::temp_dir().join(format!("weft-acc-cache-{}", std::process::id()));
+    let (a, cached_a) = Reference::cached(&make, SCENE, 10, 64, &dir).unwrap();
+    let (b, cached_b) = Reference::cached(&make, SCENE, 10, 64, &dir).unwrap();
+    assert!(!cached_a && cached_b);
+    assert_eq!(a, b);
+    let (_, other) = Reference::cached(&make, SCENE, 10, 32, &dir).unwrap();
+    assert!(!other, "other settings, other key");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn every_method_gets_closer_to_the_reference_as_its_step_shrinks() {
+    let s = scene();
+    let make = || s.world();
+    let steps = 25;
+    let r = Reference::compute(&make, steps, 2048).unwrap();
+    assert!(r.self_error < 1e-3, "reference self error {}", r.self_error);
+    for (method, subs) in [
+        (Method::Xpbd, [2, 8, 32]),
+        (Method::SymplecticEuler, [8, 32, 128]),
+        (Method::Leapfrog, [12, 24, 48]),
+        (Method::ImplicitEuler, [2, 8, 32]),
+    ] {
+        let e: Vec<f64> = subs
+            .iter()
+            .map(|&k| {
+                run_setting(&make, &r, setting(method, k), steps)
+                    .unwrap()
+                    .rms_error
+                    .unwrap_or(f64::NAN)
+            })
+            .collect();
+        eprintln!("{}: {e:?} (reference self error {:.2e})", method.name(), r.self_error);
+        assert!(
+            e[0] > e[1] && e[1] > e[2],
+            "{}: errors {e:?} must fall with the step",
+            method.name()
+        );
+    }
+}
+
+#[test]
+fn unstable_settings_are_reported_as_diverged_without_numbers() {
+    let text = SCENE.replace("stretch_compliance = 1e-2", "stretch_compliance = 1e-9");
+    let s = prepare_scene(&Scene::parse(&text, "test").unwrap());
+    let make = || s.world();
+    let r = Reference::compute(&make, 20, 64).unwrap();
+    let o = run_setting(&make, &r, setting(Method::SymplecticEuler, 1), 20).unwrap();
+    assert_eq!(o.status, "diverged");
+    assert!(o.rms_error.is_none() && o.max_error.is_none() && o.energy_drift.is_none());
+    let json = serde_json::to_string(&o).unwrap();
+    assert!(!json.contains("NaN") && json.contains("\"diverged\""), "{json}");
+    let ok = run_setting(&make, &r, setting(Method::ImplicitEuler, 1), 20).unwrap();
+    assert_eq!(ok.status, "ok", "implicit Euler stays stable on the same scene");
+}
+
+#[test]
+fn f64_precision_is_xpbd_only() {
+    let s = scene();
+    let make = || -> crate::Result<World> { s.world() };
+    let r = Reference::compute(&make, 2, 4).unwrap();
+    let mut st = setting(Method::Leapfrog, 4);
+    st.precision = Precision::F64;
+    assert!(run_setting(&make, &r, st, 2).is_err());
+    st.method = Method::Xpbd;
+    assert_eq!(run_setting(&make, &r, st, 2).unwrap().status, "ok");
+}

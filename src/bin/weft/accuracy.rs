@@ -1,0 +1,224 @@
+//! `weft accuracy SCENE [--json] [--plot FILE.svg]`: ms/step against error for a grid of
+//! solver settings, with the Pareto front marked (see `weft::accuracy`).
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use clap::Args;
+use weft::accuracy::{default_grid, prepare_scene, reference_drift, run_grid, Outcome, Reference, Report};
+use weft::scene::Scene;
+
+/// Arguments of `weft accuracy`.
+#[derive(Args)]
+pub struct AccuracyArgs {
+    /// The scene file (TOML).
+    scene: PathBuf,
+    /// Print one JSON array of results instead of the table.
+    #[arg(long)]
+    json: bool,
+    /// Write a log-log plot of rms error against ms/step (SVG).
+    #[arg(long, value_name = "FILE.svg")]
+    plot: Option<PathBuf>,
+    /// Simulated time, s (default 1).
+    #[arg(long, default_value_t = 1.0)]
+    time: f64,
+    /// Substeps per step of the reference's finer run (even; default 1024).
+    #[arg(long, default_value_t = 1024)]
+    reference_substeps: u32,
+    /// Directory of the reference cache (default out/<scene name>).
+    #[arg(long)]
+    out: Option<PathBuf>,
+}
+
+pub fn accuracy(args: AccuracyArgs) -> weft::Result<ExitCode> {
+    if !(args.time.is_finite() && args.time > 0.0) {
+        return Err(weft::WeftError::param("--time", args.time, "must be a positive number of seconds"));
+    }
+    if let Some(p) = &args.plot {
+        if p.extension().and_then(|e| e.to_str()) != Some("svg") {
+            return Err(weft::WeftError::param(
+                "--plot",
+                p.display(),
+                "only SVG plots are written (use a .svg name)",
+            ));
+        }
+    }
+    let (scene, text) = Scene::load(&args.scene)?;
+    let scene = prepare_scene(&scene);
+    let make = || scene.world();
+    let dt = scene.solver.dt.0 as f64;
+    let steps = ((args.time / dt).round() as usize).max(1);
+    let stem = args
+        .scene
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "scene".into());
+    let dir = args.out.clone().unwrap_or_else(|| Path::new("out").join(&stem));
+    if !args.json {
+        eprintln!(
+            "reference: f64 XPBD, {} and {} substeps/step, Richardson-extrapolated ...",
+            args.reference_substeps,
+            args.reference_substeps / 2
+        );
+    }
+    let (reference, cached) = Reference::cached(&make, &text, steps, args.reference_substeps, &dir)?;
+    let grid = default_grid();
+    let quiet = args.json;
+    let outcomes = run_grid(&make, &reference, &grid, steps, |i, o| {
+        if !quiet {
+            eprintln!(
+                "  [{}/{}] {} {}x{} {:?}: {:.3} ms/step",
+                i + 1,
+                grid.len(),
+                o.method,
+                o.substeps,
+                o.iterations,
+                o.precision,
+                o.ms_per_step
+            );
+        }
+    })?;
+    let report = Report {
+        steps,
+        dt: scene.solver.dt.0,
+        reference_substeps: args.reference_substeps,
+        reference_self_error: reference.self_error,
+        reference_drift: reference_drift(&make, &reference)?,
+        outcomes,
+    };
+    if let Some(p) = &args.plot {
+        plot(&report.outcomes, p, &stem)?;
+    }
+    if args.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&report.outcomes).map_err(|e| weft::WeftError::Scene(e.to_string()))?
+        );
+    } else {
+        println!(
+            "scene {}: {} particles, {} steps of {:.5} s ({:.2} s simulated)",
+            args.scene.display(),
+            make()?.particle_count(),
+            steps,
+            dt,
+            steps as f64 * dt
+        );
+        println!(
+            "reference: f64 XPBD {} substeps/step ({}), own error estimate {:.2e} m, energy change {:.4e} J",
+            args.reference_substeps,
+            if cached { "cached" } else { "computed" },
+            report.reference_self_error,
+            report.reference_drift
+        );
+        print!("{}", table(&report.outcomes));
+        println!("* = Pareto front (no other setting is both faster and more accurate). Penetration is 0: no obstacles in the step yet.");
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn num(v: Option<f64>) -> String {
+    v.map_or_else(|| "diverged".to_string(), |v| format!("{v:.3e}"))
+}
+
+/// The text table.
+pub fn table(outcomes: &[Outcome]) -> String {
+    let mut s = format!(
+        "{:<17} {:>5} {:>5} {:>4} {:>11} {:>10} {:>10} {:>10} {:>11} {:>6}\n",
+        "method", "subst", "iter", "prec", "ms/step", "rms err m", "max err m", "max strain", "energy dJ", "penet"
+    );
+    for o in outcomes {
+        s += &format!(
+            "{:<17} {:>5} {:>5} {:>4} {:>11.4} {:>10} {:>10} {:>10} {:>11} {:>6}{}\n",
+            o.method,
+            o.substeps,
+            o.iterations,
+            format!("{:?}", o.precision).to_lowercase(),
+            o.ms_per_step,
+            num(o.rms_error),
+            num(o.max_error),
+            num(o.max_strain),
+            num(o.energy_drift),
+            o.max_penetration.map_or("-".into(), |p| format!("{p}")),
+            if o.pareto { " *" } else { "" }
+        );
+    }
+    s
+}
+
+fn plot(outcomes: &[Outcome], path: &Path, title: &str) -> weft::Result<()> {
+    use plotters::prelude::*;
+    let err = |e: &dyn std::fmt::Display| weft::WeftError::io(path, std::io::Error::other(e.to_string()));
+    let ok: Vec<&Outcome> = outcomes.iter().filter(|o| o.rms_error.is_some()).collect();
+    if ok.is_empty() {
+        return Err(weft::WeftError::param(
+            "--plot",
+            path.display(),
+            "every setting diverged; nothing to plot",
+        ));
+    }
+    let (mut t0, mut t1, mut e0, mut e1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
+    for o in &ok {
+        let e = o.rms_error.unwrap_or(1.0);
+        t0 = t0.min(o.ms_per_step.max(1e-6));
+        t1 = t1.max(o.ms_per_step.max(1e-6));
+        e0 = e0.min(e.max(1e-12));
+        e1 = e1.max(e.max(1e-12));
+    }
+    let root = SVGBackend::new(path, (900, 600)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| err(&e))?;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(format!("{title}: rms error vs time per step"), ("sans-serif", 22))
+        .margin(15)
+        .x_label_area_size(45)
+        .y_label_area_size(70)
+        .build_cartesian_2d((t0 / 2.0..t1 * 2.0).log_scale(), (e0 / 2.0..e1 * 2.0).log_scale())
+        .map_err(|e| err(&e))?;
+    chart
+        .configure_mesh()
+        .x_desc("ms per step")
+        .y_desc("rms position error (m)")
+        .draw()
+        .map_err(|e| err(&e))?;
+    let series = [
+        ("xpbd", weft::accuracy::Precision::F32, BLUE),
+        ("xpbd", weft::accuracy::Precision::F64, CYAN),
+        ("symplectic-euler", weft::accuracy::Precision::F32, RED),
+        ("leapfrog", weft::accuracy::Precision::F32, MAGENTA),
+        ("implicit-euler", weft::accuracy::Precision::F32, GREEN),
+    ];
+    for (name, prec, colour) in series {
+        let pts: Vec<(f64, f64)> = ok
+            .iter()
+            .filter(|o| o.method == name && o.precision == prec)
+            .map(|o| (o.ms_per_step.max(1e-6), o.rms_error.unwrap_or(1.0).max(1e-12)))
+            .collect();
+        if pts.is_empty() {
+            continue;
+        }
+        chart
+            .draw_series(pts.iter().map(|&p| Circle::new(p, 5, colour.filled())))
+            .map_err(|e| err(&e))?
+            .label(format!("{name} ({prec:?})").to_lowercase())
+            .legend(move |(x, y)| Circle::new((x + 8, y), 5, colour.filled()));
+    }
+    let mut front: Vec<(f64, f64)> = ok
+        .iter()
+        .filter(|o| o.pareto)
+        .map(|o| (o.ms_per_step.max(1e-6), o.rms_error.unwrap_or(1.0).max(1e-12)))
+        .collect();
+    front.sort_by(|a, b| a.0.total_cmp(&b.0));
+    chart
+        .draw_series(LineSeries::new(front, BLACK.stroke_width(1)))
+        .map_err(|e| err(&e))?
+        .label("Pareto front")
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], BLACK));
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .position(SeriesLabelPosition::UpperRight)
+        .draw()
+        .map_err(|e| err(&e))?;
+    root.present().map_err(|e| err(&e))?;
+    Ok(())
+}
