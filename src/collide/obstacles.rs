@@ -210,12 +210,18 @@ pub struct ObstacleSet {
     th: Vec<f32>,
     reach: Vec<f32>,
     friction: f32,
+    busy: std::time::Duration,
 }
 
 impl ObstacleSet {
     /// Is there no obstacle?
     pub fn is_empty(&self) -> bool {
         self.list.is_empty()
+    }
+
+    /// Adds the time since `t0` to the time spent in obstacle stages.
+    pub(crate) fn add_busy(&mut self, t0: std::time::Instant) {
+        self.busy += t0.elapsed();
     }
 
     /// Forgets the per-particle arrays (the particle count changed).
@@ -404,6 +410,12 @@ impl World {
         non_negative("friction", mu)?;
         self.obstacles.friction = mu;
         Ok(())
+    }
+
+    /// Wall time spent in the obstacle stages of all steps so far (contacts, responses,
+    /// projections, velocity passes).
+    pub fn obstacle_time(&self) -> std::time::Duration {
+        self.obstacles.busy
     }
 
     /// The default obstacle friction coefficient.
