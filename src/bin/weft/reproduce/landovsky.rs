@@ -185,7 +185,18 @@ pub fn run(args: &Args) -> weft::Result<ExitCode> {
         }
         println!(
             "{:>9} {:>6} {:>6} {:<30} {:>9} {:>8} {:>10} {:>7} {:>8} {:>8} {:>11} {:>9}",
-            "particles", "faces", "iters", "broadphase", "ours (s)", "cpu (s)", "collide(s)", "paper", "x (wall)", "x (cpu)", "max pen (m)", "deviation"
+            "particles",
+            "faces",
+            "iters",
+            "broadphase",
+            "ours (s)",
+            "cpu (s)",
+            "collide(s)",
+            "paper",
+            "x (wall)",
+            "x (cpu)",
+            "max pen (m)",
+            "deviation"
         );
     }
     for s in specs() {
