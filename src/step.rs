@@ -174,9 +174,11 @@ impl World {
                 checkpoint!("predict", p.px, p.py, p.pz, p.vx, p.vy, p.vz);
             }
             if has_obstacles {
+                let t0 = std::time::Instant::now();
                 let t_end = self.time + ((s + 1) as f64) * (h as f64);
                 self.obstacles.generate(&self.particles, t_end, h, parallel, simd);
                 self.obstacles.resolve(&mut self.particles, h, parallel);
+                self.obstacles.add_busy(t0);
                 let p = &self.particles;
                 checkpoint!("obstacles", p.px, p.py, p.pz);
             }
@@ -213,7 +215,9 @@ impl World {
                     checkpoint!("tethers", p.px, p.py, p.pz);
                 }
                 if has_obstacles {
+                    let t0 = std::time::Instant::now();
                     self.obstacles.project(p, parallel, simd);
+                    self.obstacles.add_busy(t0);
                     checkpoint!("obstacles", p.px, p.py, p.pz);
                 }
                 if !self.scalps.is_empty() {
@@ -260,7 +264,9 @@ impl World {
             let p = &self.particles;
             checkpoint!("update", p.x, p.y, p.z, p.vx, p.vy, p.vz);
             if has_obstacles {
+                let t0 = std::time::Instant::now();
                 self.obstacles.velocity_pass(&mut self.particles, parallel);
+                self.obstacles.add_busy(t0);
                 let p = &self.particles;
                 checkpoint!("obstacles", p.vx, p.vy, p.vz);
             }

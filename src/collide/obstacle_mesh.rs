@@ -11,14 +11,73 @@
 //! index) for its callers. Only faces whose box overlaps the query box are tested, so every
 //! broadphase gives the same bits.
 //!
+//! [`MeshBroadphase`] holds the broadphase a mesh obstacle was given ([`BroadphaseKind`]).
+//!
 //! With face memory (the paper; [`face_memory`](super::face_memory)), a particle whose start
 //! and prediction both lie over its remembered face tests that face alone; otherwise the full
 //! search runs and remembers the face it found (or forgets).
 
+use super::bvh::Bvh;
 use super::face_broadphase::FaceBroadphase;
+use super::face_hash::FaceHash;
 use super::face_memory::{over_face, NO_FACE};
+use super::grid::UniformGrid;
 use super::mesh::TriMesh;
 use super::narrow::{face_contact, query_box, Contact, ContactKind};
+use crate::error::Result;
+
+/// Which broadphase a mesh obstacle uses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BroadphaseKind {
+    /// The paper's uniform grid with these cells per axis, or sized automatically (`None`).
+    Grid(Option<[usize; 3]>),
+    /// An AABB tree of the faces.
+    Bvh,
+    /// A spatial hash of the faces.
+    Hash,
+}
+
+/// A built broadphase.
+#[derive(Debug, Clone)]
+pub enum MeshBroadphase {
+    /// Uniform grid.
+    Grid(UniformGrid),
+    /// AABB tree.
+    Bvh(Bvh),
+    /// Spatial hash.
+    Hash(FaceHash),
+}
+
+impl MeshBroadphase {
+    /// Builds the broadphase `kind` for `mesh`.
+    pub fn build(kind: BroadphaseKind, mesh: &TriMesh) -> Result<Self> {
+        Ok(match kind {
+            BroadphaseKind::Grid(Some(d)) => MeshBroadphase::Grid(UniformGrid::new(mesh, d)?),
+            BroadphaseKind::Grid(None) => MeshBroadphase::Grid(UniformGrid::auto(mesh)?),
+            BroadphaseKind::Bvh => MeshBroadphase::Bvh(Bvh::new(mesh)),
+            BroadphaseKind::Hash => MeshBroadphase::Hash(FaceHash::auto(mesh)?),
+        })
+    }
+    fn inner(&self) -> &(dyn FaceBroadphase + Sync) {
+        match self {
+            MeshBroadphase::Grid(g) => g,
+            MeshBroadphase::Bvh(b) => b,
+            MeshBroadphase::Hash(h) => h,
+        }
+    }
+}
+
+impl FaceBroadphase for MeshBroadphase {
+    fn candidates(&self, mesh: &TriMesh, lo: [f32; 3], hi: [f32; 3], out: &mut Vec<u32>) {
+        self.inner().candidates(mesh, lo, hi, out)
+    }
+    fn stamp(&self) -> u64 {
+        self.inner().stamp()
+    }
+    fn describe(&self) -> String {
+        self.inner().describe()
+    }
+}
 
 fn dist2(a: [f32; 3], b: [f32; 3]) -> f32 {
     (0..3).map(|k| (a[k] - b[k]) * (a[k] - b[k])).sum()

@@ -24,17 +24,20 @@
 //! contacts, and optionally the paper's face memory ([`face_memory`](super::face_memory)): a
 //! particle over the face it touched last tests only that face. A world without obstacles
 //! skips all of this: no pass, no allocation.
+//!
+//! Checkpoints (`src/checkpoint.rs`) rebuild obstacles from the scene, and moving obstacles'
+//! places are functions of time, so a resumed run is bitwise the uninterrupted one, except
+//! that face memories are not saved: with `face_memory` on, a resumed run starts with empty
+//! memories and may differ slightly.
 
 use rayon::prelude::*;
 
-use super::bvh::Bvh;
 use super::face_broadphase::FaceBroadphase;
-use super::face_hash::FaceHash;
 use super::face_memory::NO_FACE;
-use super::grid::UniformGrid;
 use super::mesh::TriMesh;
 use super::obstacle_kernels::{self as k, GenInput, SLOT_BLOCK};
 use super::obstacle_mesh::{step_contact, step_contact_remembered};
+pub use super::obstacle_mesh::{BroadphaseKind, MeshBroadphase};
 use super::shapes::Shape;
 use crate::error::{finite3, non_negative, Result};
 use crate::lanes::LANES;
@@ -45,59 +48,6 @@ use crate::world::World;
 pub const MIN_MARGIN: f32 = 3e-3;
 /// Blocks of eight particles per parallel task.
 const BLOCKS_PER_TASK: usize = 32;
-
-/// Which broadphase a mesh obstacle uses.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum BroadphaseKind {
-    /// The paper's uniform grid with these cells per axis, or sized automatically (`None`).
-    Grid(Option<[usize; 3]>),
-    /// An AABB tree of the faces.
-    Bvh,
-    /// A spatial hash of the faces.
-    Hash,
-}
-
-/// A built broadphase.
-#[derive(Debug, Clone)]
-pub enum MeshBroadphase {
-    /// Uniform grid.
-    Grid(UniformGrid),
-    /// AABB tree.
-    Bvh(Bvh),
-    /// Spatial hash.
-    Hash(FaceHash),
-}
-
-impl MeshBroadphase {
-    /// Builds the broadphase `kind` for `mesh`.
-    pub fn build(kind: BroadphaseKind, mesh: &TriMesh) -> Result<Self> {
-        Ok(match kind {
-            BroadphaseKind::Grid(Some(d)) => MeshBroadphase::Grid(UniformGrid::new(mesh, d)?),
-            BroadphaseKind::Grid(None) => MeshBroadphase::Grid(UniformGrid::auto(mesh)?),
-            BroadphaseKind::Bvh => MeshBroadphase::Bvh(Bvh::new(mesh)),
-            BroadphaseKind::Hash => MeshBroadphase::Hash(FaceHash::auto(mesh)?),
-        })
-    }
-    fn inner(&self) -> &(dyn FaceBroadphase + Sync) {
-        match self {
-            MeshBroadphase::Grid(g) => g,
-            MeshBroadphase::Bvh(b) => b,
-            MeshBroadphase::Hash(h) => h,
-        }
-    }
-}
-
-impl FaceBroadphase for MeshBroadphase {
-    fn candidates(&self, mesh: &TriMesh, lo: [f32; 3], hi: [f32; 3], out: &mut Vec<u32>) {
-        self.inner().candidates(mesh, lo, hi, out)
-    }
-    fn stamp(&self) -> u64 {
-        self.inner().stamp()
-    }
-    fn describe(&self) -> String {
-        self.inner().describe()
-    }
-}
 
 /// A triangle-mesh obstacle.
 #[derive(Debug, Clone)]
@@ -260,12 +210,18 @@ pub struct ObstacleSet {
     th: Vec<f32>,
     reach: Vec<f32>,
     friction: f32,
+    busy: std::time::Duration,
 }
 
 impl ObstacleSet {
     /// Is there no obstacle?
     pub fn is_empty(&self) -> bool {
         self.list.is_empty()
+    }
+
+    /// Adds the time since `t0` to the time spent in obstacle stages.
+    pub(crate) fn add_busy(&mut self, t0: std::time::Instant) {
+        self.busy += t0.elapsed();
     }
 
     /// Forgets the per-particle arrays (the particle count changed).
@@ -456,8 +412,32 @@ impl World {
         Ok(())
     }
 
+    /// Wall time spent in the obstacle stages of all steps so far (contacts, responses,
+    /// projections, velocity passes).
+    pub fn obstacle_time(&self) -> std::time::Duration {
+        self.obstacles.busy
+    }
+
     /// The default obstacle friction coefficient.
     pub fn friction(&self) -> f32 {
         self.obstacles.friction
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::{ClothDesc, Effects, SolverParams, World};
+
+    #[test]
+    fn a_world_without_obstacles_allocates_nothing_for_them() {
+        let mut w = World::new(SolverParams::default(), Effects::gravity()).unwrap();
+        w.add_cloth(&ClothDesc::default()).unwrap();
+        w.step(1.0 / 60.0).unwrap();
+        let o = &w.obstacles;
+        assert!(o.is_empty() && o.th.capacity() == 0 && o.reach.capacity() == 0 && o.slots.capacity() == 0);
+        w.add_obstacle(super::Obstacle::shape(super::Shape::plane([0.0; 3], [0.0, 1.0, 0.0]).unwrap()).unwrap())
+            .unwrap();
+        w.step(1.0 / 60.0).unwrap();
+        assert_eq!(w.obstacles.th.len(), w.particles.padded_len());
     }
 }
