@@ -1,6 +1,10 @@
 //! Cloth self-collision as particle–particle contacts (SEEDS.md sections C and A).
 //!
 //! # The stage, once per step and once per substep
+//! Constants: `q = QUERY_FACTOR d` (3), hash cell `CELL_FACTOR q` (1), travel `T = TRAVEL_FACTOR d`
+//! (1), VcCPBD box radius `r = BOX_RADIUS d` (1: with `r = d/2` the box test put particles back
+//! into contact, 1.27% average collision on the 100x100 fold against 0.0007% with `r = d`).
+//!
 //! * **Before the substeps** ([`SelfCollisionData::begin_step`]): the broadphase (spatial hash
 //!   or AABB tree, refitted) finds, from the positions `x` at the start of the step, every pair
 //!   closer than the query radius `q = d + 2 T`, `d` the collision distance and `T = d` the
@@ -25,7 +29,9 @@
 //! movement speed: v_n = ((p_i - x_i) - (p_j - x_j)) · n;  if v_n < 0: c_i -= w_i / (w_i + w_j) v_n n
 //! ```
 //!
-//! Each particle writes only its own sums (a Jacobi pass; the kernel averages over the contact
+//! The list is first filtered eight candidates at a time (`f32x8` on gathered positions, with
+//! a 1e-4 margin so that the scalar test above makes every decision: the SIMD and scalar
+//! backends give the same bits). Each particle writes only its own sums (a Jacobi pass; the kernel averages over the contact
 //! count, the movement-speed correction over the approaching contacts), so the result is the same on any number of threads; the serial loop is the twin.
 //! The movement-speed response zeroes the approaching normal velocity (fully inelastic) and
 //! moves the particle along its corrected velocity; it does not push out an existing overlap.
@@ -132,10 +138,9 @@ impl SelfCollisionData {
         })
     }
 
-    /// Rebuilds the pair lists from the positions at the start of a step, and measures the
-    /// penetration of that state (once per step count `steps`, skipping the initial state).
-    /// Returns `false` (nothing to do this step) when off.
-    pub(crate) fn begin_step(&mut self, x: [&[f32]; 3], n: usize, damping: &[f32], steps: u64, parallel: bool) -> Result<bool> {
+    /// Rebuilds the pair lists from the positions at the start of a step. Returns `false`
+    /// (nothing to do this step) when off.
+    pub(crate) fn begin_step(&mut self, x: [&[f32]; 3], n: usize, damping: &[f32]) -> Result<bool> {
         if !self.build_lists(x, n)? {
             return Ok(false);
         }
@@ -144,12 +149,17 @@ impl SelfCollisionData {
             st.damping.extend_from_slice(&damping[..n.min(damping.len())]);
             st.damping.resize(st.sums.len(), 0.0);
         }
+        Ok(true)
+    }
+
+    /// Measures the penetration of the state the lists were just built from (once per step
+    /// count `steps`, skipping the initial state). Kept out of the timed collision stage.
+    pub(crate) fn record_start_state(&mut self, x: [&[f32]; 3], n: usize, steps: u64, parallel: bool) {
         if steps > 0 && self.last_measured != Some(steps) {
             let pct = self.penetration_pct(x, n, parallel);
             self.stats.record(pct);
             self.last_measured = Some(steps);
         }
-        Ok(true)
     }
 
     /// Measures (and records, once per step count) the penetration of the state `x`.
