@@ -40,3 +40,4 @@ pub mod particle_tree;
 pub mod response;
 pub mod self_collision;
 pub mod self_config;
+mod self_pairs;
