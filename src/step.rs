@@ -147,11 +147,15 @@ impl World {
         let sc_start = std::time::Instant::now();
         let sc = {
             let p = &self.particles;
-            let steps = self.steps;
-            let on = self.selfcol.begin_step([&p.x, &p.y, &p.z], n, &self.damping_rate, steps, parallel);
+            let on = self.selfcol.begin_step([&p.x, &p.y, &p.z], n, &self.damping_rate);
             on.unwrap_or(false).then(|| self.selfcol.active()).flatten()
         };
         let mut sc_time = sc_start.elapsed();
+        if sc.is_some() {
+            let p = &self.particles;
+            let steps = self.steps;
+            self.selfcol.record_start_state([&p.x, &p.y, &p.z], n, steps, parallel);
+        }
         for s in 0..n_sub {
             let t = self.time + (s as f64) * (h as f64);
             if let (Some(w), Some(state)) = (&self.effects.wind, &mut self.wind) {

@@ -41,4 +41,5 @@ pub mod penetration;
 pub mod response;
 pub mod self_collision;
 pub mod self_config;
+mod self_pairs;
 pub mod shapes;

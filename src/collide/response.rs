@@ -19,13 +19,18 @@
 //!
 //! ```text
 //! t = p + c / k + μ (f / k - (p - x)) / 2          projection + friction (all responses)
-//! VcCPBD only, with q the predicted position, r the box radius, n̂ = n / |n|, e = g / k:
+//! VcCPBD only, with q the predicted position (after the clamp), r the box radius (the
+//! collision distance d), n̂ = n / |n|, e = g / k:
 //!   if |t - q| >= r:  p = q                          back to the centre of the particle's box
 //!   else:             β = min(b h, 1)
 //!                     p = t - (β (t - x)·n̂ + β² e / 4) n̂
 //! ```
 //!
-//! The VcCPBD line is the paper's velocity correction `v <- (p - δd) + a dt`, `x <- p` written
+//! Our reading of the paper's box: the particle's bounding box of radius `r` centred on where
+//! inertia alone takes it this substep, `c = (max + min) / 2 = q`; `s = |t - q|` is how far
+//! the solver moved it. A particle pushed out of its box is put back to the centre (a guard
+//! against the overshooting corrections of tangled layers); inside it, the velocity is
+//! corrected. The VcCPBD line is the paper's velocity correction `v <- (p - δd) + a dt`, `x <- p` written
 //! on positions (the update stage then sets `v = (p - x) / h`): the damped oscillator
 //! `δd = m x'' + k x + b x'` per unit mass along the contact normal, with `b` the fabric's
 //! damping rate (the paper's damping column), `k/m = b²/4` (critical damping, the paper gives

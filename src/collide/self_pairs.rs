@@ -1,0 +1,140 @@
+//! The self-collision pair pass: the contact sums of one particle over its pair list (the
+//! method is described in [`super::self_collision`]).
+
+use super::neighbours::Neighbours;
+use crate::lanes::{F32s, Vec3x8, LANES};
+
+/// Everything the pair pass reads.
+pub(crate) struct PairCtx<'a> {
+    pub(crate) x: [&'a [f32]; 3],
+    pub(crate) p: [&'a [f32]; 3],
+    pub(crate) w: &'a [f32],
+    pub(crate) rest: [&'a [f32]; 3],
+    pub(crate) cloth_of: &'a [u32],
+    pub(crate) lists: &'a Neighbours,
+    pub(crate) d: f32,
+    pub(crate) movement: bool,
+}
+
+/// Unit direction separating coincident particles with no rest direction: `(1, 2, 3)/√14`.
+const COINCIDENT: [f32; 3] = [0.267_261_24, 0.534_522_5, 0.801_783_7];
+
+impl PairCtx<'_> {
+    /// `[c(3), f(3), n(3), gap, count]` of particle `i`.
+    pub(crate) fn sums(&self, i: usize, simd: bool) -> [f32; 11] {
+        let mut out = [0.0f32; 11];
+        let wi = self.w[i];
+        if wi <= 0.0 {
+            return out;
+        }
+        let pi = [self.p[0][i], self.p[1][i], self.p[2][i]];
+        let di = [pi[0] - self.x[0][i], pi[1] - self.x[1][i], pi[2] - self.x[2][i]];
+        let mut approaching = 0.0f32;
+        let d2 = self.d * self.d;
+        let ids = self.lists.of(i);
+        // Filter: eight candidates at a time (gathered, the scalar distance's operations), a
+        // lane passes when it may be within d (a 1e-4 margin, so the scalar test below makes
+        // every decision and the result equals the plain loop bit for bit).
+        let mut k = 0;
+        if simd {
+            let pv = Vec3x8::splat(pi);
+            let lim = F32s::splat(d2 * 1.0001);
+            while k + LANES <= ids.len() {
+                let g = |a: &[f32]| F32s::from(std::array::from_fn::<f32, LANES, _>(|l| a[ids[k + l] as usize]));
+                let v = pv
+                    - Vec3x8 {
+                        x: g(self.p[0]),
+                        y: g(self.p[1]),
+                        z: g(self.p[2]),
+                    };
+                let mut bits = v.length_sq().simd_lt(lim).to_bitmask();
+                while bits != 0 {
+                    let j = ids[k + bits.trailing_zeros() as usize] as usize;
+                    bits &= bits - 1;
+                    self.contact(i, j, pi, di, d2, &mut out, &mut approaching);
+                }
+                k += LANES;
+            }
+        }
+        for &j in &ids[k..] {
+            self.contact(i, j as usize, pi, di, d2, &mut out, &mut approaching);
+        }
+        if approaching > 0.0 {
+            // The kernel divides by all contacts; the velocity response averages over the
+            // approaching ones only.
+            let scale = out[10] / approaching;
+            for c in &mut out[..3] {
+                *c *= scale;
+            }
+        }
+        out
+    }
+
+    /// Adds the contact of `i` with `j`, if any, to `out`.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn contact(&self, i: usize, j: usize, pi: [f32; 3], di: [f32; 3], d2: f32, out: &mut [f32; 11], approaching: &mut f32) {
+        let wi = self.w[i];
+        {
+            let v = [pi[0] - self.p[0][j], pi[1] - self.p[1][j], pi[2] - self.p[2][j]];
+            let dist2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+            // min_dist <= d: most listed pairs end here, before the rest data is read.
+            if dist2.is_nan() || dist2 >= d2 {
+                return;
+            }
+            let same = self.cloth_of[i] == self.cloth_of[j];
+            let r = [
+                self.rest[0][i] - self.rest[0][j],
+                self.rest[1][i] - self.rest[1][j],
+                self.rest[2][i] - self.rest[2][j],
+            ];
+            let rest2 = if same {
+                r[0] * r[0] + r[1] * r[1] + r[2] * r[2]
+            } else {
+                f32::INFINITY
+            };
+            if dist2 > rest2 {
+                return;
+            }
+            let md = if rest2 < self.d * self.d { rest2.sqrt() } else { self.d };
+            if dist2.is_nan() || dist2 >= md * md {
+                return;
+            }
+            let dist = dist2.sqrt();
+            let nrm = if dist2 > 0.0 {
+                v.map(|c| c / dist)
+            } else if same && rest2 > 0.0 {
+                let rl = rest2.sqrt();
+                r.map(|c| c / rl)
+            } else {
+                let s = if i < j { 1.0 } else { -1.0 };
+                COINCIDENT.map(|c| c * s)
+            };
+            let wj = self.w[j];
+            let share = wi / (wi + wj);
+            let dj = [
+                self.p[0][j] - self.x[0][j],
+                self.p[1][j] - self.x[1][j],
+                self.p[2][j] - self.x[2][j],
+            ];
+            let amount = if self.movement {
+                let vn = (di[0] - dj[0]) * nrm[0] + (di[1] - dj[1]) * nrm[1] + (di[2] - dj[2]) * nrm[2];
+                if vn < 0.0 {
+                    *approaching += 1.0;
+                    -vn * share
+                } else {
+                    0.0
+                }
+            } else {
+                (md - dist) * share
+            };
+            for a in 0..3 {
+                out[a] += nrm[a] * amount;
+                out[3 + a] += dj[a];
+                out[6 + a] += nrm[a];
+            }
+            out[9] += dist - md;
+            out[10] += 1.0;
+        }
+    }
+}
