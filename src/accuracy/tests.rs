@@ -120,3 +120,16 @@ fn f64_precision_is_xpbd_only() {
     st.method = Method::Xpbd;
     assert_eq!(run_setting(&make, &r, st, 2).unwrap().status, "ok");
 }
+
+#[test]
+fn scene_keys_solver_method_and_stiffness() {
+    let text = SCENE.replace("dt = 0.02", "dt = 0.02\nmethod = \"implicit-euler\"\nstiffness = 5e5");
+    let s = Scene::parse(&text, "test").unwrap();
+    let p = s.world().unwrap().params().clone();
+    assert_eq!((p.method, p.stiffness), (Method::ImplicitEuler, 5e5));
+    let bad = SCENE.replace("dt = 0.02", "dt = 0.02\nmethod = \"rk4\"");
+    let e = Scene::parse(&bad, "test").unwrap_err().to_string();
+    assert!(e.contains("line 4") && e.contains("rk4"), "{e}");
+    let neg = SCENE.replace("dt = 0.02", "dt = 0.02\nstiffness = -1.0");
+    assert!(Scene::parse(&neg, "test").unwrap_err().to_string().contains("line 4"));
+}
