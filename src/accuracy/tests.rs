@@ -54,11 +54,11 @@ fn reference_is_cached_and_reloaded_identically() {
     let s = scene();
     let make = || s.world();
     let dir = std::env::temp_dir().join(format!("weft-acc-cache-{}", std::process::id()));
-    let (a, cached_a) = Reference::cached(&make, SCENE, 10, 64, &dir).unwrap();
-    let (b, cached_b) = Reference::cached(&make, SCENE, 10, 64, &dir).unwrap();
+    let (a, cached_a) = Reference::cached(&make, SCENE, 10, 64, false, &dir).unwrap();
+    let (b, cached_b) = Reference::cached(&make, SCENE, 10, 64, false, &dir).unwrap();
     assert!(!cached_a && cached_b);
     assert_eq!(a, b);
-    let (_, other) = Reference::cached(&make, SCENE, 10, 32, &dir).unwrap();
+    let (_, other) = Reference::cached(&make, SCENE, 10, 32, false, &dir).unwrap();
     assert!(!other, "other settings, other key");
     std::fs::remove_dir_all(&dir).unwrap();
 }
@@ -68,7 +68,7 @@ fn every_method_gets_closer_to_the_reference_as_its_step_shrinks() {
     let s = scene();
     let make = || s.world();
     let steps = 25;
-    let r = Reference::compute(&make, steps, 2048).unwrap();
+    let r = Reference::compute(&make, steps, 2048, true).unwrap();
     assert!(r.self_error < 1e-3, "reference self error {}", r.self_error);
     for (method, subs) in [
         (Method::Xpbd, [2, 8, 32]),
@@ -99,7 +99,7 @@ fn unstable_settings_are_reported_as_diverged_without_numbers() {
     let text = SCENE.replace("stretch_compliance = 1e-2", "stretch_compliance = 1e-9");
     let s = prepare_scene(&Scene::parse(&text, "test").unwrap());
     let make = || s.world();
-    let r = Reference::compute(&make, 20, 64).unwrap();
+    let r = Reference::compute(&make, 20, 64, false).unwrap();
     let o = run_setting(&make, &r, setting(Method::SymplecticEuler, 1), 20).unwrap();
     assert_eq!(o.status, "diverged");
     assert!(o.rms_error.is_none() && o.max_error.is_none() && o.energy_drift.is_none());
@@ -113,10 +113,23 @@ fn unstable_settings_are_reported_as_diverged_without_numbers() {
 fn f64_precision_is_xpbd_only() {
     let s = scene();
     let make = || -> crate::Result<World> { s.world() };
-    let r = Reference::compute(&make, 2, 4).unwrap();
+    let r = Reference::compute(&make, 2, 4, false).unwrap();
     let mut st = setting(Method::Leapfrog, 4);
     st.precision = Precision::F64;
     assert!(run_setting(&make, &r, st, 2).is_err());
     st.method = Method::Xpbd;
     assert_eq!(run_setting(&make, &r, st, 2).unwrap().status, "ok");
+}
+
+#[test]
+fn scene_keys_solver_method_and_stiffness() {
+    let text = SCENE.replace("dt = 0.02", "dt = 0.02\nmethod = \"implicit-euler\"\nstiffness = 5e5");
+    let s = Scene::parse(&text, "test").unwrap();
+    let p = s.world().unwrap().params().clone();
+    assert_eq!((p.method, p.stiffness), (Method::ImplicitEuler, 5e5));
+    let bad = SCENE.replace("dt = 0.02", "dt = 0.02\nmethod = \"rk4\"");
+    let e = Scene::parse(&bad, "test").unwrap_err().to_string();
+    assert!(e.contains("line 4") && e.contains("rk4"), "{e}");
+    let neg = SCENE.replace("dt = 0.02", "dt = 0.02\nstiffness = -1.0");
+    assert!(Scene::parse(&neg, "test").unwrap_err().to_string().contains("line 4"));
 }

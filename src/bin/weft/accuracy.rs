@@ -25,6 +25,10 @@ pub struct AccuracyArgs {
     /// Substeps per step of the reference's finer run (even; default 1024).
     #[arg(long, default_value_t = 1024)]
     reference_substeps: u32,
+    /// Richardson-extrapolate the reference from its R and R/2 runs (helps smooth motion,
+    /// hurts cloth ringing in stiff modes; see weft::accuracy::reference).
+    #[arg(long)]
+    extrapolate: bool,
     /// Directory of the reference cache (default out/<scene name>).
     #[arg(long)]
     out: Option<PathBuf>,
@@ -61,7 +65,7 @@ pub fn accuracy(args: AccuracyArgs) -> weft::Result<ExitCode> {
             args.reference_substeps / 2
         );
     }
-    let (reference, cached) = Reference::cached(&make, &text, steps, args.reference_substeps, &dir)?;
+    let (reference, cached) = Reference::cached(&make, &text, steps, args.reference_substeps, args.extrapolate, &dir)?;
     let grid = default_grid();
     let quiet = args.json;
     let outcomes = run_grid(&make, &reference, &grid, steps, |i, o| {
@@ -104,8 +108,9 @@ pub fn accuracy(args: AccuracyArgs) -> weft::Result<ExitCode> {
             steps as f64 * dt
         );
         println!(
-            "reference: f64 XPBD {} substeps/step ({}), own error estimate {:.2e} m, energy change {:.4e} J",
+            "reference: f64 XPBD {} substeps/step{} ({}), own error estimate {:.2e} m, energy change {:.4e} J",
             args.reference_substeps,
+            if args.extrapolate { " extrapolated" } else { "" },
             if cached { "cached" } else { "computed" },
             report.reference_self_error,
             report.reference_drift
