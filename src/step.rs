@@ -142,7 +142,7 @@ impl World {
         }
         let has_obstacles = !self.obstacles.is_empty();
         if has_obstacles {
-            self.obstacles.prepare(&self.particles, &self.cloths);
+            self.obstacles.prepare(&self.particles, &self.cloths, &self.strands);
         }
         let sc_start = std::time::Instant::now();
         let sc = {

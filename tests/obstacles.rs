@@ -335,3 +335,42 @@ fn moving_obstacles_push_particles_without_penetration() {
     }
     assert!(pushed, "the moving obstacles moved no particle");
 }
+
+/// Strands collide with the scene's obstacles too: hair long enough to reach the floor lies on a
+/// plane instead of passing through it, standing off by half its diameter.
+#[test]
+fn strands_rest_on_an_obstacle_without_passing_through() {
+    use weft::strands::hair::StrandsDesc;
+    use weft::strands::scalp::Scalp;
+    let mut w = World::new(
+        SolverParams {
+            substeps: 8,
+            ..Default::default()
+        },
+        Effects::gravity(),
+    )
+    .unwrap();
+    let desc = StrandsDesc {
+        scalp: Scalp::sphere([0.0, 0.25, 0.0], 0.1),
+        count: 40,
+        points: 16,
+        segment_length: 0.03,
+        ..StrandsDesc::default()
+    };
+    let thickness = desc.thickness;
+    w.add_strands(&desc).unwrap();
+    w.add_obstacle(Obstacle::shape(Shape::plane([0.0, 0.0, 0.0], [0.0, 1.0, 0.0]).unwrap()).unwrap())
+        .unwrap();
+    let mut lowest = f32::MAX;
+    for _ in 0..180 {
+        w.step(1.0 / 60.0).unwrap();
+        let y = w.positions()[1];
+        for &v in y {
+            lowest = lowest.min(v);
+        }
+    }
+    assert!(lowest >= 0.5 * thickness - 1e-4, "a strand point went to y = {lowest}");
+    // Some strands do reach the floor (the test is not vacuous).
+    let on_floor = w.positions()[1].iter().filter(|&&v| v < 0.5 * thickness + 2e-3).count();
+    assert!(on_floor > 0, "no strand reached the floor");
+}

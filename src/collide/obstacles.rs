@@ -230,7 +230,7 @@ impl ObstacleSet {
     }
 
     /// Sizes the per-particle arrays (thickness per cloth, contact slots, face memory).
-    pub(crate) fn prepare(&mut self, particles: &Particles, cloths: &[crate::world::ClothInfo]) {
+    pub(crate) fn prepare(&mut self, particles: &Particles, cloths: &[crate::world::ClothInfo], strands: &[crate::strands::StrandInfo]) {
         let len = particles.padded_len();
         if self.th.len() == len && self.slots.len() == self.list.len() {
             return;
@@ -240,6 +240,12 @@ impl ObstacleSet {
             let first = c.first as usize;
             let end = (first + (c.rows * c.cols) as usize).min(len);
             self.th[first..end].fill(c.thickness);
+        }
+        // Strand points stand off obstacles by half their diameter.
+        for g in strands {
+            let first = g.first as usize;
+            let end = (first + (g.count * g.points) as usize).min(len);
+            self.th[first..end].fill(0.5 * g.thickness);
         }
         self.reach = self.th.iter().map(|&t| t + t.max(MIN_MARGIN)).collect();
         self.slots = vec![vec![0.0; len / LANES * SLOT_BLOCK]; self.list.len()];
