@@ -133,3 +133,39 @@ pub fn step_bytes(data: &[u8]) {
     }
     let _ = world.metrics();
 }
+
+/// Loads arbitrary bytes as an OBJ mesh; when it loads, builds all three broadphases and asks
+/// each for the contact of a few segments (they must agree, as the proptests demand).
+pub fn obj_bytes(data: &[u8]) {
+    use crate::collide::bvh::Bvh;
+    use crate::collide::face_hash::FaceHash;
+    use crate::collide::grid::UniformGrid;
+    use crate::collide::mesh::TriMesh;
+    use crate::collide::narrow::mesh_contact;
+    let Ok((mesh, _report)) = TriMesh::from_obj_reader(&mut std::io::Cursor::new(data), "fuzz.obj") else {
+        return;
+    };
+    if mesh.face_count() > 5_000 {
+        return;
+    }
+    let (lo, hi) = mesh.bounds();
+    let grid = UniformGrid::auto(&mesh);
+    let bvh = Bvh::new(&mesh);
+    let hash = FaceHash::auto(&mesh);
+    let mid = [0, 1, 2].map(|k| 0.5 * lo[k] + 0.5 * hi[k]);
+    let above = [mid[0], hi[1] + 1.0, mid[2]];
+    let segments = [(above, mid), (lo, hi), (hi, lo), (mid, mid)];
+    for (x, p) in segments {
+        let reference = grid.as_ref().ok().map(|g| mesh_contact(&mesh, g, x, p, 0.01));
+        let c = mesh_contact(&mesh, &bvh, x, p, 0.01);
+        if let Some(r) = &reference {
+            assert_eq!(r, &c, "grid and BVH disagree");
+        }
+        if let Ok(h) = &hash {
+            let c = mesh_contact(&mesh, h, x, p, 0.01);
+            if let Some(r) = &reference {
+                assert_eq!(r, &c, "grid and hash disagree");
+            }
+        }
+    }
+}

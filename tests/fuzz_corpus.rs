@@ -25,3 +25,8 @@ fn scene_corpus() {
 fn step_corpus() {
     replay("step", weft::fuzzing::step_bytes);
 }
+
+#[test]
+fn obj_corpus() {
+    replay("obj", weft::fuzzing::obj_bytes);
+}

@@ -13,18 +13,24 @@ impl TriMesh {
     /// Loads every model of an OBJ file (polygons triangulated by `tobj`) into one mesh.
     pub fn from_obj(path: impl AsRef<Path>) -> Result<(TriMesh, MeshReport)> {
         let path = path.as_ref();
+        let file = std::fs::File::open(path).map_err(|e| WeftError::io(path, e))?;
+        TriMesh::from_obj_reader(&mut std::io::BufReader::new(file), &path.display().to_string())
+    }
+
+    /// Loads OBJ text from any reader; `name` labels errors. Material libraries are ignored.
+    pub fn from_obj_reader(reader: &mut impl std::io::BufRead, name: &str) -> Result<(TriMesh, MeshReport)> {
         let opts = tobj::LoadOptions {
             triangulate: true,
             single_index: false,
             ..Default::default()
         };
         let named = |reason: String| WeftError::InvalidMesh {
-            source_name: Some(path.display().to_string()),
+            source_name: Some(name.to_string()),
             reason,
         };
-        let (models, _materials) = tobj::load_obj(path, &opts).map_err(|e| match e {
-            tobj::LoadError::OpenFileFailed | tobj::LoadError::ReadError => WeftError::Io {
-                path: path.display().to_string(),
+        let (models, _materials) = tobj::load_obj_buf(reader, &opts, |_| Err(tobj::LoadError::OpenFileFailed)).map_err(|e| match e {
+            tobj::LoadError::ReadError => WeftError::Io {
+                path: name.to_string(),
                 message: e.to_string(),
             },
             other => named(other.to_string()),
@@ -34,7 +40,12 @@ impl TriMesh {
         for m in &models {
             let base = vertices.len() as u32;
             vertices.extend(m.mesh.positions.chunks_exact(3).map(|c| [c[0], c[1], c[2]]));
-            faces.extend(m.mesh.indices.chunks_exact(3).map(|c| [base + c[0], base + c[1], base + c[2]]));
+            faces.extend(
+                m.mesh
+                    .indices
+                    .chunks_exact(3)
+                    .map(|c| [c[0], c[1], c[2]].map(|i| base.saturating_add(i))),
+            );
         }
         TriMesh::new(vertices, faces).map_err(|e| match e {
             WeftError::InvalidMesh { reason, .. } => named(reason),
