@@ -218,3 +218,68 @@ fn divergence_names_particle_and_stage_and_keeps_the_state() {
     assert_eq!(common::state_bits(&w), before, "state before the step is kept");
     assert_eq!(w.steps(), 0);
 }
+
+#[test]
+fn self_colliding_particles_moving_1000_times_the_cell_size() {
+    use weft::collide::self_config::SelfCollision;
+    let desc = ClothDesc {
+        rows: 12,
+        cols: 12,
+        spacing: 0.01,
+        pins: vec![],
+        ..Default::default()
+    };
+    let mut w = common::world_with(&desc, SolverParams::default(), Effects::default());
+    w.set_self_collision(Some(SelfCollision::default())).unwrap();
+    let d = w.self_collision_distance();
+    let n = w.particle_count();
+    // 1000 collision distances per 1/60 s step, alternating directions.
+    let speed = 1000.0 * d * 60.0;
+    let vy: Vec<f32> = (0..n).map(|i| if i % 3 == 0 { speed } else { -speed }).collect();
+    let zero = vec![0.0f32; n];
+    w.set_velocities([&zero, &vy, &zero]).unwrap();
+    let e0 = w.metrics().total;
+    for _ in 0..30 {
+        w.step(1.0 / 60.0).unwrap();
+    }
+    assert!(all_finite(&w));
+    assert!(w.metrics().total <= e0 * 1.01, "energy grew: {} -> {}", e0, w.metrics().total);
+}
+
+#[test]
+fn zero_area_and_sliver_faces_in_a_mesh_obstacle() {
+    use weft::collide::mesh::TriMesh;
+    use weft::collide::obstacles::{BroadphaseKind, Obstacle};
+    // A floor quad plus a zero-area face and a sliver: both skipped with a count, never NaN.
+    let v = vec![
+        [-1.0, 0.0, -1.0],
+        [1.0, 0.0, -1.0],
+        [1.0, 0.0, 1.0],
+        [-1.0, 0.0, 1.0],
+        [0.0, 0.0, 0.0],
+        [0.0, 0.0, 0.0],
+        [0.5, 0.0, 0.5000001],
+    ];
+    let (mesh, report) = TriMesh::new(v, vec![[0, 2, 1], [0, 3, 2], [4, 5, 6], [0, 4, 5]]).unwrap();
+    assert_eq!(report.skipped_faces.len(), 2, "{report:?}");
+    let mut w = common::world_with(
+        &ClothDesc {
+            rows: 8,
+            cols: 8,
+            spacing: 0.05,
+            origin: [-0.2, 0.3, -0.2],
+            v: [0.0, 0.0, 1.0],
+            pins: vec![],
+            ..Default::default()
+        },
+        SolverParams::default(),
+        Effects::gravity(),
+    );
+    w.add_obstacle(Obstacle::mesh(mesh, BroadphaseKind::Bvh, false).unwrap()).unwrap();
+    for _ in 0..90 {
+        w.step(1.0 / 60.0).unwrap();
+    }
+    assert!(all_finite(&w));
+    let lowest = w.positions()[1].iter().fold(f32::INFINITY, |a, &b| if b < a { b } else { a });
+    assert!(lowest > -1e-3, "cloth fell through the floor: {lowest}");
+}
