@@ -105,27 +105,10 @@ impl World {
     /// Builds a cloth and adds it; returns its index in [`cloths`](Self::cloths).
     pub fn add_cloth(&mut self, desc: &ClothDesc) -> Result<usize> {
         let b = desc.build()?;
+        self.check_room_for(b.positions.len())?;
         let first = self.particles.extend(&b.positions, &b.inv_mass);
-        if (self.particles.padded_len() as u64) >= u32::MAX as u64 {
-            return Err(WeftError::param(
-                "particles",
-                self.particles.count(),
-                "too many particles for u32 indices",
-            ));
-        }
         let first_triangle = self.triangles.len() as u32;
-        for e in &b.edges {
-            let (a, bb) = (first + e.a, first + e.b);
-            self.distance_inputs.push(DistanceInput {
-                a,
-                b: bb,
-                rest: e.rest,
-                compliance: e.compliance,
-            });
-            if e.kind == ConstraintKind::Stretch {
-                self.stretch.push((a, bb, e.rest));
-            }
-        }
+        self.push_edges(first, &b.edges);
         for t in &b.tethers {
             self.tether_inputs.push(crate::cloth::Tether {
                 particle: first + t.particle,
@@ -150,6 +133,32 @@ impl World {
         });
         self.rebuild_topology();
         Ok(self.cloths.len() - 1)
+    }
+
+    /// Refuses a piece that would overflow the `u32` particle indices (before anything changes).
+    pub(crate) fn check_room_for(&self, more: usize) -> Result<()> {
+        let total = self.particles.count() as u64 + more as u64 + 16;
+        if total >= u32::MAX as u64 {
+            return Err(WeftError::param("particles", total, "too many particles for u32 indices"));
+        }
+        Ok(())
+    }
+
+    /// Adds a piece's distance constraints (local indices offset by `first`); stretch ones also
+    /// feed the strain metric.
+    pub(crate) fn push_edges(&mut self, first: u32, edges: &[crate::cloth::Edge]) {
+        for e in edges {
+            let (a, bb) = (first + e.a, first + e.b);
+            self.distance_inputs.push(DistanceInput {
+                a,
+                b: bb,
+                rest: e.rest,
+                compliance: e.compliance,
+            });
+            if e.kind == ConstraintKind::Stretch {
+                self.stretch.push((a, bb, e.rest));
+            }
+        }
     }
 
     /// Re-lays out constraints and scratch after the particle count changed.

@@ -1,6 +1,9 @@
 //! The `weft` command end to end: run writes a summary and pictures that are not blank, check
 //! reports bad scenes with their location, and resume equals an uninterrupted run.
 
+mod common;
+
+use common::non_background_fraction;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -43,19 +46,6 @@ fn write_scene(dir: &Path, text: &str) -> PathBuf {
     let p = dir.join("scene.toml");
     std::fs::write(&p, text).unwrap();
     p
-}
-
-fn non_background_fraction(png_path: &Path) -> f32 {
-    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(png_path).unwrap()));
-    let mut reader = decoder.read_info().unwrap();
-    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
-    let info = reader.next_frame(&mut buf).unwrap();
-    let img = weft::render::Image {
-        width: info.width,
-        height: info.height,
-        rgb: buf[..info.buffer_size()].to_vec(),
-    };
-    img.non_background_fraction(weft::render::DEFAULT_BACKGROUND)
 }
 
 #[test]

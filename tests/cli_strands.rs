@@ -1,7 +1,10 @@
 //! The `weft` command with hair: a strand scene runs and draws its strands, `check` lists the
 //! strands, cloth can be drawn as a NURBS surface, and `reproduce nurbs` prints its table.
 
-use std::path::{Path, PathBuf};
+mod common;
+
+use common::non_background_fraction;
+use std::path::PathBuf;
 use std::process::Command;
 
 const HAIR: &str = r#"
@@ -45,19 +48,6 @@ fn tmp(name: &str) -> PathBuf {
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
     d
-}
-
-fn non_background_fraction(png_path: &Path) -> f32 {
-    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(png_path).unwrap()));
-    let mut reader = decoder.read_info().unwrap();
-    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
-    let info = reader.next_frame(&mut buf).unwrap();
-    let img = weft::render::Image {
-        width: info.width,
-        height: info.height,
-        rgb: buf[..info.buffer_size()].to_vec(),
-    };
-    img.non_background_fraction(weft::render::DEFAULT_BACKGROUND)
 }
 
 #[test]

@@ -9,8 +9,6 @@
 
 use super::hair::StrandsDesc;
 use super::scalp::Scalp;
-use crate::cloth::ConstraintKind;
-use crate::constraints::distance::DistanceInput;
 use crate::error::{Result, WeftError};
 use crate::world::World;
 
@@ -42,23 +40,9 @@ impl World {
     /// [`strands`](Self::strands).
     pub fn add_strands(&mut self, desc: &StrandsDesc) -> Result<usize> {
         let b = desc.build()?;
-        let total = self.particles.count() as u64 + b.positions.len() as u64 + 16;
-        if total >= u32::MAX as u64 {
-            return Err(WeftError::param("particles", total, "too many particles for u32 indices"));
-        }
+        self.check_room_for(b.positions.len())?;
         let first = self.particles.extend(&b.positions, &b.inv_mass);
-        for e in &b.edges {
-            let (a, bb) = (first + e.a, first + e.b);
-            self.distance_inputs.push(DistanceInput {
-                a,
-                b: bb,
-                rest: e.rest,
-                compliance: e.compliance,
-            });
-            if e.kind == ConstraintKind::Stretch {
-                self.stretch.push((a, bb, e.rest));
-            }
-        }
+        self.push_edges(first, &b.edges);
         let n = self.particles.count();
         self.damping_rate.resize(n, desc.damping);
         self.has_damping |= desc.damping > 0.0;

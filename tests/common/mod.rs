@@ -28,3 +28,17 @@ pub fn state_bits(w: &World) -> Vec<u32> {
     let v = w.velocities();
     p.iter().chain(v.iter()).flat_map(|a| a.iter().map(|f| f.to_bits())).collect()
 }
+
+/// Fraction of a PNG file's pixels that differ from the renderer's background.
+pub fn non_background_fraction(png_path: &std::path::Path) -> f32 {
+    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(png_path).unwrap()));
+    let mut reader = decoder.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    let img = weft::render::Image {
+        width: info.width,
+        height: info.height,
+        rgb: buf[..info.buffer_size()].to_vec(),
+    };
+    img.non_background_fraction(weft::render::DEFAULT_BACKGROUND)
+}
