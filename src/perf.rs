@@ -62,21 +62,44 @@ pub fn cloth_world(n: usize, threads: usize) -> Result<World> {
     Ok(w)
 }
 
-/// Memory bandwidth reference: a triad `a = b + s c` over arrays totalling `bytes`, in bytes
-/// per second (loads plus stores, the same accounting as the kernels).
+/// Memory bandwidth reference: a triad `a = b + s c` over arrays totalling `bytes`, on the
+/// current rayon pool (in parallel chunks), in bytes per second (loads plus stores, the same
+/// accounting as the kernels). Use a size far beyond the last-level cache.
 pub fn triad_bandwidth(bytes: usize, reps: usize) -> f64 {
+    use rayon::prelude::*;
     let n = (bytes / 12).max(1024);
     let b = vec![1.0f32; n];
     let c = vec![2.0f32; n];
     let mut a = vec![0.0f32; n];
     let s = 0.5f32;
     let t = median_secs(reps, || {
-        for ((a, b), c) in a.iter_mut().zip(&b).zip(&c) {
-            *a = *b + s * *c;
-        }
+        a.par_chunks_mut(1 << 16)
+            .zip(b.par_chunks(1 << 16))
+            .zip(c.par_chunks(1 << 16))
+            .for_each(|((a, b), c)| {
+                for ((a, b), c) in a.iter_mut().zip(b).zip(c) {
+                    *a = *b + s * *c;
+                }
+            });
         std::hint::black_box(&mut a);
     });
     (n * 12) as f64 / t
+}
+
+/// Particles for a bandwidth measurement: `n` free particles on a line (no constraints).
+pub fn particle_cloud(n: usize) -> Particles {
+    let mut p = Particles::new();
+    let pos: Vec<[f32; 3]> = (0..n).map(|i| [i as f32 * 1e-3, 1.0, 0.0]).collect();
+    p.extend(&pos, &vec![1.0; n]);
+    p
+}
+
+/// Bandwidth of the integrate kernels (SIMD, parallel on the current pool) over `n` particles,
+/// in bytes per second, counting [`INTEGRATE_BYTES_PER_PARTICLE`].
+pub fn integrate_bandwidth(n: usize, reps: usize) -> f64 {
+    let mut p = particle_cloud(n);
+    let t = time_integrate(&mut p, true, true, reps);
+    n as f64 * INTEGRATE_BYTES_PER_PARTICLE / t
 }
 
 /// Seconds for one predict + update over `p` (SIMD or scalar twin, parallel or not).
