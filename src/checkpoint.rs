@@ -92,6 +92,27 @@ impl World {
     }
 }
 
+/// Reads a checkpoint body front to back; running past the end is an error, never a panic.
+struct Reader<'a> {
+    body: &'a [u8],
+    at: usize,
+}
+
+impl Reader<'_> {
+    fn bytes(&mut self, k: usize) -> Result<&[u8]> {
+        let end = self.at.checked_add(k);
+        let s = end.and_then(|e| self.body.get(self.at..e));
+        let s = s.ok_or_else(|| WeftError::Scene("not a valid weft checkpoint: truncated".into()))?;
+        self.at += k;
+        Ok(s)
+    }
+
+    fn array<const N: usize>(&mut self) -> Result<[u8; N]> {
+        let s = self.bytes(N)?;
+        Ok(std::array::from_fn(|i| s[i]))
+    }
+}
+
 impl Checkpoint {
     /// Encodes the checkpoint.
     pub fn to_bytes(&self) -> Vec<u8> {
@@ -121,25 +142,20 @@ impl Checkpoint {
             return Err(bad("wrong magic or too short"));
         }
         let (body, tail) = b.split_at(b.len() - 8);
-        if fnv1a(body) != u64::from_le_bytes(tail.try_into().expect("8 bytes")) {
+        if fnv1a(body) != u64::from_le_bytes(std::array::from_fn(|i| tail[i])) {
             return Err(bad("hash mismatch (truncated or corrupted file)"));
         }
-        let mut at = 8;
-        let mut take = |k: usize| -> Result<&[u8]> {
-            let s = body.get(at..at + k).ok_or_else(|| bad("truncated"))?;
-            at += k;
-            Ok(s)
-        };
-        let version = u32::from_le_bytes(take(4)?.try_into().expect("4"));
+        let mut r = Reader { body, at: 8 };
+        let version = u32::from_le_bytes(r.array()?);
         if version != VERSION {
             return Err(bad(&format!("format version {version}, this weft reads {VERSION}")));
         }
-        let steps = u64::from_le_bytes(take(8)?.try_into().expect("8"));
-        let time = f64::from_le_bytes(take(8)?.try_into().expect("8"));
-        let n = u64::from_le_bytes(take(8)?.try_into().expect("8"));
-        let scene_len = u64::from_le_bytes(take(8)?.try_into().expect("8"));
+        let steps = u64::from_le_bytes(r.array()?);
+        let time = f64::from_le_bytes(r.array()?);
+        let n = u64::from_le_bytes(r.array()?);
+        let scene_len = u64::from_le_bytes(r.array()?);
         let scene_len = usize::try_from(scene_len).map_err(|_| bad("scene length"))?;
-        let scene = String::from_utf8(take(scene_len)?.to_vec()).map_err(|_| bad("scene is not UTF-8"))?;
+        let scene = String::from_utf8(r.bytes(scene_len)?.to_vec()).map_err(|_| bad("scene is not UTF-8"))?;
         let n = usize::try_from(n).map_err(|_| bad("particle count"))?;
         let header = 8 + 4 + 8 + 8 + 8 + 8 + scene_len;
         if n.checked_mul(24).is_none_or(|need| need != body.len().saturating_sub(header)) {
@@ -147,8 +163,8 @@ impl Checkpoint {
         }
         let mut state: [Vec<f32>; 6] = Default::default();
         for a in &mut state {
-            let raw = take(n * 4)?;
-            *a = raw.chunks_exact(4).map(|c| f32::from_le_bytes(c.try_into().expect("4"))).collect();
+            let raw = r.bytes(n * 4)?;
+            *a = raw.chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
         }
         Ok(Checkpoint { scene, steps, time, state })
     }
