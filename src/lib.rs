@@ -25,6 +25,8 @@ pub mod render;
 pub mod scene;
 pub mod step;
 pub mod strands;
+#[cfg(test)]
+mod test_rng;
 pub mod world;
 
 pub use cloth::{ClothDesc, PinSpec};

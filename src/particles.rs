@@ -93,9 +93,9 @@ impl Particles {
         first as u32
     }
 
-    fn truncate_padding(&mut self) {
-        let n = self.count;
-        for v in [
+    /// The arrays that hold state between steps (the predictions are derived from `x`).
+    fn stored_arrays(&mut self) -> [&mut Vec<f32>; 7] {
+        [
             &mut self.x,
             &mut self.y,
             &mut self.z,
@@ -103,22 +103,19 @@ impl Particles {
             &mut self.vy,
             &mut self.vz,
             &mut self.w,
-        ] {
+        ]
+    }
+
+    fn truncate_padding(&mut self) {
+        let n = self.count;
+        for v in self.stored_arrays() {
             v.truncate(n);
         }
     }
 
     fn repad(&mut self) {
         let len = round_up(self.count + 1);
-        for v in [
-            &mut self.x,
-            &mut self.y,
-            &mut self.z,
-            &mut self.vx,
-            &mut self.vy,
-            &mut self.vz,
-            &mut self.w,
-        ] {
+        for v in self.stored_arrays() {
             v.resize(len, 0.0);
         }
         self.px = self.x.clone();

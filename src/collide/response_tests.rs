@@ -4,13 +4,7 @@ use proptest::prelude::*;
 
 /// xorshift in [-1, 1).
 fn rng(seed: u64) -> impl FnMut() -> f32 {
-    let mut s = seed | 1;
-    move || {
-        s ^= s << 13;
-        s ^= s >> 7;
-        s ^= s << 17;
-        (s >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
-    }
+    crate::test_rng::signed(seed | 1)
 }
 
 fn cloud(n: usize, seed: u64) -> Particles {

@@ -155,13 +155,7 @@ mod tests {
 
     fn cloud(n: usize, seed: u64) -> Particles {
         let mut p = Particles::new();
-        let mut s = seed | 1;
-        let mut r = move || {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            (s >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
-        };
+        let mut r = crate::test_rng::signed(seed | 1);
         for i in 0..n {
             let w = if i % 7 == 0 { 0.0 } else { 1.0 + r().abs() * 100.0 };
             p.push([r(), r(), r()], [r(), r(), r()], w);

@@ -143,13 +143,7 @@ mod tests {
     use proptest::prelude::*;
 
     fn setup(n: usize, m: usize, seed: u64) -> (DistanceSet, [Vec<f32>; 3]) {
-        let mut s = seed | 1;
-        let mut rnd = move || {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            (s >> 40) as f32 / (1u64 << 24) as f32
-        };
+        let mut rnd = crate::test_rng::unit(seed | 1);
         let len = round_up(n + 1);
         let mut pos = [vec![0.0; len], vec![0.0; len], vec![0.0; len]];
         for i in 0..n {
