@@ -95,13 +95,50 @@ fn reproduce_small_steps_json_prints_ours_beside_theirs() {
 }
 
 #[test]
-fn accuracy_refuses_png_and_bad_time() {
+fn accuracy_writes_a_png_plot_that_decodes() {
+    let dir = std::env::temp_dir().join(format!("weft-accuracy-png-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("tiny.toml");
+    std::fs::write(&scene, SCENE).unwrap();
+    let png_path = dir.join("plot.png");
     let out = Command::new(env!("CARGO_BIN_EXE_weft"))
-        .args(["accuracy", "scenes/hanging.toml", "--plot", "x.png"])
+        .args([
+            "accuracy",
+            scene.to_str().unwrap(),
+            "--json",
+            "--time",
+            "0.04",
+            "--reference-substeps",
+            "16",
+        ])
+        .args(["--out", dir.to_str().unwrap(), "--plot", png_path.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&png_path).unwrap()));
+    let mut reader = decoder.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    assert_eq!((info.width, info.height), (900, 600));
+    assert_eq!(info.color_type, png::ColorType::Rgb);
+    let px = &buf[..info.buffer_size()];
+    let white = px.chunks(3).filter(|p| p == &[255, 255, 255]).count();
+    let dark = px.chunks(3).filter(|p| p.iter().all(|&c| c < 64)).count();
+    let blue = px.chunks(3).filter(|p| p == &[0, 0, 255]).count();
+    assert!(white > px.len() / 6, "mostly white background");
+    assert!(dark > 500, "axes and text drawn: {dark} dark pixels");
+    assert!(blue > 50, "xpbd points drawn: {blue} blue pixels");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn accuracy_refuses_other_plot_formats_and_bad_time() {
+    let out = Command::new(env!("CARGO_BIN_EXE_weft"))
+        .args(["accuracy", "scenes/hanging.toml", "--plot", "x.jpg"])
         .output()
         .unwrap();
     assert!(!out.status.success());
-    assert!(String::from_utf8_lossy(&out.stderr).contains("SVG"));
+    assert!(String::from_utf8_lossy(&out.stderr).contains(".png"));
     let out = Command::new(env!("CARGO_BIN_EXE_weft"))
         .args(["accuracy", "scenes/hanging.toml", "--time", "0"])
         .output()

@@ -1,10 +1,11 @@
-//! `weft accuracy SCENE [--json] [--plot FILE.svg]`: ms/step against error for a grid of
+//! `weft accuracy SCENE [--json] [--plot FILE.svg|png]`: ms/step against error for a grid of
 //! solver settings, with the Pareto front marked (see `weft::accuracy`).
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::Args;
+use plot_png::PngBackend;
 use weft::accuracy::{default_grid, prepare_scene, reference_drift, run_grid, Outcome, Reference, Report};
 use weft::scene::Scene;
 
@@ -16,8 +17,8 @@ pub struct AccuracyArgs {
     /// Print one JSON array of results instead of the table.
     #[arg(long)]
     json: bool,
-    /// Write a log-log plot of rms error against ms/step (SVG).
-    #[arg(long, value_name = "FILE.svg")]
+    /// Write a log-log plot of rms error against ms/step (SVG or PNG, by the file's extension).
+    #[arg(long, value_name = "FILE.svg|png")]
     plot: Option<PathBuf>,
     /// Simulated time, s (default 1).
     #[arg(long, default_value_t = 1.0)]
@@ -34,18 +35,14 @@ pub struct AccuracyArgs {
     out: Option<PathBuf>,
 }
 
+mod plot_png;
+
 pub fn accuracy(args: AccuracyArgs) -> weft::Result<ExitCode> {
     if !(args.time.is_finite() && args.time > 0.0) {
         return Err(weft::WeftError::param("--time", args.time, "must be a positive number of seconds"));
     }
     if let Some(p) = &args.plot {
-        if p.extension().and_then(|e| e.to_str()) != Some("svg") {
-            return Err(weft::WeftError::param(
-                "--plot",
-                p.display(),
-                "only SVG plots are written (use a .svg name)",
-            ));
-        }
+        plot_kind(p)?;
     }
     let (scene, text) = Scene::load(&args.scene)?;
     let scene = prepare_scene(&scene);
@@ -150,7 +147,33 @@ pub fn table(outcomes: &[Outcome]) -> String {
     s
 }
 
+/// Whether `path` names a PNG (`Ok(true)`) or an SVG (`Ok(false)`) plot.
+fn plot_kind(path: &Path) -> weft::Result<bool> {
+    match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
+        Some("png") => Ok(true),
+        Some("svg") => Ok(false),
+        _ => Err(weft::WeftError::param("--plot", path.display(), "must end in .svg or .png")),
+    }
+}
+
+/// Plot size in pixels.
+const PLOT_SIZE: (u32, u32) = (900, 600);
+
 fn plot(outcomes: &[Outcome], path: &Path, title: &str) -> weft::Result<()> {
+    use plotters::prelude::*;
+    if plot_kind(path)? {
+        draw(PngBackend::new(path, PLOT_SIZE).into_drawing_area(), outcomes, path, title)
+    } else {
+        draw(SVGBackend::new(path, PLOT_SIZE).into_drawing_area(), outcomes, path, title)
+    }
+}
+
+fn draw<DB: plotters::prelude::DrawingBackend>(
+    root: plotters::drawing::DrawingArea<DB, plotters::coord::Shift>,
+    outcomes: &[Outcome],
+    path: &Path,
+    title: &str,
+) -> weft::Result<()> {
     use plotters::prelude::*;
     let err = |e: &dyn std::fmt::Display| weft::WeftError::io(path, std::io::Error::other(e.to_string()));
     let ok: Vec<&Outcome> = outcomes.iter().filter(|o| o.rms_error.is_some()).collect();
@@ -169,10 +192,9 @@ fn plot(outcomes: &[Outcome], path: &Path, title: &str) -> weft::Result<()> {
         e0 = e0.min(e.max(1e-12));
         e1 = e1.max(e.max(1e-12));
     }
-    let root = SVGBackend::new(path, (900, 600)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| err(&e))?;
     let mut chart = ChartBuilder::on(&root)
-        .caption(format!("{title}: rms error vs time per step"), ("sans-serif", 22))
+        .caption(format!("{title}: rms error vs time per step"), ("sans-serif", 24))
         .margin(15)
         .x_label_area_size(45)
         .y_label_area_size(70)
@@ -181,6 +203,8 @@ fn plot(outcomes: &[Outcome], path: &Path, title: &str) -> weft::Result<()> {
     chart
         .configure_mesh()
         .x_desc("ms per step")
+        .x_label_formatter(&|v| format!("{v}"))
+        .y_label_formatter(&|v| format!("{v:.0e}"))
         .y_desc("rms position error (m)")
         .draw()
         .map_err(|e| err(&e))?;
