@@ -17,14 +17,15 @@
 //!     update: v = (p - x) / h, damping; x = p          [integrate]
 //!     obstacle velocity pass: normal part, friction     [collide/obstacles] (if any)
 //!   (solver.method = symplectic-euler | leapfrog | implicit-euler: the force-based step of
-//!    integrate::mass_spring / integrate::implicit replaces the substep loop above)
+//!    integrate::mass_spring / integrate::implicit replaces the substep loop above; its drift
+//!    feeds the obstacle and self-collision stages as the prediction p, integrate::contacts)
 //!   on a non-finite value: restore the copy, replay the step with a check after every stage
 //!   to name the stage and particle, and return `Diverged`
 //!   kinematic pins land exactly on their targets                     [embed::kinematic]
 //! ```
 
 use crate::collide::response::{apply, clamp_speed, ApplyInput, ApplyMode, ClampParams};
-use crate::collide::self_collision::{mean_velocity, Response, BOX_RADIUS, TRAVEL_FACTOR};
+use crate::collide::self_collision::{mean_velocity, Active, Response, BOX_RADIUS, TRAVEL_FACTOR};
 use crate::error::{positive, Result, WeftError};
 use crate::integrate::{predict, update, PredictParams};
 use crate::params::{Backend, Method};
@@ -188,17 +189,9 @@ impl World {
             }
             if let Some(a) = sc {
                 let t0 = std::time::Instant::now();
-                let p = &self.particles;
-                let mean = mean_velocity([&p.vx, &p.vy, &p.vz], &p.w, n, parallel);
-                let cp = ClampParams {
-                    mean,
-                    limit: TRAVEL_FACTOR * a.d / n_sub as f32,
-                    h,
-                };
-                self.particles.for_chunks(parallel, |c| clamp_speed(c, &cp, simd));
-                let p = &self.particles;
-                self.selfcol.keep_predictions([&p.px, &p.py, &p.pz]);
+                self.self_collision_clamp(a, n_sub, h, parallel, simd);
                 sc_time += t0.elapsed();
+                let p = &self.particles;
                 checkpoint!("self-collision clamp", p.px, p.py, p.pz, p.vx, p.vy, p.vz);
             }
             self.distance.reset_lambda();
@@ -235,30 +228,7 @@ impl World {
             }
             if let Some(a) = sc {
                 let t0 = std::time::Instant::now();
-                let p = &self.particles;
-                self.selfcol
-                    .pair_pass([&p.x, &p.y, &p.z], [&p.px, &p.py, &p.pz], &p.w, n, parallel, simd);
-                if let Some((sums, q, b)) = self.selfcol.kernel_inputs() {
-                    let mode = if a.response == Response::Vccpbd {
-                        ApplyMode::Vccpbd
-                    } else {
-                        ApplyMode::Plain
-                    };
-                    self.particles.for_chunks(parallel, |c| {
-                        let inp = ApplyInput {
-                            start: c.start,
-                            x: [&*c.x, &*c.y, &*c.z],
-                            w: c.w,
-                            q,
-                            b,
-                            sums,
-                            friction: a.friction,
-                            h,
-                            r: BOX_RADIUS * a.d,
-                        };
-                        apply(&inp, [c.px, c.py, c.pz], mode, simd)
-                    });
-                }
+                self.self_collision_pairs_pass(a, h, parallel, simd);
                 sc_time += t0.elapsed();
                 let p = &self.particles;
                 checkpoint!("self-collision", p.px, p.py, p.pz);
@@ -280,5 +250,52 @@ impl World {
             self.selfcol.stats.steps += 1;
         }
         None
+    }
+}
+
+impl World {
+    /// The self-collision speed clamp (relative to the mean velocity, at most
+    /// `TRAVEL_FACTOR d / substeps` per substep), then the predictions kept as box centres.
+    pub(crate) fn self_collision_clamp(&mut self, a: Active, n_sub: u32, h: f32, parallel: bool, simd: bool) {
+        let n = self.particles.count();
+        let p = &self.particles;
+        let mean = mean_velocity([&p.vx, &p.vy, &p.vz], &p.w, n, parallel);
+        let cp = ClampParams {
+            mean,
+            limit: TRAVEL_FACTOR * a.d / n_sub as f32,
+            h,
+        };
+        self.particles.for_chunks(parallel, |c| clamp_speed(c, &cp, simd));
+        let p = &self.particles;
+        self.selfcol.keep_predictions([&p.px, &p.py, &p.pz]);
+    }
+
+    /// The self-collision pair pass and its correction of the predictions `p`.
+    pub(crate) fn self_collision_pairs_pass(&mut self, a: Active, h: f32, parallel: bool, simd: bool) {
+        let n = self.particles.count();
+        let p = &self.particles;
+        self.selfcol
+            .pair_pass([&p.x, &p.y, &p.z], [&p.px, &p.py, &p.pz], &p.w, n, parallel, simd);
+        if let Some((sums, q, b)) = self.selfcol.kernel_inputs() {
+            let mode = if a.response == Response::Vccpbd {
+                ApplyMode::Vccpbd
+            } else {
+                ApplyMode::Plain
+            };
+            self.particles.for_chunks(parallel, |c| {
+                let inp = ApplyInput {
+                    start: c.start,
+                    x: [&*c.x, &*c.y, &*c.z],
+                    w: c.w,
+                    q,
+                    b,
+                    sums,
+                    friction: a.friction,
+                    h,
+                    r: BOX_RADIUS * a.d,
+                };
+                apply(&inp, [c.px, c.py, c.pz], mode, simd)
+            });
+        }
     }
 }

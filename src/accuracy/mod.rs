@@ -11,9 +11,16 @@
 //! - **energy_drift** — `E(T) - E(0)`, J, with `E` = kinetic + gravitational + spring energy
 //!   `Σ ½ k (l - rest)²` (the same energy for every method; [`Report::reference_drift`] is the
 //!   reference's own change, which damping and drag make negative);
-//! - **max_penetration / penetration_count** — always 0 here: this branch's world has no
-//!   obstacles or self-collision in its step yet, so nothing can penetrate. They are kept so the
-//!   report's columns stay the same once collisions join the step.
+//! - **max_penetration / penetration_count** — the deepest any particle sat inside an obstacle
+//!   after any step (exact signed distances of the shapes and closed meshes), and how many sit
+//!   deeper than [`PENETRATION_COUNT_DEPTH`] at the end;
+//! - **self_penetration_pct** — with self-collision, the mean over steps of the percentage of
+//!   particles in penetration (VcCPBD's "average collision", [`crate::World::measure_self_collision`]).
+//!
+//! Every method runs the scene's obstacle and self-collision stages (the force-based methods
+//! through [`crate::integrate::contacts`]). Scenes with collisions get an f32 reference and no
+//! f64 rows ([`ReferenceKind`]); with self-collision the grid also varies the response and the
+//! broadphase ([`grid_for`]).
 //!
 //! A run whose step reports [`WeftError::Diverged`](crate::WeftError::Diverged), or whose RMS
 //! error passes [`DIVERGED_RMS`], is reported as diverged with no numbers. The Pareto front is
@@ -25,8 +32,11 @@
 pub mod reference;
 pub mod run;
 
-pub use reference::{fnv1a, MakeWorld, Reference};
-pub use run::{default_grid, model_energy, reference_drift, run_grid, run_setting, Outcome, Precision, Report, Setting};
+pub use reference::{fnv1a, MakeWorld, Reference, ReferenceKind, F32_REFERENCE_ITERATIONS};
+pub use run::{
+    default_grid, grid_for, model_energy, obstacle_penetration, reference_drift, run_grid, run_setting, Outcome, Precision, Report,
+    Setting, PENETRATION_COUNT_DEPTH,
+};
 
 use crate::scene::{Scene, TetherSetting};
 

@@ -15,6 +15,16 @@
 //! sides integrate the same equations; constraints of zero compliance are rigid in the
 //! reference and stiff springs in the force methods (see [`crate::integrate::mass_spring`]).
 //!
+//! **Scenes with obstacles or self-collision.** The f64 step has neither, so for these scenes
+//! ([`ReferenceKind::F32World`]) the reference is the world's own f32 XPBD step with `R`
+//! substeps and [`F32_REFERENCE_ITERATIONS`] iterations, and `R/2` for the self-error. f32 caps
+//! `R`: a particle starting from rest moves `h² g` in its first substep, and once that falls
+//! below half an ulp of its coordinate (6e-8 m at 1 m, reached near 150 substeps of 1/60 s) the
+//! prediction rounds back to `x` and the particle never starts moving. `weft accuracy` therefore
+//! defaults to `R = 64` for these scenes, and the reference is only as good as its self-error
+//! says — on contact-rich scenes that is millimetres to centimetres, not the f64 reference's
+//! micrometres.
+//!
 //! Cache file (`reference-<hash>.bin`, little endian): `b"WEFTREF1"`, the u64 key, u32 steps,
 //! u32 particles, f64 self-error, then `steps + 1` frames of `3 n` f64 positions and one frame
 //! of `3 n` f64 velocities. The key is an FNV-1a hash of the scene text and the settings, so
@@ -27,9 +37,45 @@ use crate::params::{Method, SolverParams};
 use crate::reference::ReferenceWorld;
 use crate::world::World;
 
+/// How a reference is computed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ReferenceKind {
+    /// The scalar f64 XPBD step of [`crate::reference`], 1 iteration per substep.
+    F64Xpbd,
+    /// The world's f32 XPBD step with [`F32_REFERENCE_ITERATIONS`] iterations per substep
+    /// (scenes with obstacles or self-collision, which the f64 step does not have).
+    F32World,
+}
+
+/// Iterations per substep of an [`ReferenceKind::F32World`] reference.
+pub const F32_REFERENCE_ITERATIONS: u32 = 32;
+
+impl ReferenceKind {
+    /// The kind a world needs: [`F32World`](ReferenceKind::F32World) when it has obstacles or
+    /// self-collision, else [`F64Xpbd`](ReferenceKind::F64Xpbd).
+    pub fn for_world(world: &World) -> ReferenceKind {
+        if world.obstacles().is_empty() && world.self_collision().is_none() {
+            ReferenceKind::F64Xpbd
+        } else {
+            ReferenceKind::F32World
+        }
+    }
+
+    /// A short description for report headers.
+    pub fn describe(self) -> String {
+        match self {
+            ReferenceKind::F64Xpbd => "f64 scalar XPBD, 1 iteration".into(),
+            ReferenceKind::F32World => format!("f32 world XPBD with collisions, {F32_REFERENCE_ITERATIONS} iterations"),
+        }
+    }
+}
+
 /// Positions of the reference at every step, and its final velocities.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Reference {
+    /// How it was computed.
+    pub kind: ReferenceKind,
     /// Step length, s.
     pub dt: f32,
     /// Positions at step 0 (the initial state) to `steps`.
@@ -54,16 +100,35 @@ pub type MakeWorld<'a> = &'a dyn Fn() -> Result<World>;
 /// Positions at every step and the final velocities.
 type Trajectory = (Vec<Vec<[f64; 3]>>, Vec<[f64; 3]>);
 
-fn run(make: MakeWorld<'_>, substeps: u32, steps: usize) -> Result<Trajectory> {
+fn run(make: MakeWorld<'_>, substeps: u32, steps: usize, kind: ReferenceKind) -> Result<Trajectory> {
     let mut w = make()?;
     let params = SolverParams {
         substeps,
-        iterations: 1,
+        iterations: match kind {
+            ReferenceKind::F64Xpbd => 1,
+            ReferenceKind::F32World => F32_REFERENCE_ITERATIONS,
+        },
         method: Method::Xpbd,
+        backend: crate::params::Backend::Simd,
+        guard: true,
         ..w.params().clone()
     };
     let dt = params.dt as f64;
     w.set_params(params)?;
+    if kind == ReferenceKind::F32World {
+        let state = |w: &World, v: bool| {
+            let p = w.particles();
+            (0..w.particle_count())
+                .map(|i| if v { p.velocity(i) } else { p.position(i) }.map(f64::from))
+                .collect::<Vec<_>>()
+        };
+        let mut frames = vec![state(&w, false)];
+        for _ in 0..steps {
+            w.step(dt as f32)?;
+            frames.push(state(&w, false));
+        }
+        return Ok((frames, state(&w, true)));
+    }
     let mut r = ReferenceWorld::from_world(&w);
     let mut frames = vec![r.x.clone()];
     for _ in 0..steps {
@@ -90,9 +155,10 @@ impl Reference {
                 "must be an even number of at least 2",
             ));
         }
-        let dt = make()?.params().dt;
-        let (fine, v) = run(make, substeps, steps)?;
-        let (coarse, _) = run(make, substeps / 2, steps)?;
+        let world = make()?;
+        let (dt, kind) = (world.params().dt, ReferenceKind::for_world(&world));
+        let (fine, v) = run(make, substeps, steps, kind)?;
+        let (coarse, _) = run(make, substeps / 2, steps, kind)?;
         let mut sum = 0.0;
         let mut count = 0usize;
         let frames = fine
@@ -114,6 +180,7 @@ impl Reference {
             })
             .collect();
         Ok(Reference {
+            kind,
             dt,
             frames,
             final_velocity: v,
@@ -132,10 +199,13 @@ impl Reference {
         dir: &Path,
     ) -> Result<(Reference, bool)> {
         let world = make()?;
-        let key = fnv1a(format!("{key_text}\n--reference v1 steps={steps} substeps={substeps} extrapolate={extrapolate}").as_bytes());
+        let kind = ReferenceKind::for_world(&world);
+        let key = fnv1a(
+            format!("{key_text}\n--reference v1 steps={steps} substeps={substeps} extrapolate={extrapolate} kind={kind:?}").as_bytes(),
+        );
         let path = Self::path(dir, key);
         if let Ok(bytes) = std::fs::read(&path) {
-            if let Some(r) = Self::decode(&bytes, key, world.particle_count(), steps, world.params().dt) {
+            if let Some(r) = Self::decode(&bytes, key, world.particle_count(), steps, world.params().dt, kind) {
                 return Ok((r, true));
             }
         }
@@ -166,7 +236,7 @@ impl Reference {
         out
     }
 
-    fn decode(b: &[u8], key: u64, n: usize, steps: usize, dt: f32) -> Option<Reference> {
+    fn decode(b: &[u8], key: u64, n: usize, steps: usize, dt: f32, kind: ReferenceKind) -> Option<Reference> {
         let u32_at = |o: usize| Some(u32::from_le_bytes(b.get(o..o + 4)?.try_into().ok()?));
         let f64_at = |o: usize| Some(f64::from_le_bytes(b.get(o..o + 8)?.try_into().ok()?));
         if b.get(..8)? != b"WEFTREF1" || u64::from_le_bytes(b.get(8..16)?.try_into().ok()?) != key {
@@ -188,6 +258,7 @@ impl Reference {
         }
         let final_velocity = frames.pop()?;
         Some(Reference {
+            kind,
             dt,
             frames,
             final_velocity,

@@ -2,8 +2,9 @@
 
 use std::time::Instant;
 
-use crate::accuracy::reference::{MakeWorld, Reference};
+use crate::accuracy::reference::{MakeWorld, Reference, ReferenceKind};
 use crate::accuracy::{pareto, DIVERGED_RMS};
+use crate::collide::self_config::{Response, SelfBroadphase};
 use crate::error::{Result, WeftError};
 use crate::params::{Backend, Method, SolverParams};
 use crate::reference::ReferenceWorld;
@@ -22,6 +23,10 @@ pub enum Precision {
 /// One point of the grid.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Setting {
+    /// Self-collision response, if the scene has self-collision (`None`: the scene's).
+    pub response: Option<Response>,
+    /// Self-collision broadphase (`None`: the scene's).
+    pub broadphase: Option<SelfBroadphase>,
     /// Integrator.
     pub method: Method,
     /// Substeps per step.
@@ -43,6 +48,10 @@ pub struct Outcome {
     pub iterations: u32,
     /// `"f32"` or `"f64"`.
     pub precision: Precision,
+    /// Self-collision response that ran (`None`: no self-collision).
+    pub response: Option<&'static str>,
+    /// Self-collision broadphase that ran (`None`: no self-collision).
+    pub broadphase: Option<&'static str>,
     /// `"ok"` or `"diverged"`.
     pub status: &'static str,
     /// Wall time per step, ms (until divergence for diverged runs).
@@ -55,10 +64,13 @@ pub struct Outcome {
     pub max_strain: Option<f64>,
     /// `E(T) - E(0)`, J.
     pub energy_drift: Option<f64>,
-    /// Deepest penetration, m (0: no obstacles in this world's step yet).
+    /// Deepest obstacle penetration after any step, m (0 without obstacles).
     pub max_penetration: Option<f64>,
-    /// Penetrating particles at the end (0: no obstacles in this world's step yet).
+    /// Particles more than [`PENETRATION_COUNT_DEPTH`] inside an obstacle at the end.
     pub penetration_count: Option<u64>,
+    /// Mean over the steps of the percentage of particles in self-penetration (the VcCPBD
+    /// paper's "average collision"; `None` without self-collision).
+    pub self_penetration_pct: Option<f64>,
     /// On the Pareto front of (ms_per_step, rms_error).
     pub pareto: bool,
 }
@@ -70,6 +82,8 @@ pub struct Report {
     pub steps: usize,
     /// Step length, s.
     pub dt: f32,
+    /// How the reference was computed.
+    pub reference_kind: ReferenceKind,
     /// Substeps of the reference's finer run.
     pub reference_substeps: u32,
     /// The reference's own error estimate, m (see [`Reference::self_error`]).
@@ -80,10 +94,68 @@ pub struct Report {
     pub outcomes: Vec<Outcome>,
 }
 
+/// Depth past which a particle counts in [`Outcome::penetration_count`], m.
+pub const PENETRATION_COUNT_DEPTH: f64 = 1e-4;
+
+/// The grid for `world`: [`default_grid`] without obstacles or self-collision. With them, the
+/// f64 rows go (the f64 step has no collisions); with self-collision, XPBD at 4 and 16
+/// substeps also runs every other response × broadphase (the plain rows use the scene's).
+pub fn grid_for(world: &World) -> Vec<Setting> {
+    if ReferenceKind::for_world(world) == ReferenceKind::F64Xpbd {
+        return default_grid();
+    }
+    let mut g: Vec<Setting> = default_grid().into_iter().filter(|s| s.precision == Precision::F32).collect();
+    if let Some(sc) = world.self_collision() {
+        for substeps in [4, 16] {
+            for response in [Response::Pbd, Response::MovementSpeed, Response::Vccpbd] {
+                for broadphase in [SelfBroadphase::Hash, SelfBroadphase::AabbTree] {
+                    if (response, broadphase) != (sc.response, sc.broadphase) {
+                        g.push(Setting {
+                            method: Method::Xpbd,
+                            substeps,
+                            iterations: 1,
+                            precision: Precision::F32,
+                            response: Some(response),
+                            broadphase: Some(broadphase),
+                        });
+                    }
+                }
+            }
+        }
+    }
+    g
+}
+
+/// Deepest obstacle penetration of `w`'s particles (m, 0 when none) and how many sit deeper
+/// than [`PENETRATION_COUNT_DEPTH`].
+pub fn obstacle_penetration(w: &World) -> (f64, u64) {
+    use crate::collide::obstacles::Geometry;
+    use crate::collide::penetration::mesh_signed_distance;
+    let [x, y, z] = w.positions();
+    let mut depth = vec![0.0f32; w.particle_count()];
+    let mut scratch = Vec::new();
+    for o in w.obstacles() {
+        let shape = o.shape_at(w.time());
+        for (i, d) in depth.iter_mut().enumerate() {
+            let q = [x[i], y[i], z[i]];
+            let s = match (&shape, o.geometry()) {
+                (Some(s), _) => Some(s.signed_distance(q)),
+                (None, Geometry::Mesh(m)) => mesh_signed_distance(m.mesh(), m.broadphase(), q, &mut scratch),
+                _ => None,
+            };
+            *d = d.max(-s.unwrap_or(0.0));
+        }
+    }
+    let max = depth.iter().copied().fold(0.0f32, f32::max) as f64;
+    (max, depth.iter().filter(|&&d| d as f64 > PENETRATION_COUNT_DEPTH).count() as u64)
+}
+
 /// The default grid: XPBD (f32: substeps 1–64 × iterations 1–16; f64: substeps 1–64),
 /// symplectic Euler and leapfrog (64–4096 substeps) and implicit Euler (1–16 substeps).
 pub fn default_grid() -> Vec<Setting> {
     let s = |method, substeps, iterations, precision| Setting {
+        response: None,
+        broadphase: None,
         method,
         substeps,
         iterations,
@@ -169,15 +241,31 @@ pub fn run_setting(make: MakeWorld<'_>, reference: &Reference, setting: Setting,
     };
     let dt = params.dt;
     w.set_params(params)?;
+    if let Some(mut sc) = w.self_collision().cloned() {
+        sc.response = setting.response.unwrap_or(sc.response);
+        sc.broadphase = setting.broadphase.unwrap_or(sc.broadphase);
+        w.set_self_collision(Some(sc))?;
+    } else if setting.response.is_some() || setting.broadphase.is_some() {
+        return Err(WeftError::param(
+            "self-collision response",
+            "set",
+            "the scene has no self-collision",
+        ));
+    }
+    let selfcol = w.self_collision().map(|c| (c.response.name(), c.broadphase.name()));
     let (x0, v0) = state64(&w);
     let e0 = model_energy(&w, &x0, &v0);
     let mut f64_world = match setting.precision {
         Precision::F32 => None,
+        Precision::F64 if ReferenceKind::for_world(&w) == ReferenceKind::F32World => {
+            return Err(WeftError::param("precision", "f64", "has no obstacles or self-collision"))
+        }
         Precision::F64 if setting.method == Method::Xpbd => Some(ReferenceWorld::from_world(&w)),
         Precision::F64 => return Err(WeftError::param("precision", "f64", "is available for the xpbd method only")),
     };
     let (mut sum2, mut max_err, mut strain, mut seconds) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
     let mut done = 0usize;
+    let (mut depth, mut self_pct) = (0.0f64, 0.0f64);
     let mut diverged = false;
     let mut last = (x0, v0);
     for k in 0..steps {
@@ -209,6 +297,12 @@ pub fn run_setting(make: MakeWorld<'_>, reference: &Reference, setting: Setting,
             max_err = max_err.max(d);
         }
         strain = strain.max(max_strain(&w, &last.0));
+        if f64_world.is_none() {
+            depth = depth.max(obstacle_penetration(&w).0);
+            if selfcol.is_some() {
+                self_pct += w.measure_self_collision()?;
+            }
+        }
     }
     let n = w.particle_count().max(1);
     let rms = (sum2 / (n * done.max(1)) as f64).sqrt();
@@ -219,14 +313,17 @@ pub fn run_setting(make: MakeWorld<'_>, reference: &Reference, setting: Setting,
         substeps: setting.substeps,
         iterations: setting.iterations,
         precision: setting.precision,
+        response: selfcol.map(|s| s.0),
+        broadphase: selfcol.map(|s| s.1),
         status: if diverged { "diverged" } else { "ok" },
         ms_per_step: 1e3 * seconds / done.max(1) as f64,
         rms_error: some(rms),
         max_error: some(max_err),
         max_strain: some(strain),
         energy_drift: some(model_energy(&w, &last.0, &last.1) - e0),
-        max_penetration: some(0.0),
-        penetration_count: (!diverged).then_some(0),
+        max_penetration: some(depth),
+        penetration_count: (!diverged).then(|| if f64_world.is_some() { 0 } else { obstacle_penetration(&w).1 }),
+        self_penetration_pct: selfcol.and(some(self_pct / done.max(1) as f64)),
         pareto: false,
     })
 }

@@ -33,6 +33,8 @@ fn setting(method: Method, substeps: u32) -> Setting {
         substeps,
         iterations: 1,
         precision: Precision::F32,
+        response: None,
+        broadphase: None,
     }
 }
 

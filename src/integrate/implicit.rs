@@ -199,8 +199,9 @@ fn faer_err(e: impl std::fmt::Debug) -> WeftError {
 }
 
 impl World {
-    /// One implicit Euler substep of length `h` at time `t`.
-    pub(crate) fn implicit_substep(&mut self, h: f32, t: f64) -> Result<()> {
+    /// One implicit Euler substep of length `h` at time `t`. With `keep_x` the drift writes only
+    /// the prediction `p` for the collision stages ([`crate::integrate::contacts`]).
+    pub(crate) fn implicit_substep(&mut self, h: f32, t: f64, keep_x: bool) -> Result<()> {
         let mut state = match self.ms.implicit.take() {
             Some(st) if st.fits(self) => st,
             _ => ImplicitState::new(self)?,
@@ -259,10 +260,11 @@ impl World {
                 v = v.map(|e| e * d[i]);
             }
             (p.vx[i], p.vy[i], p.vz[i]) = (v[0], v[1], v[2]);
-            p.x[i] += v[0] * h;
-            p.y[i] += v[1] * h;
-            p.z[i] += v[2] * h;
-            (p.px[i], p.py[i], p.pz[i]) = (p.x[i], p.y[i], p.z[i]);
+            let x = [p.x[i] + v[0] * h, p.y[i] + v[1] * h, p.z[i] + v[2] * h];
+            if !keep_x {
+                (p.x[i], p.y[i], p.z[i]) = (x[0], x[1], x[2]);
+            }
+            (p.px[i], p.py[i], p.pz[i]) = (x[0], x[1], x[2]);
         }
         self.ms.implicit = Some(state);
         Ok(())

@@ -41,6 +41,9 @@ pub struct MassSpringState {
     pub f: [Vec<f32>; 3],
     /// The implicit solver's factorisation and layout, built on first use.
     pub implicit: Option<crate::integrate::implicit::ImplicitState>,
+    /// The predictions before the collision stages moved them (see
+    /// [`crate::integrate::contacts`]).
+    pub predicted: [Vec<f32>; 3],
 }
 
 /// What one kick/drift pass does to a chunk of particles.
@@ -58,6 +61,9 @@ pub struct KickParams<'a> {
     pub damp: Option<&'a [f32]>,
     /// Drift `x += h v` after the kick, with this `h`.
     pub drift: Option<f32>,
+    /// The drift writes only the prediction `p = x + h v` and leaves `x` for the collision
+    /// stages (see [`crate::integrate::contacts`]); otherwise it writes both.
+    pub keep_x: bool,
 }
 
 /// Kick (and optionally drag, damping, drift) on one chunk: SIMD when `simd`, else the twin.
@@ -95,7 +101,9 @@ fn kick_simd(c: ParticleChunk<'_>, p: &KickParams<'_>) {
         v.store(c.vx, c.vy, c.vz, i);
         if p.drift.is_some() {
             let x = Vec3x8::load(c.x, c.y, c.z, i) + v.scale(hd);
-            x.store(c.x, c.y, c.z, i);
+            if !p.keep_x {
+                x.store(c.x, c.y, c.z, i);
+            }
             x.store(c.px, c.py, c.pz, i);
         }
     }
@@ -130,10 +138,11 @@ fn kick_scalar(c: ParticleChunk<'_>, p: &KickParams<'_>) {
         }
         (c.vx[i], c.vy[i], c.vz[i]) = (v[0], v[1], v[2]);
         if p.drift.is_some() {
-            c.x[i] += v[0] * hd;
-            c.y[i] += v[1] * hd;
-            c.z[i] += v[2] * hd;
-            (c.px[i], c.py[i], c.pz[i]) = (c.x[i], c.y[i], c.z[i]);
+            let x = [c.x[i] + v[0] * hd, c.y[i] + v[1] * hd, c.z[i] + v[2] * hd];
+            if !p.keep_x {
+                (c.x[i], c.y[i], c.z[i]) = (x[0], x[1], x[2]);
+            }
+            (c.px[i], c.py[i], c.pz[i]) = (x[0], x[1], x[2]);
         }
     }
 }
@@ -155,6 +164,7 @@ fn kick_params<'a>(
         drag_h: effects.drag.filter(|_| close).map(|c| c * h),
         damp: damp.filter(|_| close),
         drift,
+        keep_x: false,
     }
 }
 
@@ -192,13 +202,17 @@ impl World {
         }
     }
 
-    /// One step of a force-based method (`substeps` substeps; `iterations` is not used).
+    /// One step of a force-based method (`substeps` substeps; `iterations` is not used), with
+    /// the collision stages after every drift when the world has obstacles or self-collision.
     pub(crate) fn run_mass_spring(&mut self, dt: f32, method: Method) -> crate::Result<()> {
         let n_sub = self.params.substeps;
         let h = dt / n_sub as f32;
         let simd = self.params.backend == Backend::Simd;
+        let parallel = simd && !self.embed.caller_thread_only;
         self.damping_for(h);
         self.last_h = h;
+        let contacts = self.begin_force_contacts(parallel);
+        let keep_x = contacts.any();
         let leap = method == Method::Leapfrog;
         if leap {
             self.compute_forces(self.time);
@@ -206,16 +220,11 @@ impl World {
         for s in 0..n_sub {
             let t = self.time + s as f64 * h as f64;
             if method == Method::ImplicitEuler {
-                self.implicit_substep(h, t)?;
-                continue;
-            }
-            if !leap {
-                self.compute_forces(t);
-            }
-            // Leapfrog: half kick + drift with F(x_n), then half kick with F(x_{n+1}) closing the
-            // substep; symplectic Euler: one whole kick + drift closing the substep.
-            if leap {
-                let first = kick_params(
+                self.implicit_substep(h, t, keep_x)?;
+            } else if leap {
+                // Half kick + drift with F(x_n), contacts, then the half kick with F(x_{n+1})
+                // closing the substep.
+                let mut first = kick_params(
                     &self.ms.f,
                     self.has_damping.then_some(&self.damp_factor[..]),
                     &self.effects,
@@ -224,11 +233,13 @@ impl World {
                     false,
                     Some(h),
                 );
-                self.particles.for_chunks(simd, |c| kick(c, &first, simd));
+                first.keep_x = keep_x;
+                self.particles.for_chunks(parallel, |c| kick(c, &first, simd));
+                if keep_x {
+                    self.force_contact_stages(contacts, s, h, parallel, simd);
+                }
                 self.compute_forces(t + h as f64);
-            }
-            let close = if leap {
-                kick_params(
+                let close = kick_params(
                     &self.ms.f,
                     self.has_damping.then_some(&self.damp_factor[..]),
                     &self.effects,
@@ -236,9 +247,13 @@ impl World {
                     h,
                     true,
                     None,
-                )
+                );
+                self.particles.for_chunks(parallel, |c| kick(c, &close, simd));
+                continue;
             } else {
-                kick_params(
+                // Symplectic Euler: one whole kick + drift closing the substep.
+                self.compute_forces(t);
+                let mut close = kick_params(
                     &self.ms.f,
                     self.has_damping.then_some(&self.damp_factor[..]),
                     &self.effects,
@@ -246,9 +261,13 @@ impl World {
                     h,
                     true,
                     Some(h),
-                )
-            };
-            self.particles.for_chunks(simd, |c| kick(c, &close, simd));
+                );
+                close.keep_x = keep_x;
+                self.particles.for_chunks(parallel, |c| kick(c, &close, simd));
+            }
+            if keep_x {
+                self.force_contact_stages(contacts, s, h, parallel, simd);
+            }
         }
         Ok(())
     }

@@ -6,7 +6,7 @@ use std::process::ExitCode;
 
 use clap::Args;
 use plot_png::PngBackend;
-use weft::accuracy::{default_grid, prepare_scene, reference_drift, run_grid, Outcome, Reference, Report};
+use weft::accuracy::{grid_for, prepare_scene, reference_drift, run_grid, Outcome, Reference, ReferenceKind, Report};
 use weft::scene::Scene;
 
 /// Arguments of `weft accuracy`.
@@ -23,9 +23,10 @@ pub struct AccuracyArgs {
     /// Simulated time, s (default 1).
     #[arg(long, default_value_t = 1.0)]
     time: f64,
-    /// Substeps per step of the reference's finer run (even; default 1024).
-    #[arg(long, default_value_t = 1024)]
-    reference_substeps: u32,
+    /// Substeps per step of the reference's finer run (even; default 1024, or 64 for scenes
+    /// with obstacles or self-collision, whose reference is f32: see weft::accuracy::reference).
+    #[arg(long)]
+    reference_substeps: Option<u32>,
     /// Richardson-extrapolate the reference from its R and R/2 runs (helps smooth motion,
     /// hurts cloth ringing in stiff modes; see weft::accuracy::reference).
     #[arg(long)]
@@ -55,15 +56,23 @@ pub fn accuracy(args: AccuracyArgs) -> weft::Result<ExitCode> {
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "scene".into());
     let dir = args.out.clone().unwrap_or_else(|| Path::new("out").join(&stem));
+    let world = make()?;
+    let kind = ReferenceKind::for_world(&world);
+    let reference_substeps = args.reference_substeps.unwrap_or(match kind {
+        ReferenceKind::F64Xpbd => 1024,
+        ReferenceKind::F32World => 64,
+    });
     if !args.json {
         eprintln!(
-            "reference: f64 XPBD, {} and {} substeps/step, Richardson-extrapolated ...",
-            args.reference_substeps,
-            args.reference_substeps / 2
+            "reference: {}, {} and {} substeps/step{} ...",
+            kind.describe(),
+            reference_substeps,
+            reference_substeps / 2,
+            if args.extrapolate { ", Richardson-extrapolated" } else { "" }
         );
     }
-    let (reference, cached) = Reference::cached(&make, &text, steps, args.reference_substeps, args.extrapolate, &dir)?;
-    let grid = default_grid();
+    let (reference, cached) = Reference::cached(&make, &text, steps, reference_substeps, args.extrapolate, &dir)?;
+    let grid = grid_for(&world);
     let quiet = args.json;
     let outcomes = run_grid(&make, &reference, &grid, steps, |i, o| {
         if !quiet {
@@ -82,7 +91,8 @@ pub fn accuracy(args: AccuracyArgs) -> weft::Result<ExitCode> {
     let report = Report {
         steps,
         dt: scene.solver.dt.0,
-        reference_substeps: args.reference_substeps,
+        reference_kind: kind,
+        reference_substeps,
         reference_self_error: reference.self_error,
         reference_drift: reference_drift(&make, &reference)?,
         outcomes,
@@ -99,21 +109,24 @@ pub fn accuracy(args: AccuracyArgs) -> weft::Result<ExitCode> {
         println!(
             "scene {}: {} particles, {} steps of {:.5} s ({:.2} s simulated)",
             args.scene.display(),
-            make()?.particle_count(),
+            world.particle_count(),
             steps,
             dt,
             steps as f64 * dt
         );
         println!(
-            "reference: f64 XPBD {} substeps/step{} ({}), own error estimate {:.2e} m, energy change {:.4e} J",
-            args.reference_substeps,
+            "reference: {}, {} substeps/step{} ({}), own error estimate {:.2e} m, energy change {:.4e} J",
+            kind.describe(),
+            reference_substeps,
             if args.extrapolate { " extrapolated" } else { "" },
             if cached { "cached" } else { "computed" },
             report.reference_self_error,
             report.reference_drift
         );
         print!("{}", table(&report.outcomes));
-        println!("* = Pareto front (no other setting is both faster and more accurate). Penetration is 0: no obstacles in the step yet.");
+        println!(
+            "* = Pareto front (no other setting is both faster and more accurate). penet = deepest obstacle penetration (m) / particles deeper than 0.1 mm at the end; self% = mean % of particles in self-penetration."
+        );
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -125,13 +138,33 @@ fn num(v: Option<f64>) -> String {
 /// The text table.
 pub fn table(outcomes: &[Outcome]) -> String {
     let mut s = format!(
-        "{:<17} {:>5} {:>5} {:>4} {:>11} {:>10} {:>10} {:>10} {:>11} {:>6}\n",
-        "method", "subst", "iter", "prec", "ms/step", "rms err m", "max err m", "max strain", "energy dJ", "penet"
+        "{:<17} {:<20} {:>5} {:>5} {:>4} {:>11} {:>10} {:>10} {:>10} {:>11} {:>13} {:>6}\n",
+        "method",
+        "self-collision",
+        "subst",
+        "iter",
+        "prec",
+        "ms/step",
+        "rms err m",
+        "max err m",
+        "max strain",
+        "energy dJ",
+        "penet",
+        "self%"
     );
     for o in outcomes {
+        let sc = match (o.response, o.broadphase) {
+            (Some(r), Some(b)) => format!("{r}/{b}"),
+            _ => "-".into(),
+        };
+        let penet = match (o.max_penetration, o.penetration_count) {
+            (Some(d), Some(c)) => format!("{d:.1e}/{c}"),
+            _ => "-".into(),
+        };
         s += &format!(
-            "{:<17} {:>5} {:>5} {:>4} {:>11.4} {:>10} {:>10} {:>10} {:>11} {:>6}{}\n",
+            "{:<17} {:<20} {:>5} {:>5} {:>4} {:>11.4} {:>10} {:>10} {:>10} {:>11} {:>13} {:>6}{}\n",
             o.method,
+            sc,
             o.substeps,
             o.iterations,
             format!("{:?}", o.precision).to_lowercase(),
@@ -140,7 +173,8 @@ pub fn table(outcomes: &[Outcome]) -> String {
             num(o.max_error),
             num(o.max_strain),
             num(o.energy_drift),
-            o.max_penetration.map_or("-".into(), |p| format!("{p}")),
+            penet,
+            o.self_penetration_pct.map_or("-".into(), |p| format!("{p:.2}")),
             if o.pareto { " *" } else { "" }
         );
     }
