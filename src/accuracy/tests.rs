@@ -135,3 +135,46 @@ fn scene_keys_solver_method_and_stiffness() {
     let neg = SCENE.replace("dt = 0.02", "dt = 0.02\nstiffness = -1.0");
     assert!(Scene::parse(&neg, "test").unwrap_err().to_string().contains("line 4"));
 }
+
+#[test]
+fn scenes_with_collisions_get_an_f32_reference_the_response_grid_and_penetration_measures() {
+    let text = format!(
+        "{SCENE}\n[effects.self_collision]\nresponse = \"vccpbd\"\n\n[[obstacle]]\nkind = \"sphere\"\ncenter = [0.125, 0.85, 0.2]\nradius = 0.1\n"
+    );
+    let s = prepare_scene(&Scene::parse(&text, "test").unwrap());
+    let make = || s.world();
+    let w = make().unwrap();
+    assert_eq!(ReferenceKind::for_world(&w), ReferenceKind::F32World);
+    let grid = grid_for(&w);
+    assert!(
+        grid.iter().all(|g| g.precision == Precision::F32),
+        "no f64 rows: the f64 step has no collisions"
+    );
+    let variants = grid.iter().filter(|g| g.response.is_some()).count();
+    assert_eq!(variants, 2 * (3 * 2 - 1), "every other response x broadphase at 4 and 16 substeps");
+    let steps = 25;
+    let r = Reference::compute(&make, steps, 16, false).unwrap();
+    assert_eq!(r.kind, ReferenceKind::F32World);
+    for (method, substeps) in [
+        (Method::Xpbd, 4),
+        (Method::SymplecticEuler, 64),
+        (Method::Leapfrog, 64),
+        (Method::ImplicitEuler, 4),
+    ] {
+        let o = run_setting(&make, &r, setting(method, substeps), steps).unwrap();
+        assert_eq!(o.status, "ok", "{o:?}");
+        let depth = o.max_penetration.unwrap();
+        assert!(depth <= PENETRATION_COUNT_DEPTH, "{}: penetration {depth} m", method.name());
+        assert_eq!(o.penetration_count, Some(0));
+        assert!(o.self_penetration_pct.is_some() && o.response == Some("vccpbd"), "{o:?}");
+        // The sheet reaches the ball: its error against a reference that rests on the ball is
+        // far below the 0.25 m it would fall through it in this time.
+        assert!(o.rms_error.unwrap() < 0.05, "{}: {o:?}", method.name());
+    }
+    let mut pbd = setting(Method::Xpbd, 4);
+    pbd.response = Some(crate::collide::self_config::Response::Pbd);
+    assert_eq!(run_setting(&make, &r, pbd, 2).unwrap().response, Some("pbd"));
+    let mut f64_row = setting(Method::Xpbd, 4);
+    f64_row.precision = Precision::F64;
+    assert!(run_setting(&make, &r, f64_row, 2).is_err());
+}

@@ -20,6 +20,9 @@ pub struct AccuracyArgs {
     /// Write a log-log plot of rms error against ms/step (SVG or PNG, by the file's extension).
     #[arg(long, value_name = "FILE.svg|png")]
     plot: Option<PathBuf>,
+    /// Also write the whole report (header figures and every row) as JSON to this file.
+    #[arg(long, value_name = "FILE.json")]
+    save_json: Option<PathBuf>,
     /// Simulated time, s (default 1).
     #[arg(long, default_value_t = 1.0)]
     time: f64,
@@ -99,6 +102,10 @@ pub fn accuracy(args: AccuracyArgs) -> weft::Result<ExitCode> {
     };
     if let Some(p) = &args.plot {
         plot(&report.outcomes, p, &stem)?;
+    }
+    if let Some(p) = &args.save_json {
+        let text = serde_json::to_string_pretty(&report).map_err(|e| weft::WeftError::Scene(e.to_string()))?;
+        std::fs::write(p, text + "\n").map_err(|e| weft::WeftError::io(p, e))?;
     }
     if args.json {
         println!(
