@@ -1,7 +1,8 @@
 //! Obstacles and self-collision for the force-based methods.
 //!
 //! The force-based methods (symplectic Euler, leapfrog, implicit Euler) end their substep with a
-//! drift `x_{n+1} = x_n + h v`. When the world has obstacles or self-collision, that drift writes
+//! drift `x_{n+1} = x_n + h v`. When the world has obstacles, self-collision or strands with
+//! scalps, that drift writes
 //! the prediction `p = x_n + h v` instead of `x`, and the collision stages of the XPBD step
 //! (`src/step.rs`) run on it exactly as they do after XPBD's constraint sweeps:
 //!
@@ -9,6 +10,7 @@
 //! obstacle contacts of x -> p, back along the path     [collide/obstacles]  (if any)
 //! speed clamp relative to the mean velocity            [self-collision]     (if on)
 //! obstacle projection                                  [collide/obstacles]  (if any)
+//! strands pushed out of their scalps                   [strands::scalp]     (if any)
 //! pair pass, velocity correction                       [self-collision]     (if on)
 //! update: v += (p - p_drift) / h;  x = p                [integrate/contacts]
 //! obstacle velocity pass: normal part, friction        [collide/obstacles]  (if any)
@@ -36,12 +38,14 @@ pub(crate) struct Contacts {
     obstacles: bool,
     /// Self-collision is on for this step.
     selfcol: Option<Active>,
+    /// The world has strands with scalps.
+    scalps: bool,
 }
 
 impl Contacts {
     /// Whether any collision stage runs: the drift must then write `p`, not `x`.
     pub(crate) fn any(&self) -> bool {
-        self.obstacles || self.selfcol.is_some()
+        self.obstacles || self.selfcol.is_some() || self.scalps
     }
 }
 
@@ -64,7 +68,11 @@ impl World {
             let steps = self.steps;
             self.selfcol.record_start_state([&p.x, &p.y, &p.z], n, steps, parallel);
         }
-        Contacts { obstacles, selfcol }
+        Contacts {
+            obstacles,
+            selfcol,
+            scalps: !self.scalps.is_empty(),
+        }
     }
 
     /// The collision stages of substep `s` (length `h`) on the prediction `p`, then
@@ -93,6 +101,14 @@ impl World {
             let t0 = std::time::Instant::now();
             self.obstacles.project(&mut self.particles, parallel, simd);
             self.obstacles.add_busy(t0);
+        }
+        if c.scalps {
+            let p = &mut self.particles;
+            if parallel {
+                self.scalps.solve(&mut p.px, &mut p.py, &mut p.pz, &p.w);
+            } else {
+                self.scalps.solve_scalar(&mut p.px, &mut p.py, &mut p.pz, &p.w);
+            }
         }
         if let Some(a) = c.selfcol {
             self.self_collision_pairs_pass(a, h, parallel, simd);
