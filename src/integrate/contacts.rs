@@ -145,6 +145,11 @@ mod tests {
 
     /// A soft 12 x 12 sheet (k = 1e4 N/m stretch) dropped from 5 cm above a ball.
     fn drape(method: Method, substeps: u32, ball: bool) -> World {
+        drape_on(method, substeps, ball, 0)
+    }
+
+    /// [`drape`] on `threads` threads (0: the global pool).
+    fn drape_on(method: Method, substeps: u32, ball: bool, threads: usize) -> World {
         let fabric = Fabric {
             stretch_compliance: 1e-4,
             shear_compliance: 1e-3,
@@ -167,6 +172,7 @@ mod tests {
             dt: 1.0 / 60.0,
             substeps,
             method,
+            threads,
             ..Default::default()
         };
         let mut w = World::new(params, Effects::gravity()).unwrap();
@@ -207,6 +213,21 @@ mod tests {
             assert!(gap > -TOL && gap < 0.01, "{method:?}: centre {gap} m off the surface");
             let top = CENTER[1] + RADIUS;
             assert!(lowest(&with) < top - 0.05, "{method:?}: edges drape, lowest {}", lowest(&with));
+        }
+    }
+
+    #[test]
+    fn force_based_contacts_do_not_depend_on_the_thread_count() {
+        for method in [Method::SymplecticEuler, Method::Leapfrog, Method::ImplicitEuler] {
+            let run = |threads| {
+                let mut w = drape_on(method, 64, true, threads);
+                for _ in 0..20 {
+                    w.step(1.0 / 60.0).unwrap();
+                }
+                let [x, y, z] = w.positions();
+                x.iter().chain(y).chain(z).map(|v| v.to_bits()).collect::<Vec<_>>()
+            };
+            assert_eq!(run(1), run(2), "{method:?}");
         }
     }
 }
