@@ -35,6 +35,9 @@ pub struct VccpbdArgs {
     /// machine the ~50 parallel joins a step mostly measure the scheduler; 0 = all cores).
     #[arg(long, default_value_t = 1)]
     threads: usize,
+    /// Only the rows of this grid size (34, 50 or 100); all three when absent.
+    #[arg(long)]
+    size: Option<u32>,
 }
 
 /// One row of the result.
@@ -172,7 +175,10 @@ fn measure(size: u32, fi: usize, ri: usize, broadphase: SelfBroadphase, steps: u
 pub fn run(args: VccpbdArgs) -> weft::Result<ExitCode> {
     let steps = args.steps.unwrap_or(if args.quick { 30 } else { 150 }).max(1);
     let mut rows = Vec::new();
-    for &size in &SIZES {
+    if let Some(s) = args.size.filter(|s| !SIZES.contains(s)) {
+        return Err(WeftError::param("size", s, "must be 34, 50 or 100"));
+    }
+    for &size in SIZES.iter().filter(|&&s| args.size.is_none_or(|a| a == s)) {
         for fi in 0..FABRICS.len() {
             for ri in 0..RESPONSES.len() {
                 rows.push(measure(size, fi, ri, SelfBroadphase::Hash, steps, args.threads)?);
