@@ -21,7 +21,7 @@ use super::response::{apply, ApplyInput, ApplyMode, ContactSums};
 use super::self_pairs::PairCtx;
 use crate::lanes::LANES;
 
-/// Particles (compact slots) one parallel task handles in the pair pass.
+/// Compact slots one parallel task handles in the pair pass's candidate search.
 const PAIR_CHUNK: usize = 128;
 
 /// Blocks one parallel task handles in the correction pass at least.
@@ -52,6 +52,10 @@ pub(crate) struct ActiveSet {
     pred: [Vec<f32>; 3],
     /// Damping rates, compact.
     damping: Vec<f32>,
+    /// Candidate pairs of the pair pass, one buffer per chunk (kept between substeps).
+    candidates: Vec<Vec<(u32, u32)>>,
+    /// Per-slot sums and approaching counts while the contacts are added.
+    acc: Vec<([f32; 11], f32)>,
 }
 
 fn resize(v: &mut Vec<f32>, len: usize) {
@@ -109,48 +113,61 @@ impl ActiveSet {
     }
 
     /// The pair pass over the active blocks: the contact sums of every particle in them (zero
-    /// for particles with no contact or `i >= n`). Parallel over fixed chunks when `parallel`.
+    /// for particles with no contact or `i >= n`).
+    ///
+    /// Each unordered pair is tested once: the candidates `(i, j)`, `j > i`, closer than `d`
+    /// (with a margin) are found in parallel over fixed chunks of the active slots, each chunk
+    /// into its own buffer; then, serially in buffer order (`i` ascending, then `j`), each
+    /// candidate adds its exact contact to both particles' sums. A particle thus receives its
+    /// contacts in ascending partner order, as the per-particle loop over its sorted list would
+    /// (the tests hold the two equal bit for bit); nothing depends on the thread count.
     pub(crate) fn pair_pass(&mut self, ctx: &PairCtx<'_>, n: usize, parallel: bool, simd: bool) {
+        let slots = self.blocks.len() * LANES;
+        let chunks = slots.div_ceil(PAIR_CHUNK);
+        if self.candidates.len() < chunks {
+            self.candidates.resize_with(chunks, Vec::new);
+        }
         let blocks = &self.blocks;
-        let body = |start: usize, out: [&mut [f32]; 11]| {
-            let [c0, c1, c2, f0, f1, f2, n0, n1, n2, g, k] = out;
-            for o in 0..c0.len() {
-                let s = start + o;
+        let find = |c: usize, buf: &mut Vec<(u32, u32)>| {
+            buf.clear();
+            for s in c * PAIR_CHUNK..((c + 1) * PAIR_CHUNK).min(slots) {
                 let i = blocks[s / LANES] as usize * LANES + s % LANES;
-                let r = if i < n { ctx.sums(i, simd) } else { [0.0; 11] };
-                let dst = [
-                    &mut c0[o], &mut c1[o], &mut c2[o], &mut f0[o], &mut f1[o], &mut f2[o], &mut n0[o], &mut n1[o], &mut n2[o], &mut g[o],
-                    &mut k[o],
-                ];
-                for (d, v) in dst.into_iter().zip(r) {
-                    *d = v;
+                if i < n {
+                    ctx.candidates(i, simd, buf);
                 }
             }
         };
-        let s = &mut self.sums;
-        let len = s.len();
-        let [c0, c1, c2] = &mut s.c;
-        let [f0, f1, f2] = &mut s.f;
-        let [n0, n1, n2] = &mut s.n;
-        if parallel && len > PAIR_CHUNK {
-            (
-                c0.par_chunks_mut(PAIR_CHUNK),
-                c1.par_chunks_mut(PAIR_CHUNK),
-                c2.par_chunks_mut(PAIR_CHUNK),
-                f0.par_chunks_mut(PAIR_CHUNK),
-                f1.par_chunks_mut(PAIR_CHUNK),
-                f2.par_chunks_mut(PAIR_CHUNK),
-                n0.par_chunks_mut(PAIR_CHUNK),
-                n1.par_chunks_mut(PAIR_CHUNK),
-                n2.par_chunks_mut(PAIR_CHUNK),
-                s.gap.par_chunks_mut(PAIR_CHUNK),
-                s.count.par_chunks_mut(PAIR_CHUNK),
-            )
-                .into_par_iter()
-                .enumerate()
-                .for_each(|(k, (a, b, c, d, e, f, g, h, i, j, l))| body(k * PAIR_CHUNK, [a, b, c, d, e, f, g, h, i, j, l]));
+        let bufs = &mut self.candidates[..chunks];
+        if parallel && chunks > 1 {
+            bufs.par_iter_mut().enumerate().for_each(|(c, b)| find(c, b));
         } else {
-            body(0, [c0, c1, c2, f0, f1, f2, n0, n1, n2, &mut s.gap, &mut s.count]);
+            bufs.iter_mut().enumerate().for_each(|(c, b)| find(c, b));
+        }
+        self.acc.clear();
+        self.acc.resize(slots, ([0.0; 11], 0.0));
+        let slot = |i: usize| match self.slot_of_block.get(i / LANES) {
+            Some(&k) if k != INACTIVE => Some(k as usize * LANES + i % LANES),
+            _ => None,
+        };
+        for &(i, j) in self.candidates[..chunks].iter().flatten() {
+            let (i, j) = (i as usize, j as usize);
+            for (a, b) in [(i, j), (j, i)] {
+                if let Some(k) = slot(a) {
+                    let (out, approaching) = &mut self.acc[k];
+                    ctx.add_contact(a, b, out, approaching);
+                }
+            }
+        }
+        let s = &mut self.sums;
+        for (k, (out, approaching)) in self.acc.iter_mut().enumerate() {
+            PairCtx::finish(out, *approaching);
+            for a in 0..3 {
+                s.c[a][k] = out[a];
+                s.f[a][k] = out[3 + a];
+                s.n[a][k] = out[6 + a];
+            }
+            s.gap[k] = out[9];
+            s.count[k] = out[10];
         }
     }
 

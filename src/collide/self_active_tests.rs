@@ -107,7 +107,7 @@ fn reference(data: &SelfCollisionData, x: &[Vec<f32>; 3], p: &[Vec<f32>; 3], w: 
         d: a.d,
         movement: a.response == Response::MovementSpeed,
     };
-    let sums: Vec<[f32; 11]> = (0..n).map(|i| ctx.sums(i, false)).collect();
+    let sums: Vec<[f32; 11]> = (0..n).map(|i| ctx.sums(i)).collect();
     let len = p[0].len();
     let mut full = ContactSums::new(len);
     for (i, v) in sums.iter().enumerate() {
