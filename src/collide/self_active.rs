@@ -64,16 +64,28 @@ fn resize(v: &mut Vec<f32>, len: usize) {
 }
 
 impl ActiveSet {
-    /// Recomputes the active blocks from the compact `lists` of `n` particles and gathers their
-    /// damping rates. Allocation-free once the buffers have reached their working size.
+    /// Recomputes the active blocks from the compact `lists` of `n` particles (each pair once,
+    /// in the list of its smaller id: both ends' blocks are active) and gathers their damping
+    /// rates. Allocation-free once the buffers have reached their working size.
     pub(crate) fn rebuild(&mut self, lists: &Neighbours, n: usize, damping: &[f32]) {
         let nb = n.div_ceil(LANES);
         self.blocks.clear();
         self.slot_of_block.clear();
         self.slot_of_block.resize(nb, INACTIVE);
+        // Mark (any value but INACTIVE), then number the marked blocks in order.
+        for i in 0..n.min(lists.len()) {
+            let list = lists.of(i);
+            if !list.is_empty() {
+                self.slot_of_block[i / LANES] = 0;
+            }
+            for &j in list {
+                if let Some(b) = self.slot_of_block.get_mut(j as usize / LANES) {
+                    *b = 0;
+                }
+            }
+        }
         for b in 0..nb {
-            let (s, e) = (b * LANES, ((b + 1) * LANES).min(n));
-            if lists.first[e] > lists.first[s] {
+            if self.slot_of_block[b] != INACTIVE {
                 self.slot_of_block[b] = self.blocks.len() as u32;
                 self.blocks.push(b as u32);
             }

@@ -199,6 +199,10 @@ fn rest_neighbours_are_never_listed() {
     let d = data.distance();
     // Fold rows r and rows - 1 - r lie `gap` apart; only rows 3 or more apart at rest are kept.
     assert!(lists.total() > 0);
+    assert!(
+        (0..n).all(|i| lists.of(i).iter().all(|&j| j as usize > i)),
+        "each pair once, under its smaller id"
+    );
     for (i, j) in lists.pairs() {
         let (ri, rj) = (i as usize / cols, j as usize / cols);
         assert!(ri.abs_diff(rj) >= 3, "{i} {j}");

@@ -13,7 +13,9 @@
 //!   **rest neighbours** at once: pairs of one cloth whose rest distance is at most `q`
 //!   (`REST_SKIP_FACTOR`). These are held by the cloth's own stretch, shear and bend
 //!   constraints; in the flat cloth every pair the query finds is one, so before a fold the
-//!   compact lists are empty. The lists are kept for all substeps, and the substeps work only
+//!   compact lists are empty. Each pair is listed once, under its smaller id (the query tests
+//!   `j > i` before anything else, so half the hits cost one comparison). The lists are kept
+//!   for all substeps, and the substeps work only
 //!   on the **active blocks** (eight consecutive particles, one of them with a partner; see
 //!   [`super::self_active`]). Dropping rest neighbours is a rule, not an approximation: the
 //!   same pairs would be dropped by a recomputation in every substep (tests hold the compact
@@ -41,12 +43,20 @@
 //! movement speed: v_n = ((p_i - x_i) - (p_j - x_j)) · n;  if v_n < 0: c_i -= w_i / (w_i + w_j) v_n n
 //! ```
 //!
-//! The list is first filtered eight candidates at a time (`f32x8` on gathered positions, with
-//! a 1e-4 margin so that the scalar test above makes every decision: the SIMD and scalar
-//! backends give the same bits). Each particle writes only its own sums (a Jacobi pass; the kernel averages over the contact
-//! count, the movement-speed correction over the approaching contacts), so the result is the same on any number of threads; the serial loop is the twin.
-//! The movement-speed response zeroes the approaching normal velocity (fully inelastic) and
-//! moves the particle along its corrected velocity; it does not push out an existing overlap.
+//! Each unordered pair is tested once, on the upper half of the lists (`j > i`), eight
+//! candidates at a time (`f32x8` on gathered positions, with a 1e-4 margin so that the scalar
+//! test above makes every decision: the SIMD and scalar backends give the same bits); the
+//! contacts are then added to both particles' sums in `(i, j)` order, so every particle sums
+//! its contacts in ascending partner order, as a loop over its own sorted list would
+//! ([`super::self_active`]). The sums feed a Jacobi update (the kernel averages over the
+//! contact count, the movement-speed correction over the approaching contacts), and the
+//! result is the same on any number of threads; the serial loop is the twin.
+//!
+//! **Movement speed.** The paper (section A) names this response only as the velocity-based
+//! technique of current software it compares against and gives no algorithm for it. Our
+//! reading is the usual inelastic velocity response: zero the approaching normal velocity
+//! (fully inelastic) and move the particle along its corrected velocity; it does not push out
+//! an existing overlap, which is why it is the weakest of the three (as in the paper).
 //!
 //! # Average collision (the paper's metric)
 //! A particle is *in penetration* when a non-neighbour particle (another cloth, or rest distance
@@ -197,8 +207,8 @@ impl SelfCollisionData {
         Ok(pct)
     }
 
-    /// Runs the broadphase on `x` with the query radius `q = 3 d`, rest neighbours dropped;
-    /// `false` when off.
+    /// Runs the broadphase on `x` with the query radius `q = 3 d`, keeping each pair once
+    /// (`(i, j)` in the list of `i`, `j > i`) and dropping rest neighbours; `false` when off.
     fn build_lists(&mut self, x: [&[f32]; 3], n: usize) -> Result<bool> {
         let Some(a) = self.active() else { return Ok(false) };
         let broadphase = self.config.as_ref().map(|c| c.broadphase).unwrap_or_default();
@@ -212,7 +222,8 @@ impl SelfCollisionData {
         });
         let q = QUERY_FACTOR * a.d;
         st.ready = false;
-        let keep = |i: usize, j: u32| !self.rest_skipped(i, j as usize, a.d);
+        // Each pair once (`j > i`), rest neighbours dropped.
+        let keep = |i: usize, j: u32| j as usize > i && !self.rest_skipped(i, j as usize, a.d);
         let done = match broadphase {
             SelfBroadphase::Hash => st
                 .hash

@@ -137,8 +137,9 @@ impl World {
         self.selfcol.distance()
     }
 
-    /// The pair lists of the last step (pairs within `3 d` at the step's start, the cloths'
-    /// rest neighbours left out: see [`super::self_collision`]), if self-collision has run.
+    /// The pair lists of the last step: pairs within `3 d` at the step's start, the cloths'
+    /// rest neighbours left out, each pair once in the list of its smaller id (see
+    /// [`super::self_collision`]), if self-collision has run.
     pub fn self_collision_pairs(&self) -> Option<&super::neighbours::Neighbours> {
         self.selfcol.lists()
     }
