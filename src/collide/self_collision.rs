@@ -17,7 +17,7 @@
 //!   `j > i` before anything else, so half the hits cost one comparison). The lists are kept
 //!   for all substeps, and the substeps work only
 //!   on the **active blocks** (eight consecutive particles, one of them with a partner; see
-//!   [`super::self_active`]). Dropping rest neighbours is a rule, not an approximation: the
+//!   the `self_active` module). Dropping rest neighbours is a rule, not an approximation: the
 //!   same pairs would be dropped by a recomputation in every substep (tests hold the compact
 //!   pass equal, bit for bit, to a brute force over all pairs with this rule).
 //! * **After predict** (each substep): the speed clamp ([`super::response`]) limits a free
@@ -48,7 +48,7 @@
 //! test above makes every decision: the SIMD and scalar backends give the same bits); the
 //! contacts are then added to both particles' sums in `(i, j)` order, so every particle sums
 //! its contacts in ascending partner order, as a loop over its own sorted list would
-//! ([`super::self_active`]). The sums feed a Jacobi update (the kernel averages over the
+//! (the `self_active` module). The sums feed a Jacobi update (the kernel averages over the
 //! contact count, the movement-speed correction over the approaching contacts), and the
 //! result is the same on any number of threads; the serial loop is the twin.
 //!
