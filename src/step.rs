@@ -24,8 +24,8 @@
 //!   kinematic pins land exactly on their targets                     [embed::kinematic]
 //! ```
 
-use crate::collide::response::{apply, clamp_speed, ApplyInput, ApplyMode, ClampParams};
-use crate::collide::self_collision::{mean_velocity, Active, Response, BOX_RADIUS, TRAVEL_FACTOR};
+use crate::collide::response::{clamp_speed, ApplyMode, ClampParams};
+use crate::collide::self_collision::{mean_velocity, Active, ApplyParams, Response, BOX_RADIUS, TRAVEL_FACTOR};
 use crate::error::{positive, Result, WeftError};
 use crate::integrate::{predict, update, PredictParams};
 use crate::params::{Backend, Method};
@@ -276,26 +276,18 @@ impl World {
         let p = &self.particles;
         self.selfcol
             .pair_pass([&p.x, &p.y, &p.z], [&p.px, &p.py, &p.pz], &p.w, n, parallel, simd);
-        if let Some((sums, q, b)) = self.selfcol.kernel_inputs() {
-            let mode = if a.response == Response::Vccpbd {
+        let ap = ApplyParams {
+            mode: if a.response == Response::Vccpbd {
                 ApplyMode::Vccpbd
             } else {
                 ApplyMode::Plain
-            };
-            self.particles.for_chunks(parallel, |c| {
-                let inp = ApplyInput {
-                    start: c.start,
-                    x: [&*c.x, &*c.y, &*c.z],
-                    w: c.w,
-                    q,
-                    b,
-                    sums,
-                    friction: a.friction,
-                    h,
-                    r: BOX_RADIUS * a.d,
-                };
-                apply(&inp, [c.px, c.py, c.pz], mode, simd)
-            });
-        }
+            },
+            friction: a.friction,
+            h,
+            r: BOX_RADIUS * a.d,
+        };
+        let p = &mut self.particles;
+        self.selfcol
+            .apply([&p.x, &p.y, &p.z], &p.w, [&mut p.px, &mut p.py, &mut p.pz], ap, parallel, simd);
     }
 }

@@ -6,6 +6,7 @@ mod common;
 
 use proptest::prelude::*;
 use weft::collide::neighbours::Neighbours;
+use weft::collide::self_collision::REST_SKIP_FACTOR;
 use weft::collide::self_config::{Response, SelfBroadphase, SelfCollision};
 use weft::scene::Scene;
 use weft::{Backend, ClothDesc, Effects, Fabric, SolverParams, World};
@@ -122,25 +123,36 @@ proptest! {
 }
 
 /// The lists the step used are the brute-force pairs within `3 d` of the step's start
-/// positions, for both broadphases.
+/// positions minus the rest neighbours (rest distance at most `3 d`), each pair once (in the
+/// list of its smaller id), for both broadphases.
 #[test]
 fn step_pairs_equal_brute_force() {
+    let (rows, cols, s) = (16u32, 12u32, 0.02f32);
     for bp in [SelfBroadphase::Hash, SelfBroadphase::AabbTree] {
         let sc = SelfCollision {
             broadphase: bp,
             ..SelfCollision::default()
         };
-        let mut w = folded(16, 12, 0.02, 0.03, 0.007, sc, params(4));
+        let mut w = folded(rows, cols, s, 0.03, 0.007, sc, params(4));
         for _ in 0..3 {
             let [x, y, z] = w.positions();
             let (x, y, z) = (x.to_vec(), y.to_vec(), z.to_vec());
             w.step(1.0 / 60.0).unwrap();
             let mut brute = Neighbours::new();
-            let q = 3.0 * w.self_collision_distance();
-            brute.fill_brute_force(&x, &y, &z, x.len(), q).unwrap();
+            let d = w.self_collision_distance();
+            brute.fill_brute_force(&x, &y, &z, x.len(), 3.0 * d).unwrap();
+            // Rest positions on the grid, computed like the library (f32 differences).
+            let rest = |i: u32| [(i % cols) as f32 * s, 0.0f32, (i / cols) as f32 * s];
+            let skip = REST_SKIP_FACTOR * d;
+            brute.retain(|i, j| {
+                let (a, b) = (rest(i as u32), rest(j));
+                let r2 = (a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]);
+                j as usize > i && r2 > skip * skip
+            });
             let got = w.self_collision_pairs().expect("pairs after a step");
             assert!(got.total() > 0);
             assert_eq!(got, &brute, "{bp:?}");
+            assert!(w.self_collision_active_blocks() > 0);
         }
     }
 }

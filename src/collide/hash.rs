@@ -45,7 +45,9 @@
 //!   spacing below about `1e-18`, where the margin for underflowing squares dominates — is
 //!   tested against all particles instead (correct, slow).
 
-use super::neighbours::{check_max_dist, check_positions, search_radius, sort_dedup_tail, within, Candidates, Neighbours, CHUNK};
+use super::neighbours::{
+    check_max_dist, check_positions, retain_tail, search_radius, sort_dedup_tail, within, Candidates, Neighbours, CHUNK,
+};
 use crate::lanes::LANES;
 use crate::{Result, WeftError};
 use rayon::prelude::*;
@@ -322,25 +324,66 @@ impl SpatialHash {
     /// the build. This is checked (bitwise, one pass). Errors if the positions differ from the
     /// build, an array is short, or `max_dist` is negative, non-finite or above `spacing`.
     pub fn query_all(&self, x: &[f32], y: &[f32], z: &[f32], n: usize, max_dist: f32, out: &mut Neighbours) -> Result<()> {
-        let same = || (0..n).into_par_iter().all(|i| self.unchanged(x, y, z, i));
-        let md2 = self.check_query(x, y, z, n, max_dist, same)?;
-        let r = search_radius(max_dist);
-        out.fill_parallel(n, |i, buf| self.scan::<true>(x, y, z, n, i, md2, r, buf))
+        self.query_filtered(x, y, z, n, max_dist, &|_, _| true, out)
     }
 
     /// Serial, scalar twin of [`SpatialHash::query_all`] (no threads, no lanes); produces
     /// identical lists.
     pub fn query_all_serial(&self, x: &[f32], y: &[f32], z: &[f32], n: usize, max_dist: f32, out: &mut Neighbours) -> Result<()> {
+        self.query_filtered_serial(x, y, z, n, max_dist, &|_, _| true, out)
+    }
+
+    /// [`SpatialHash::query_all`] keeping only the neighbours `j` of `i` with `keep(i, j)`:
+    /// the lists equal the unfiltered ones with the other entries removed. The filter runs on
+    /// each particle's candidates before they are sorted, so a filter that drops most pairs
+    /// (self-collision drops the cloth's own rest neighbours) also saves most of the sorting.
+    #[allow(clippy::too_many_arguments)]
+    pub fn query_filtered<K>(&self, x: &[f32], y: &[f32], z: &[f32], n: usize, max_dist: f32, keep: &K, out: &mut Neighbours) -> Result<()>
+    where
+        K: Fn(usize, u32) -> bool + Sync,
+    {
+        let same = || (0..n).into_par_iter().all(|i| self.unchanged(x, y, z, i));
+        let md2 = self.check_query(x, y, z, n, max_dist, same)?;
+        let r = search_radius(max_dist);
+        out.fill_parallel(n, |i, buf| self.scan::<true, K>(x, y, z, n, i, md2, r, keep, buf))
+    }
+
+    /// Serial, scalar twin of [`SpatialHash::query_filtered`]; produces identical lists.
+    #[allow(clippy::too_many_arguments)]
+    pub fn query_filtered_serial<K>(
+        &self,
+        x: &[f32],
+        y: &[f32],
+        z: &[f32],
+        n: usize,
+        max_dist: f32,
+        keep: &K,
+        out: &mut Neighbours,
+    ) -> Result<()>
+    where
+        K: Fn(usize, u32) -> bool,
+    {
         let same = || (0..n).all(|i| self.unchanged(x, y, z, i));
         let md2 = self.check_query(x, y, z, n, max_dist, same)?;
         let r = search_radius(max_dist);
-        out.fill_serial(n, |i, buf| self.scan::<false>(x, y, z, n, i, md2, r, buf))
+        out.fill_serial(n, |i, buf| self.scan::<false, K>(x, y, z, n, i, md2, r, keep, buf))
     }
 
-    /// Appends the sorted neighbours of particle `i` to `buf`.
+    /// Appends the sorted neighbours `j` of particle `i` with `keep(i, j)` to `buf`.
     #[allow(clippy::too_many_arguments)]
     #[inline]
-    fn scan<const SIMD: bool>(&self, x: &[f32], y: &[f32], z: &[f32], n: usize, i: usize, md2: f32, r: f32, buf: &mut Vec<u32>) {
+    fn scan<const SIMD: bool, K: Fn(usize, u32) -> bool>(
+        &self,
+        x: &[f32],
+        y: &[f32],
+        z: &[f32],
+        n: usize,
+        i: usize,
+        md2: f32,
+        r: f32,
+        keep: &K,
+        buf: &mut Vec<u32>,
+    ) {
         let (xi, yi, zi) = (x[i], y[i], z[i]);
         if !(xi.is_finite() && yi.is_finite() && zi.is_finite()) {
             return;
@@ -353,7 +396,7 @@ impl SpatialHash {
         let wide = |a: i32, b: i32| i64::from(b) - i64::from(a) > 3;
         if wide(x0, x1) || wide(y0, y1) || wide(z0, z1) {
             for j in 0..n {
-                if j != i && within(xi, yi, zi, x[j], y[j], z[j], md2) {
+                if j != i && within(xi, yi, zi, x[j], y[j], z[j], md2) && keep(i, j as u32) {
                     buf.push(j as u32);
                 }
             }
@@ -376,6 +419,7 @@ impl SpatialHash {
                 }
             }
         }
+        retain_tail(buf, start, |j| keep(i, j));
         sort_dedup_tail(buf, start);
     }
 

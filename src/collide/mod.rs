@@ -39,6 +39,7 @@ pub mod obstacles;
 pub mod particle_tree;
 pub mod penetration;
 pub mod response;
+mod self_active;
 pub mod self_collision;
 pub mod self_config;
 mod self_pairs;

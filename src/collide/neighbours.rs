@@ -114,6 +114,25 @@ impl Neighbours {
         })
     }
 
+    /// Removes every entry `j` of list `i` without `keep(i, j)` (serial, in place, order kept).
+    pub fn retain(&mut self, keep: impl Fn(usize, u32) -> bool) {
+        let mut w = 0usize;
+        let mut start = 0usize;
+        for i in 0..self.len() {
+            let end = self.first[i + 1] as usize;
+            for r in start..end {
+                let j = self.ids[r];
+                if keep(i, j) {
+                    self.ids[w] = j;
+                    w += 1;
+                }
+            }
+            start = end;
+            self.first[i + 1] = w as u32;
+        }
+        self.ids.truncate(w);
+    }
+
     /// Empties the lists (zero particles) and keeps every buffer's capacity.
     pub fn clear(&mut self) {
         self.first.clear();
@@ -228,6 +247,20 @@ fn copy_buffers(bufs: &[Vec<u32>], dst: &mut [u32]) {
     let left: usize = bufs[..mid].iter().map(Vec::len).sum();
     let (dl, dr) = dst.split_at_mut(left);
     rayon::join(|| copy_buffers(&bufs[..mid], dl), || copy_buffers(&bufs[mid..], dr));
+}
+
+/// Removes from `buf[start..]` the entries without `keep(j)`, keeping the others in order.
+#[inline]
+pub(crate) fn retain_tail(buf: &mut Vec<u32>, start: usize, keep: impl Fn(u32) -> bool) {
+    let mut w = start;
+    for r in start..buf.len() {
+        let j = buf[r];
+        if keep(j) {
+            buf[w] = j;
+            w += 1;
+        }
+    }
+    buf.truncate(w);
 }
 
 /// Sorts `buf[start..]` and removes repeated ids from it.

@@ -5,22 +5,36 @@
 //! (1), VcCPBD box radius `r = BOX_RADIUS d` (1: with `r = d/2` the box test put particles back
 //! into contact, 1.27% average collision on the 100x100 fold against 0.0007% with `r = d`).
 //!
-//! * **Before the substeps** ([`SelfCollisionData::begin_step`]): the broadphase (spatial hash
-//!   or AABB tree, refitted) finds, from the positions `x` at the start of the step, every pair
-//!   closer than the query radius `q = d + 2 T`, `d` the collision distance and `T = d` the
-//!   relative travel a particle is allowed in one step. The lists are kept for all substeps.
+//! * **Before the substeps** ([`SelfCollisionData::begin_step`]), the paper's "generate
+//!   collision constraints" line of Algorithm 1, done once before the solver iterates: the
+//!   broadphase (spatial hash or AABB tree, refitted) finds, from the positions `x` at the start
+//!   of the step, every pair closer than the query radius `q = d + 2 T`, `d` the collision
+//!   distance and `T = d` the relative travel a particle is allowed in one step, and drops the
+//!   **rest neighbours** at once: pairs of one cloth whose rest distance is at most `q`
+//!   (`REST_SKIP_FACTOR`). These are held by the cloth's own stretch, shear and bend
+//!   constraints; in the flat cloth every pair the query finds is one, so before a fold the
+//!   compact lists are empty. Each pair is listed once, under its smaller id (the query tests
+//!   `j > i` before anything else, so half the hits cost one comparison). The lists are kept
+//!   for all substeps, and the substeps work only
+//!   on the **active blocks** (eight consecutive particles, one of them with a partner; see
+//!   the `self_active` module). Dropping rest neighbours is a rule, not an approximation: the
+//!   same pairs would be dropped by a recomputation in every substep (tests hold the compact
+//!   pass equal, bit for bit, to a brute force over all pairs with this rule).
 //! * **After predict** (each substep): the speed clamp ([`super::response`]) limits a free
 //!   particle's velocity relative to the mean velocity of the free particles to `T / substeps`
 //!   a substep, so two particles close in by at most `2T` in a step: any pair that touches
 //!   during the step was in the lists. (The clamp is relative so a falling cloth still falls at
-//!   full speed; section C clamps absolute speed to one cell a substep.)
-//! * **After the constraint sweeps** (each substep): the pair pass below, then the
-//!   velocity-correction kernel [`super::response::apply`].
+//!   full speed; section C clamps absolute speed to one cell a substep.) The clamp bounds the
+//!   predicted motion; the constraint sweeps move particles further, so the bound is the
+//!   model's, not a proof.
+//! * **After the constraint sweeps** (each substep): the pair pass below over the active
+//!   blocks, then the velocity-correction kernel [`super::response::apply`] on them.
 //!
 //! # Pair pass
 //! For each particle `i`, over its list (sorted ids, fixed order), with predicted positions `p`:
 //!
 //! ```text
+//! rest neighbours (above): same cloth and |r_i - r_j| <= q: never in the lists
 //! rest rule (section C): same cloth and |p_i - p_j| > |r_i - r_j| (rest grid positions): skip
 //! min_dist = min(d, |r_i - r_j|);   contact if |p_i - p_j| < min_dist
 //! n = (p_i - p_j) / |p_i - p_j|, or for coincident particles (distance 0) the rest direction
@@ -29,33 +43,40 @@
 //! movement speed: v_n = ((p_i - x_i) - (p_j - x_j)) · n;  if v_n < 0: c_i -= w_i / (w_i + w_j) v_n n
 //! ```
 //!
-//! The list is first filtered eight candidates at a time (`f32x8` on gathered positions, with
-//! a 1e-4 margin so that the scalar test above makes every decision: the SIMD and scalar
-//! backends give the same bits). Each particle writes only its own sums (a Jacobi pass; the kernel averages over the contact
-//! count, the movement-speed correction over the approaching contacts), so the result is the same on any number of threads; the serial loop is the twin.
-//! The movement-speed response zeroes the approaching normal velocity (fully inelastic) and
-//! moves the particle along its corrected velocity; it does not push out an existing overlap.
+//! Each unordered pair is tested once, on the upper half of the lists (`j > i`), eight
+//! candidates at a time (`f32x8` on gathered positions, with a 1e-4 margin so that the scalar
+//! test above makes every decision: the SIMD and scalar backends give the same bits); the
+//! contacts are then added to both particles' sums in `(i, j)` order, so every particle sums
+//! its contacts in ascending partner order, as a loop over its own sorted list would
+//! (the `self_active` module). The sums feed a Jacobi update (the kernel averages over the
+//! contact count, the movement-speed correction over the approaching contacts), and the
+//! result is the same on any number of threads; the serial loop is the twin.
+//!
+//! **Movement speed.** The paper (section A) names this response only as the velocity-based
+//! technique of current software it compares against and gives no algorithm for it. Our
+//! reading is the usual inelastic velocity response: zero the approaching normal velocity
+//! (fully inelastic) and move the particle along its corrected velocity; it does not push out
+//! an existing overlap, which is why it is the weakest of the three (as in the paper).
 //!
 //! # Average collision (the paper's metric)
 //! A particle is *in penetration* when a non-neighbour particle (another cloth, or rest distance
 //! above `1.5 d`) lies closer than `(1 - PENETRATION_TOLERANCE) d`. The percentage is measured
-//! on the positions the next step's broadphase is built from (so it costs one pass over the
-//! lists) and averaged over the steps ([`SelfCollisionStats`]).
+//! on the positions the next step's broadphase is built from, with its own query of that
+//! broadphase (reach `(1 - PENETRATION_TOLERANCE) d`, outside the timed stage; it counts the
+//! pairs between `1.5 d` and `q` at rest that the response leaves to the cloth's constraints),
+//! and averaged over the steps ([`SelfCollisionStats`]).
 
 use rayon::prelude::*;
 
 use super::hash::SpatialHash;
 use super::neighbours::Neighbours;
 use super::particle_tree::{ParticleTree, TreeShape};
-use super::response::ContactSums;
+use super::self_active::ActiveSet;
+pub(crate) use super::self_active::ApplyParams;
 use super::self_pairs::PairCtx;
 use crate::error::{positive, Result, WeftError};
 
 pub use super::self_config::{Response, SelfBroadphase, SelfCollision, SelfCollisionStats, PENETRATION_TOLERANCE};
-
-/// Particles one parallel task handles in the pair pass (fixed: the split never depends on the
-/// thread count).
-const PAIR_CHUNK: usize = 256;
 
 /// Leaf size of the AABB tree (the paper's depth 5 gives ~312 particles a leaf at 10 000
 /// particles; 16 queries much faster and gives the same pairs).
@@ -66,6 +87,11 @@ pub const QUERY_FACTOR: f32 = 3.0;
 
 /// Hash cell side over the query radius (section C uses 1).
 pub const CELL_FACTOR: f32 = 1.0;
+
+/// Rest-neighbour skip radius over the collision distance: pairs of one cloth whose rest
+/// distance is at most this are never contacts (the query reach `QUERY_FACTOR`, plus 0.1% so
+/// that lattice pairs lying exactly at the reach are skipped whatever the rounding).
+pub const REST_SKIP_FACTOR: f32 = QUERY_FACTOR * 1.001;
 
 /// VcCPBD box radius over the collision distance (`r / d`).
 pub const BOX_RADIUS: f32 = 1.0;
@@ -90,15 +116,13 @@ pub struct SelfCollisionData {
 struct State {
     hash: SpatialHash,
     tree: Option<ParticleTree>,
+    /// Compact lists: partners within `q` at the step's start, rest neighbours left out.
     lists: Neighbours,
+    /// Metric lists: non-neighbours within the penetration limit (not timed).
+    probe: Neighbours,
     ready: bool,
-    pub(crate) sums: ContactSums,
-    pub(crate) pred: [Vec<f32>; 3],
-    pub(crate) damping: Vec<f32>,
+    active: ActiveSet,
 }
-
-/// Contact sums, predicted positions (box centres) and damping rates.
-pub(crate) type KernelInputs<'a> = (&'a ContactSums, [&'a [f32]; 3], &'a [f32]);
 
 /// What the step needs each substep.
 #[derive(Clone, Copy, Debug)]
@@ -138,18 +162,25 @@ impl SelfCollisionData {
         })
     }
 
-    /// Rebuilds the pair lists from the positions at the start of a step. Returns `false`
-    /// (nothing to do this step) when off.
+    /// Rebuilds the compact pair lists and the active blocks from the positions at the start
+    /// of a step. Returns `false` (nothing to do this step) when off.
     pub(crate) fn begin_step(&mut self, x: [&[f32]; 3], n: usize, damping: &[f32]) -> Result<bool> {
         if !self.build_lists(x, n)? {
             return Ok(false);
         }
         if let Some(st) = &mut self.state {
-            st.damping.clear();
-            st.damping.extend_from_slice(&damping[..n.min(damping.len())]);
-            st.damping.resize(st.sums.len(), 0.0);
+            st.active.rebuild(&st.lists, n, damping);
         }
         Ok(true)
+    }
+
+    /// Whether `i` and `j` are rest neighbours: one cloth, rest distance at most
+    /// `REST_SKIP_FACTOR d`. Such pairs are never contacts (the cloth's own constraints keep
+    /// them apart), so the broadphase drops them once per step.
+    #[inline]
+    pub(crate) fn rest_skipped(&self, i: usize, j: usize, d: f32) -> bool {
+        let skip = REST_SKIP_FACTOR * d;
+        self.cloth_of[i] == self.cloth_of[j] && dist2(&self.rest, i, j) <= skip * skip
     }
 
     /// Measures the penetration of the state the lists were just built from (once per step
@@ -176,65 +207,75 @@ impl SelfCollisionData {
         Ok(pct)
     }
 
-    /// Runs the broadphase on `x` with the query radius `3 d`; `false` when off.
+    /// Runs the broadphase on `x` with the query radius `q = 3 d`, keeping each pair once
+    /// (`(i, j)` in the list of `i`, `j > i`) and dropping rest neighbours; `false` when off.
     fn build_lists(&mut self, x: [&[f32]; 3], n: usize) -> Result<bool> {
         let Some(a) = self.active() else { return Ok(false) };
         let broadphase = self.config.as_ref().map(|c| c.broadphase).unwrap_or_default();
-        let len = crate::lanes::round_up(n + 1);
-        let st = self.state.get_or_insert_with(|| State {
+        let mut st = self.state.take().unwrap_or_else(|| State {
             hash: SpatialHash::new(n),
             tree: None,
             lists: Neighbours::new(),
+            probe: Neighbours::new(),
             ready: false,
-            sums: ContactSums::new(len),
-            pred: [vec![0.0; len], vec![0.0; len], vec![0.0; len]],
-            damping: vec![0.0; len],
+            active: ActiveSet::default(),
         });
-        if st.sums.len() != len {
-            st.sums = ContactSums::new(len);
-            st.pred = [vec![0.0; len], vec![0.0; len], vec![0.0; len]];
-            st.damping = vec![0.0; len];
-        }
         let q = QUERY_FACTOR * a.d;
         st.ready = false;
-        match broadphase {
-            SelfBroadphase::Hash => {
-                st.hash.build(x[0], x[1], x[2], n, q * CELL_FACTOR)?;
-                st.hash.query_all(x[0], x[1], x[2], n, q, &mut st.lists)?;
-            }
+        // Each pair once (`j > i`), rest neighbours dropped.
+        let keep = |i: usize, j: u32| j as usize > i && !self.rest_skipped(i, j as usize, a.d);
+        let done = match broadphase {
+            SelfBroadphase::Hash => st
+                .hash
+                .build(x[0], x[1], x[2], n, q * CELL_FACTOR)
+                .and_then(|_| st.hash.query_filtered(x[0], x[1], x[2], n, q, &keep, &mut st.lists)),
             SelfBroadphase::AabbTree => {
-                match &mut st.tree {
-                    Some(t) if t.len() == n => t.refit(x[0], x[1], x[2], n)?,
-                    t => *t = Some(ParticleTree::build(x[0], x[1], x[2], n, TreeShape::LeafSize(TREE_LEAF))?),
-                }
-                let t = st
-                    .tree
-                    .as_ref()
-                    .ok_or_else(|| WeftError::param("broadphase", "aabb-tree", "tree missing"))?;
-                t.query_all(x[0], x[1], x[2], n, q, &mut st.lists)?;
+                let t = match st.tree.take() {
+                    Some(mut t) if t.len() == n => t.refit(x[0], x[1], x[2], n).map(|_| t),
+                    _ => ParticleTree::build(x[0], x[1], x[2], n, TreeShape::LeafSize(TREE_LEAF)),
+                };
+                t.and_then(|t| {
+                    let r = t.query_all(x[0], x[1], x[2], n, q, &mut st.lists);
+                    st.tree = Some(t);
+                    r
+                })
+                .map(|_| st.lists.retain(keep))
             }
-        }
-        st.ready = true;
-        Ok(true)
+        };
+        st.ready = done.is_ok();
+        self.state = Some(st);
+        done.map(|_| true)
+    }
+
+    /// Fills the metric lists (non-neighbours within the penetration limit) from the
+    /// broadphase of the same positions `x`.
+    fn probe_lists(&mut self, x: [&[f32]; 3], n: usize) -> Result<()> {
+        let d = self.distance();
+        let lim = d * (1.0 - PENETRATION_TOLERANCE);
+        let far2 = (1.5 * d) * (1.5 * d);
+        let Some(mut st) = self.state.take() else { return Ok(()) };
+        let keep = |i: usize, j: u32| self.cloth_of[i] != self.cloth_of[j as usize] || dist2(&self.rest, i, j as usize) > far2;
+        let r = match &st.tree {
+            Some(t) if self.config.as_ref().map(|c| c.broadphase) == Some(SelfBroadphase::AabbTree) => {
+                t.query_all(x[0], x[1], x[2], n, lim, &mut st.probe).map(|_| st.probe.retain(keep))
+            }
+            _ => st.hash.query_filtered(x[0], x[1], x[2], n, lim, &keep, &mut st.probe),
+        };
+        self.state = Some(st);
+        r
     }
 
     /// Percentage of particles in penetration in the state the lists were built from.
-    fn penetration_pct(&self, x: [&[f32]; 3], n: usize, parallel: bool) -> f64 {
+    fn penetration_pct(&mut self, x: [&[f32]; 3], n: usize, parallel: bool) -> f64 {
+        if self.probe_lists(x, n).is_err() {
+            return 0.0;
+        }
         let Some(st) = self.state.as_ref().filter(|s| s.ready) else {
             return 0.0;
         };
         let d = self.distance();
         let lim = d * (1.0 - PENETRATION_TOLERANCE);
-        let far2 = (1.5 * d) * (1.5 * d);
-        let hit = |i: usize| -> bool {
-            st.lists.of(i).iter().any(|&j| {
-                let j = j as usize;
-                if self.cloth_of[i] == self.cloth_of[j] && dist2(&self.rest, i, j) <= far2 {
-                    return false;
-                }
-                dist2(&x, i, j) < lim * lim
-            })
-        };
+        let hit = |i: usize| -> bool { st.probe.of(i).iter().any(|&j| dist2(&x, i, j as usize) < lim * lim) };
         let count = if parallel {
             (0..n).into_par_iter().filter(|&i| hit(i)).count()
         } else {
@@ -247,19 +288,17 @@ impl SelfCollisionData {
         }
     }
 
-    /// Copies the predicted positions (the VcCPBD box centres) after the speed clamp.
+    /// Copies the predicted positions (the VcCPBD box centres) of the active blocks after
+    /// the speed clamp.
     pub(crate) fn keep_predictions(&mut self, p: [&[f32]; 3]) {
         if let Some(st) = &mut self.state {
-            for (dst, src) in st.pred.iter_mut().zip(p) {
-                let m = dst.len().min(src.len());
-                dst[..m].copy_from_slice(&src[..m]);
-            }
+            st.active.keep_predictions(p);
         }
     }
 
-    /// The pair pass: fills the contact sums from the predicted positions `p`, start positions
-    /// `x` and inverse masses `w` (see the module docs). Parallel over fixed chunks when
-    /// `parallel`; the serial loop is its twin.
+    /// The pair pass: fills the contact sums of the active blocks from the predicted positions
+    /// `p`, start positions `x` and inverse masses `w` (see the module docs). Parallel over
+    /// fixed chunks when `parallel`; the serial loop is its twin.
     pub(crate) fn pair_pass(&mut self, x: [&[f32]; 3], p: [&[f32]; 3], w: &[f32], n: usize, parallel: bool, simd: bool) {
         let Some(a) = self.active() else { return };
         let Some(st) = self.state.as_mut().filter(|s| s.ready) else {
@@ -275,51 +314,19 @@ impl SelfCollisionData {
             d: a.d,
             movement: a.response == Response::MovementSpeed,
         };
-        let s = &mut st.sums;
-        let len = s.len();
-        let body = |start: usize, out: [&mut [f32]; 11]| {
-            let [c0, c1, c2, f0, f1, f2, n0, n1, n2, g, k] = out;
-            for o in 0..c0.len() {
-                let i = start + o;
-                let r = if i < n { ctx.sums(i, simd) } else { [0.0; 11] };
-                let dst = [
-                    &mut c0[o], &mut c1[o], &mut c2[o], &mut f0[o], &mut f1[o], &mut f2[o], &mut n0[o], &mut n1[o], &mut n2[o], &mut g[o],
-                    &mut k[o],
-                ];
-                for (d, v) in dst.into_iter().zip(r) {
-                    *d = v;
-                }
-            }
-        };
-        let [c0, c1, c2] = &mut s.c;
-        let [f0, f1, f2] = &mut s.f;
-        let [n0, n1, n2] = &mut s.n;
-        if parallel && len > PAIR_CHUNK {
-            (
-                c0.par_chunks_mut(PAIR_CHUNK),
-                c1.par_chunks_mut(PAIR_CHUNK),
-                c2.par_chunks_mut(PAIR_CHUNK),
-                f0.par_chunks_mut(PAIR_CHUNK),
-                f1.par_chunks_mut(PAIR_CHUNK),
-                f2.par_chunks_mut(PAIR_CHUNK),
-                n0.par_chunks_mut(PAIR_CHUNK),
-                n1.par_chunks_mut(PAIR_CHUNK),
-                n2.par_chunks_mut(PAIR_CHUNK),
-                s.gap.par_chunks_mut(PAIR_CHUNK),
-                s.count.par_chunks_mut(PAIR_CHUNK),
-            )
-                .into_par_iter()
-                .enumerate()
-                .for_each(|(k, (a, b, c, d, e, f, g, h, i, j, l))| body(k * PAIR_CHUNK, [a, b, c, d, e, f, g, h, i, j, l]));
-        } else {
-            body(0, [c0, c1, c2, f0, f1, f2, n0, n1, n2, &mut s.gap, &mut s.count]);
+        st.active.pair_pass(&ctx, n, parallel, simd);
+    }
+
+    /// The velocity-correction kernel on the active blocks of the predicted positions `p`.
+    pub(crate) fn apply(&self, x: [&[f32]; 3], w: &[f32], p: [&mut [f32]; 3], ap: ApplyParams, parallel: bool, simd: bool) {
+        if let Some(st) = self.state.as_ref().filter(|s| s.ready) {
+            st.active.apply(x, w, p, ap, parallel, simd);
         }
     }
 
-    /// Contact sums, predictions and damping rates for the velocity-correction kernel.
-    pub(crate) fn kernel_inputs(&self) -> Option<KernelInputs<'_>> {
-        let st = self.state.as_ref().filter(|s| s.ready)?;
-        Some((&st.sums, [&st.pred[0], &st.pred[1], &st.pred[2]], &st.damping))
+    /// Number of active blocks (groups of eight particles the substeps work on) this step.
+    pub fn active_blocks(&self) -> usize {
+        self.state.as_ref().filter(|s| s.ready).map_or(0, |s| s.active.len())
     }
 
     /// The pair lists of the current step (empty before the first step with self-collision).
@@ -379,3 +386,7 @@ pub(crate) fn validate(c: &SelfCollision) -> Result<()> {
     }
     Ok(())
 }
+
+#[cfg(test)]
+#[path = "self_active_tests.rs"]
+mod active_tests;

@@ -137,10 +137,17 @@ impl World {
         self.selfcol.distance()
     }
 
-    /// The pair lists of the last step (pairs within `3 d` at the step's start), if
-    /// self-collision has run.
+    /// The pair lists of the last step: pairs within `3 d` at the step's start, the cloths'
+    /// rest neighbours left out, each pair once in the list of its smaller id (see
+    /// [`super::self_collision`]), if self-collision has run.
     pub fn self_collision_pairs(&self) -> Option<&super::neighbours::Neighbours> {
         self.selfcol.lists()
+    }
+
+    /// Groups of eight consecutive particles the substeps of the last step worked on (those
+    /// holding a particle with a partner in the pair lists).
+    pub fn self_collision_active_blocks(&self) -> usize {
+        self.selfcol.active_blocks()
     }
 
     /// Average-collision statistics and self-collision time so far.

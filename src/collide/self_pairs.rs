@@ -20,25 +20,19 @@ pub(crate) struct PairCtx<'a> {
 const COINCIDENT: [f32; 3] = [0.267_261_24, 0.534_522_5, 0.801_783_7];
 
 impl PairCtx<'_> {
-    /// `[c(3), f(3), n(3), gap, count]` of particle `i`.
-    pub(crate) fn sums(&self, i: usize, simd: bool) -> [f32; 11] {
-        let mut out = [0.0f32; 11];
-        let wi = self.w[i];
-        if wi <= 0.0 {
-            return out;
-        }
+    /// Appends to `out` the pairs `(i, j)`, `j > i` in `i`'s list, that may be in contact:
+    /// eight partners at a time (`f32x8` on gathered predicted positions) when `simd`, else one
+    /// by one. A pair passes when closer than `d` with a 1e-4 margin, so the exact test of
+    /// [`PairCtx::contact`] makes every decision and both paths lead to the same sums.
+    pub(crate) fn candidates(&self, i: usize, simd: bool, out: &mut Vec<(u32, u32)>) {
+        let list = self.lists.of(i);
+        let ids = &list[list.partition_point(|&j| j as usize <= i)..];
         let pi = [self.p[0][i], self.p[1][i], self.p[2][i]];
-        let di = [pi[0] - self.x[0][i], pi[1] - self.x[1][i], pi[2] - self.x[2][i]];
-        let mut approaching = 0.0f32;
-        let d2 = self.d * self.d;
-        let ids = self.lists.of(i);
-        // Filter: eight candidates at a time (gathered, the scalar distance's operations), a
-        // lane passes when it may be within d (a 1e-4 margin, so the scalar test below makes
-        // every decision and the result equals the plain loop bit for bit).
+        let lim = self.d * self.d * 1.0001;
         let mut k = 0;
         if simd {
             let pv = Vec3x8::splat(pi);
-            let lim = F32s::splat(d2 * 1.0001);
+            let limv = F32s::splat(lim);
             while k + LANES <= ids.len() {
                 let g = |a: &[f32]| F32s::from(std::array::from_fn::<f32, LANES, _>(|l| a[ids[k + l] as usize]));
                 let v = pv
@@ -47,26 +41,58 @@ impl PairCtx<'_> {
                         y: g(self.p[1]),
                         z: g(self.p[2]),
                     };
-                let mut bits = v.length_sq().simd_lt(lim).to_bitmask();
+                let mut bits = v.length_sq().simd_lt(limv).to_bitmask();
                 while bits != 0 {
-                    let j = ids[k + bits.trailing_zeros() as usize] as usize;
+                    out.push((i as u32, ids[k + bits.trailing_zeros() as usize]));
                     bits &= bits - 1;
-                    self.contact(i, j, pi, di, d2, &mut out, &mut approaching);
                 }
                 k += LANES;
             }
         }
         for &j in &ids[k..] {
-            self.contact(i, j as usize, pi, di, d2, &mut out, &mut approaching);
+            let j = j as usize;
+            let v = [pi[0] - self.p[0][j], pi[1] - self.p[1][j], pi[2] - self.p[2][j]];
+            if v[0] * v[0] + v[1] * v[1] + v[2] * v[2] < lim {
+                out.push((i as u32, j as u32));
+            }
         }
+    }
+
+    /// Adds the contact of `i` with `j` to `i`'s sums `out` (`[c(3), f(3), n(3), gap, count]`
+    /// and the approaching count), if `i` is free and the pair is in contact.
+    #[inline]
+    pub(crate) fn add_contact(&self, i: usize, j: usize, out: &mut [f32; 11], approaching: &mut f32) {
+        if self.w[i] <= 0.0 {
+            return;
+        }
+        let pi = [self.p[0][i], self.p[1][i], self.p[2][i]];
+        let di = [pi[0] - self.x[0][i], pi[1] - self.x[1][i], pi[2] - self.x[2][i]];
+        self.contact(i, j, pi, di, self.d * self.d, out, approaching);
+    }
+
+    /// Scales the summed movement-speed corrections from the contact count to the approaching
+    /// count (the kernel divides by all contacts; the velocity response averages over the
+    /// approaching ones only).
+    #[inline]
+    pub(crate) fn finish(out: &mut [f32; 11], approaching: f32) {
         if approaching > 0.0 {
-            // The kernel divides by all contacts; the velocity response averages over the
-            // approaching ones only.
             let scale = out[10] / approaching;
             for c in &mut out[..3] {
                 *c *= scale;
             }
         }
+    }
+
+    /// `[c(3), f(3), n(3), gap, count]` of particle `i` over its whole list, ascending: the
+    /// per-particle form of the pair pass (the reference the tests hold the pair form to).
+    #[cfg(test)]
+    pub(crate) fn sums(&self, i: usize) -> [f32; 11] {
+        let mut out = [0.0f32; 11];
+        let mut approaching = 0.0f32;
+        for &j in self.lists.of(i) {
+            self.add_contact(i, j as usize, &mut out, &mut approaching);
+        }
+        Self::finish(&mut out, approaching);
         out
     }
 

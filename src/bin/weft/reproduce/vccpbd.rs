@@ -10,6 +10,18 @@
 //! per step (broadphase, speed clamp, pair pass, velocity correction), the whole step, and the
 //! paper's "average collision" (percentage of particles in penetration after each step).
 //! The paper's machine was a Core 2 Duo at 1.5 GHz running C#/XNA; ours is whatever runs this.
+//!
+//! Threads: the table runs on one thread by default (`--threads 2` or `0` for more). The
+//! paper's program was single-threaded, and on the shared two-core machine this was measured
+//! on, two threads did not lower the collision CPU time and changed the wall time by less than
+//! the run-to-run noise (150 steps, 100x100: 7.5-9.7 ms collision CPU a step on one thread,
+//! 7.9-9.9 ms on two): after the compact pair lists most of a substep's work is a few
+//! thousand pairs, too little to pay for a parallel join on a busy machine. The results are
+//! the same bits on any thread count.
+//!
+//! Substeps: 10 by default (`--substeps`). With 5 the fold still runs but the cloth does not
+//! converge (the largest strain went from 1.05-1.5 to 3.9-5.5, average collision from 0.000%
+//! to 0.3-1.2%), so 10 stays.
 
 use std::process::ExitCode;
 use std::time::Instant;
@@ -31,10 +43,17 @@ pub struct VccpbdArgs {
     /// Steps per row (default 150, or 30 with --quick).
     #[arg(long)]
     steps: Option<u32>,
-    /// Solver threads (default 1: the paper's program was single-threaded, and on a shared
-    /// machine the ~50 parallel joins a step mostly measure the scheduler; 0 = all cores).
+    /// Solver threads (default 1: the paper's program was single-threaded, and two threads
+    /// did not pay on the shared two-core machine, see the module docs; 0 = all cores).
     #[arg(long, default_value_t = 1)]
     threads: usize,
+    /// Substeps a step (a modelling choice: fewer is faster but the cloth stretches more;
+    /// the table reports the largest strain at the end of each row).
+    #[arg(long, default_value_t = SUBSTEPS)]
+    substeps: u32,
+    /// Only the rows of this grid size (34, 50 or 100); all three when absent.
+    #[arg(long)]
+    size: Option<u32>,
 }
 
 /// One row of the result.
@@ -54,6 +73,8 @@ struct Row {
     /// `cpu_step_ms` times the collision share of the wall time: an estimate of the collision
     /// CPU time a step, ms.
     cpu_collision_ms: Option<f64>,
+    /// Largest constraint strain `|l - l0| / l0` at the end of the row.
+    max_strain: f64,
 }
 
 /// CPU time (user + system) of this process so far, s, from `/proc/self/stat` (100 ticks a
@@ -96,10 +117,18 @@ const PAPER_MS: [[[f64; 3]; 4]; 3] = [
 /// The paper's average collision, %: movement speed, PBD, VcCPBD.
 const PAPER_AVG_PCT: [f64; 3] = [1.995, 1.151, 1.018];
 
-/// Substeps of the paper's (large) time step.
+/// Substeps of the paper's (large) time step, by default.
 const SUBSTEPS: u32 = 10;
 
-fn world(size: u32, fabric: &str, response: Response, broadphase: SelfBroadphase, threads: usize) -> weft::Result<(World, f32)> {
+/// What every row shares: steps, threads, substeps.
+#[derive(Clone, Copy)]
+struct RunCfg {
+    steps: u32,
+    threads: usize,
+    substeps: u32,
+}
+
+fn world(size: u32, fabric: &str, response: Response, broadphase: SelfBroadphase, cfg: RunCfg) -> weft::Result<(World, f32)> {
     let preset = Fabric::preset(fabric)?;
     let spacing = 1.0 / (size - 1) as f32;
     let fab = Fabric {
@@ -109,9 +138,9 @@ fn world(size: u32, fabric: &str, response: Response, broadphase: SelfBroadphase
     let dt = fab.dt;
     let params = SolverParams {
         dt,
-        substeps: SUBSTEPS,
+        substeps: cfg.substeps,
         iterations: 1,
-        threads,
+        threads: cfg.threads,
         ..Default::default()
     };
     let mut w = World::new(params, Effects::gravity())?;
@@ -136,9 +165,9 @@ fn world(size: u32, fabric: &str, response: Response, broadphase: SelfBroadphase
     Ok((w, dt))
 }
 
-fn measure(size: u32, fi: usize, ri: usize, broadphase: SelfBroadphase, steps: u32, threads: usize) -> weft::Result<Row> {
-    let response = RESPONSES[ri];
-    let (mut w, dt) = world(size, FABRICS[fi], response, broadphase, threads)?;
+fn measure(size: u32, fi: usize, ri: usize, broadphase: SelfBroadphase, cfg: RunCfg) -> weft::Result<Row> {
+    let (steps, response) = (cfg.steps, RESPONSES[ri]);
+    let (mut w, dt) = world(size, FABRICS[fi], response, broadphase, cfg)?;
     let c0 = process_cpu_s();
     let t0 = Instant::now();
     for _ in 0..steps {
@@ -165,19 +194,31 @@ fn measure(size: u32, fi: usize, ri: usize, broadphase: SelfBroadphase, steps: u
         paper_ms: PAPER_MS[si][fi][ri],
         cpu_step_ms: cpu,
         cpu_collision_ms: cpu.map(|c| c * share),
+        max_strain: w.metrics().max_strain,
     })
 }
 
 /// Runs the experiment and prints the table (or JSON).
 pub fn run(args: VccpbdArgs) -> weft::Result<ExitCode> {
     let steps = args.steps.unwrap_or(if args.quick { 30 } else { 150 }).max(1);
+    if args.substeps == 0 {
+        return Err(WeftError::param("substeps", 0, "must be at least 1"));
+    }
+    let cfg = RunCfg {
+        steps,
+        threads: args.threads,
+        substeps: args.substeps,
+    };
     let mut rows = Vec::new();
-    for &size in &SIZES {
+    if let Some(s) = args.size.filter(|s| !SIZES.contains(s)) {
+        return Err(WeftError::param("size", s, "must be 34, 50 or 100"));
+    }
+    for &size in SIZES.iter().filter(|&&s| args.size.is_none_or(|a| a == s)) {
         for fi in 0..FABRICS.len() {
             for ri in 0..RESPONSES.len() {
-                rows.push(measure(size, fi, ri, SelfBroadphase::Hash, steps, args.threads)?);
+                rows.push(measure(size, fi, ri, SelfBroadphase::Hash, cfg)?);
             }
-            rows.push(measure(size, fi, 2, SelfBroadphase::AabbTree, steps, args.threads)?);
+            rows.push(measure(size, fi, 2, SelfBroadphase::AabbTree, cfg)?);
         }
     }
     if args.json {
@@ -186,14 +227,14 @@ pub fn run(args: VccpbdArgs) -> weft::Result<ExitCode> {
         return Ok(ExitCode::SUCCESS);
     }
     println!(
-        "VcCPBD (Shapri et al. 2016): cloth hung over a line folding onto itself, {steps} steps a row, {SUBSTEPS} substeps, {} thread(s)",
-        args.threads
+        "VcCPBD (Shapri et al. 2016): cloth hung over a line folding onto itself, {steps} steps a row, {} substeps, {} thread(s)",
+        args.substeps, args.threads
     );
     println!("collision, step: wall ms a step (ours); cpu coll, cpu step: CPU ms a step (collision estimated from its wall share)");
     println!("ratio = paper collision ms / our collision wall ms; cpu rat = paper / our collision CPU ms");
     println!();
     println!(
-        "{:>9} {:>9} {:>14} {:>9} {:>10} {:>9} {:>9} {:>9} {:>10} {:>9} {:>8} {:>8}",
+        "{:>9} {:>9} {:>14} {:>9} {:>10} {:>9} {:>9} {:>9} {:>10} {:>9} {:>8} {:>8} {:>7}",
         "particles",
         "fabric",
         "response",
@@ -205,11 +246,12 @@ pub fn run(args: VccpbdArgs) -> weft::Result<ExitCode> {
         "avg coll%",
         "paper ms",
         "ratio",
-        "cpu rat"
+        "cpu rat",
+        "strain"
     );
     for r in &rows {
         println!(
-            "{:>9} {:>9} {:>14} {:>9} {:>10.3} {:>9.3} {:>9.3} {:>9.3} {:>10.3} {:>9.3} {:>7.2}x {:>7.2}x",
+            "{:>9} {:>9} {:>14} {:>9} {:>10.3} {:>9.3} {:>9.3} {:>9.3} {:>10.3} {:>9.3} {:>7.2}x {:>7.2}x {:>7.4}",
             r.particles,
             r.fabric,
             r.response,
@@ -221,7 +263,8 @@ pub fn run(args: VccpbdArgs) -> weft::Result<ExitCode> {
             r.avg_collision_pct,
             r.paper_ms,
             r.paper_ms / r.collision_ms.max(1e-9),
-            r.paper_ms / r.cpu_collision_ms.unwrap_or(f64::NAN).max(1e-9)
+            r.paper_ms / r.cpu_collision_ms.unwrap_or(f64::NAN).max(1e-9),
+            r.max_strain
         );
     }
     println!();

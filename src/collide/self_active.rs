@@ -1,0 +1,229 @@
+//! The self-collision work of one step, restricted to the particles that can collide (the
+//! method is described in [`super::self_collision`]).
+//!
+//! The broadphase runs once per step and leaves, per particle, the *compact* list: partners
+//! within the query reach `q` that are not the particle's own rest neighbours. Before the fold
+//! most lists are empty. The substeps then touch only the **active blocks**: the groups of
+//! [`LANES`] consecutive particles (`8 b .. 8 b + 8`) holding at least one particle with a
+//! non-empty list. The contact sums, the predicted positions (VcCPBD box centres) and the
+//! damping rates are kept in compact arrays, block after block, so the velocity-correction
+//! kernel [`super::response::apply`] runs unchanged on each active block (`start` is the
+//! block's compact offset, `x`, `w`, `p` the block's slices of the particle arrays).
+//!
+//! Every block is computed independently (a Jacobi pass: a particle writes only its own
+//! sums and position), so the result is the same serially, in parallel and on any number of
+//! threads; parallel work is split into fixed groups of blocks.
+
+use rayon::prelude::*;
+
+use super::neighbours::Neighbours;
+use super::response::{apply, ApplyInput, ApplyMode, ContactSums};
+use super::self_pairs::PairCtx;
+use crate::lanes::LANES;
+
+/// Compact slots one parallel task handles in the pair pass's candidate search.
+const PAIR_CHUNK: usize = 128;
+
+/// Blocks one parallel task handles in the correction pass at least.
+const APPLY_BLOCKS: usize = 16;
+
+/// Marks a block that is not active.
+const INACTIVE: u32 = u32::MAX;
+
+/// Inputs of [`ActiveSet::apply`] besides the particle arrays.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct ApplyParams {
+    pub mode: ApplyMode,
+    pub friction: f32,
+    pub h: f32,
+    pub r: f32,
+}
+
+/// The active blocks of a step and their compact per-particle data.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct ActiveSet {
+    /// Active block indices, ascending.
+    pub(crate) blocks: Vec<u32>,
+    /// Compact slot of each block (`INACTIVE` when not active).
+    slot_of_block: Vec<u32>,
+    /// Contact sums, compact.
+    pub(crate) sums: ContactSums,
+    /// Predicted positions after the clamp (box centres), compact.
+    pred: [Vec<f32>; 3],
+    /// Damping rates, compact.
+    damping: Vec<f32>,
+    /// Candidate pairs of the pair pass, one buffer per chunk (kept between substeps).
+    candidates: Vec<Vec<(u32, u32)>>,
+    /// Per-slot sums and approaching counts while the contacts are added.
+    acc: Vec<([f32; 11], f32)>,
+}
+
+fn resize(v: &mut Vec<f32>, len: usize) {
+    v.clear();
+    v.resize(len, 0.0);
+}
+
+impl ActiveSet {
+    /// Recomputes the active blocks from the compact `lists` of `n` particles (each pair once,
+    /// in the list of its smaller id: both ends' blocks are active) and gathers their damping
+    /// rates. Allocation-free once the buffers have reached their working size.
+    pub(crate) fn rebuild(&mut self, lists: &Neighbours, n: usize, damping: &[f32]) {
+        let nb = n.div_ceil(LANES);
+        self.blocks.clear();
+        self.slot_of_block.clear();
+        self.slot_of_block.resize(nb, INACTIVE);
+        // Mark (any value but INACTIVE), then number the marked blocks in order.
+        for i in 0..n.min(lists.len()) {
+            let list = lists.of(i);
+            if !list.is_empty() {
+                self.slot_of_block[i / LANES] = 0;
+            }
+            for &j in list {
+                if let Some(b) = self.slot_of_block.get_mut(j as usize / LANES) {
+                    *b = 0;
+                }
+            }
+        }
+        for b in 0..nb {
+            if self.slot_of_block[b] != INACTIVE {
+                self.slot_of_block[b] = self.blocks.len() as u32;
+                self.blocks.push(b as u32);
+            }
+        }
+        let len = self.blocks.len() * LANES;
+        let s = &mut self.sums;
+        for v in s.c.iter_mut().chain(s.f.iter_mut()).chain(s.n.iter_mut()) {
+            resize(v, len);
+        }
+        resize(&mut s.gap, len);
+        resize(&mut s.count, len);
+        for v in &mut self.pred {
+            resize(v, len);
+        }
+        resize(&mut self.damping, len);
+        for (k, &b) in self.blocks.iter().enumerate() {
+            for l in 0..LANES {
+                let i = b as usize * LANES + l;
+                self.damping[k * LANES + l] = damping.get(i).copied().unwrap_or(0.0);
+            }
+        }
+    }
+
+    /// Number of active blocks.
+    pub(crate) fn len(&self) -> usize {
+        self.blocks.len()
+    }
+
+    /// Copies the predicted positions of the active blocks (after the speed clamp).
+    pub(crate) fn keep_predictions(&mut self, p: [&[f32]; 3]) {
+        for (dst, src) in self.pred.iter_mut().zip(p) {
+            for (k, &b) in self.blocks.iter().enumerate() {
+                let g = b as usize * LANES;
+                dst[k * LANES..(k + 1) * LANES].copy_from_slice(&src[g..g + LANES]);
+            }
+        }
+    }
+
+    /// The pair pass over the active blocks: the contact sums of every particle in them (zero
+    /// for particles with no contact or `i >= n`).
+    ///
+    /// Each unordered pair is tested once: the candidates `(i, j)`, `j > i`, closer than `d`
+    /// (with a margin) are found in parallel over fixed chunks of the active slots, each chunk
+    /// into its own buffer; then, serially in buffer order (`i` ascending, then `j`), each
+    /// candidate adds its exact contact to both particles' sums. A particle thus receives its
+    /// contacts in ascending partner order, as the per-particle loop over its sorted list would
+    /// (the tests hold the two equal bit for bit); nothing depends on the thread count.
+    pub(crate) fn pair_pass(&mut self, ctx: &PairCtx<'_>, n: usize, parallel: bool, simd: bool) {
+        let slots = self.blocks.len() * LANES;
+        let chunks = slots.div_ceil(PAIR_CHUNK);
+        if self.candidates.len() < chunks {
+            self.candidates.resize_with(chunks, Vec::new);
+        }
+        let blocks = &self.blocks;
+        let find = |c: usize, buf: &mut Vec<(u32, u32)>| {
+            buf.clear();
+            for s in c * PAIR_CHUNK..((c + 1) * PAIR_CHUNK).min(slots) {
+                let i = blocks[s / LANES] as usize * LANES + s % LANES;
+                if i < n {
+                    ctx.candidates(i, simd, buf);
+                }
+            }
+        };
+        let bufs = &mut self.candidates[..chunks];
+        if parallel && chunks > 1 {
+            bufs.par_iter_mut().enumerate().for_each(|(c, b)| find(c, b));
+        } else {
+            bufs.iter_mut().enumerate().for_each(|(c, b)| find(c, b));
+        }
+        self.acc.clear();
+        self.acc.resize(slots, ([0.0; 11], 0.0));
+        let slot = |i: usize| match self.slot_of_block.get(i / LANES) {
+            Some(&k) if k != INACTIVE => Some(k as usize * LANES + i % LANES),
+            _ => None,
+        };
+        for &(i, j) in self.candidates[..chunks].iter().flatten() {
+            let (i, j) = (i as usize, j as usize);
+            for (a, b) in [(i, j), (j, i)] {
+                if let Some(k) = slot(a) {
+                    let (out, approaching) = &mut self.acc[k];
+                    ctx.add_contact(a, b, out, approaching);
+                }
+            }
+        }
+        let s = &mut self.sums;
+        for (k, (out, approaching)) in self.acc.iter_mut().enumerate() {
+            PairCtx::finish(out, *approaching);
+            for a in 0..3 {
+                s.c[a][k] = out[a];
+                s.f[a][k] = out[3 + a];
+                s.n[a][k] = out[6 + a];
+            }
+            s.gap[k] = out[9];
+            s.count[k] = out[10];
+        }
+    }
+
+    /// The velocity-correction kernel on every active block of the predicted positions `p`
+    /// (full particle arrays, padded to the lane width), with start positions `x` and inverse
+    /// masses `w`. Parallel over the blocks when `parallel`; same bits either way.
+    pub(crate) fn apply(&self, x: [&[f32]; 3], w: &[f32], p: [&mut [f32]; 3], ap: ApplyParams, parallel: bool, simd: bool) {
+        let one = |k: usize, b: usize, p: [&mut [f32]; 3]| {
+            let g = b * LANES..(b + 1) * LANES;
+            let inp = ApplyInput {
+                start: k * LANES,
+                x: [&x[0][g.clone()], &x[1][g.clone()], &x[2][g.clone()]],
+                w: &w[g],
+                q: [&self.pred[0], &self.pred[1], &self.pred[2]],
+                b: &self.damping,
+                sums: &self.sums,
+                friction: ap.friction,
+                h: ap.h,
+                r: ap.r,
+            };
+            apply(&inp, p, ap.mode, simd);
+        };
+        let [px, py, pz] = p;
+        if parallel && self.blocks.len() > APPLY_BLOCKS {
+            let nb = self.slot_of_block.len();
+            (
+                px[..nb * LANES].par_chunks_mut(LANES),
+                py[..nb * LANES].par_chunks_mut(LANES),
+                pz[..nb * LANES].par_chunks_mut(LANES),
+            )
+                .into_par_iter()
+                .with_min_len(APPLY_BLOCKS * 4)
+                .enumerate()
+                .for_each(|(b, (a, c, d))| {
+                    let k = self.slot_of_block[b];
+                    if k != INACTIVE {
+                        one(k as usize, b, [a, c, d]);
+                    }
+                });
+        } else {
+            for (k, &b) in self.blocks.iter().enumerate() {
+                let g = b as usize * LANES..(b as usize + 1) * LANES;
+                one(k, b as usize, [&mut px[g.clone()], &mut py[g.clone()], &mut pz[g]]);
+            }
+        }
+    }
+}

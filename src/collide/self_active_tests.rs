@@ -1,0 +1,218 @@
+//! The compact step (lists built once, rest neighbours dropped, substeps on the active blocks)
+//! against a recomputation from scratch: the pair sums of a brute force over all pairs with the
+//! same rules, and the correction kernel run on every particle. Bit for bit, for the three
+//! responses, SIMD and scalar, serial and parallel on one and two threads.
+
+use super::*;
+use crate::collide::response::{apply, ApplyInput, ApplyMode, ContactSums};
+use crate::lanes::LANES;
+use crate::test_rng::signed;
+
+/// A `rows x cols` cloth of spacing `s` folded in half across a row (second layer `gap` above),
+/// each coordinate jittered by up to `jitter`.
+fn folded(rows: usize, cols: usize, s: f32, gap: f32, jitter: f32, rng: &mut impl FnMut() -> f32) -> (SelfCollisionData, [Vec<f32>; 3]) {
+    let mut data = SelfCollisionData::default();
+    let rest: Vec<[f32; 3]> = (0..rows * cols)
+        .map(|i| [(i % cols) as f32 * s, 0.0, (i / cols) as f32 * s])
+        .collect();
+    data.add_cloth(&rest, 0, s, s);
+    let mut x = [vec![0.0f32; rows * cols], vec![0.0; rows * cols], vec![0.0; rows * cols]];
+    for r in 0..rows {
+        for c in 0..cols {
+            let i = r * cols + c;
+            let (y, z) = if r < rows / 2 {
+                (0.0, r as f32 * s)
+            } else {
+                (gap, (rows - 1 - r) as f32 * s)
+            };
+            let p = [c as f32 * s, y, z];
+            for a in 0..3 {
+                x[a][i] = p[a] + jitter * rng();
+            }
+        }
+    }
+    (data, x)
+}
+
+fn padded(v: &[f32]) -> Vec<f32> {
+    let mut p = v.to_vec();
+    p.resize(crate::lanes::round_up(v.len() + 1), 0.0);
+    p
+}
+
+/// Runs one pair pass and one correction on the compact set; returns `(p after, sums by particle)`.
+#[allow(clippy::type_complexity)]
+fn compact(
+    data: &mut SelfCollisionData,
+    x: &[Vec<f32>; 3],
+    p: &[Vec<f32>; 3],
+    w: &[f32],
+    n: usize,
+    parallel: bool,
+    simd: bool,
+) -> ([Vec<f32>; 3], Vec<[f32; 11]>) {
+    let damping = vec![0.8f32; n];
+    let xs = [&x[0][..], &x[1][..], &x[2][..]];
+    assert!(data.begin_step(xs, n, &damping).unwrap());
+    let mut out = p.clone();
+    data.keep_predictions([&out[0][..], &out[1][..], &out[2][..]]);
+    data.pair_pass(xs, [&p[0][..], &p[1][..], &p[2][..]], w, n, parallel, simd);
+    let a = data.active().unwrap();
+    let ap = ApplyParams {
+        mode: if a.response == Response::Vccpbd {
+            ApplyMode::Vccpbd
+        } else {
+            ApplyMode::Plain
+        },
+        friction: a.friction,
+        h: 0.005,
+        r: BOX_RADIUS * a.d,
+    };
+    let [o0, o1, o2] = &mut out;
+    data.apply(xs, w, [o0, o1, o2], ap, parallel, simd);
+    let st = data.state.as_ref().unwrap();
+    let s = &st.active.sums;
+    let mut by_particle = vec![[0.0f32; 11]; n];
+    for (k, &b) in st.active.blocks.iter().enumerate() {
+        for l in 0..LANES {
+            let (i, g) = (b as usize * LANES + l, k * LANES + l);
+            if i < n {
+                let v = [
+                    s.c[0][g], s.c[1][g], s.c[2][g], s.f[0][g], s.f[1][g], s.f[2][g], s.n[0][g], s.n[1][g], s.n[2][g], s.gap[g], s.count[g],
+                ];
+                by_particle[i] = v;
+            }
+        }
+    }
+    (out, by_particle)
+}
+
+/// The reference: every pair tested (no broadphase, rest rule applied), the kernel run on all
+/// particles.
+#[allow(clippy::type_complexity)]
+fn reference(data: &SelfCollisionData, x: &[Vec<f32>; 3], p: &[Vec<f32>; 3], w: &[f32], n: usize) -> ([Vec<f32>; 3], Vec<[f32; 11]>) {
+    let a = data.active().unwrap();
+    let mut all = Neighbours::new();
+    all.fill_serial(n, |i, buf| {
+        buf.extend((0..n).filter(|&j| j != i && !data.rest_skipped(i, j, a.d)).map(|j| j as u32))
+    })
+    .unwrap();
+    let ctx = PairCtx {
+        x: [&x[0], &x[1], &x[2]],
+        p: [&p[0], &p[1], &p[2]],
+        w,
+        rest: [&data.rest[0], &data.rest[1], &data.rest[2]],
+        cloth_of: &data.cloth_of,
+        lists: &all,
+        d: a.d,
+        movement: a.response == Response::MovementSpeed,
+    };
+    let sums: Vec<[f32; 11]> = (0..n).map(|i| ctx.sums(i)).collect();
+    let len = p[0].len();
+    let mut full = ContactSums::new(len);
+    for (i, v) in sums.iter().enumerate() {
+        for a in 0..3 {
+            full.c[a][i] = v[a];
+            full.f[a][i] = v[3 + a];
+            full.n[a][i] = v[6 + a];
+        }
+        full.gap[i] = v[9];
+        full.count[i] = v[10];
+    }
+    let damping = padded(&vec![0.8f32; n]);
+    let mut out = p.clone();
+    let inp = ApplyInput {
+        start: 0,
+        x: [&x[0], &x[1], &x[2]],
+        w,
+        q: [&p[0], &p[1], &p[2]],
+        b: &damping,
+        sums: &full,
+        friction: a.friction,
+        h: 0.005,
+        r: BOX_RADIUS * a.d,
+    };
+    let mode = if a.response == Response::Vccpbd {
+        ApplyMode::Vccpbd
+    } else {
+        ApplyMode::Plain
+    };
+    let [o0, o1, o2] = &mut out;
+    apply(&inp, [o0, o1, o2], mode, false);
+    (out, sums)
+}
+
+#[test]
+fn compact_step_equals_recomputation_from_scratch() {
+    let mut rng = signed(7);
+    let (rows, cols, s) = (14, 11, 0.02f32);
+    for case in 0..6 {
+        let response = [Response::Pbd, Response::MovementSpeed, Response::Vccpbd][case % 3];
+        let (mut data, x0) = folded(rows, cols, s, 1.05 * s, 0.3 * s, &mut rng);
+        data.config = Some(SelfCollision {
+            response,
+            ..SelfCollision::default()
+        });
+        let n = rows * cols;
+        let x = [padded(&x0[0]), padded(&x0[1]), padded(&x0[2])];
+        // Predicted positions within one travel `T = d` of the start (what the clamp allows).
+        let mut p = x.clone();
+        for c in &mut p {
+            for v in &mut c[..n] {
+                *v += 0.55 * s * rng();
+            }
+        }
+        let mut w = padded(&vec![1.0f32; n]);
+        w[case] = 0.0;
+        let (want_p, want_sums) = reference(&data, &x, &p, &w, n);
+        assert!(want_sums.iter().any(|v| v[10] > 0.0), "case {case}: no contact to compare");
+        for (parallel, simd) in [(false, false), (false, true), (true, true), (true, false)] {
+            for threads in [1, 2] {
+                let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+                let (got_p, got_sums) = pool.install(|| compact(&mut data, &x, &p, &w, n, parallel, simd));
+                for i in 0..n {
+                    assert_eq!(
+                        got_sums[i].map(f32::to_bits),
+                        want_sums[i].map(f32::to_bits),
+                        "case {case} particle {i} ({parallel}, {simd}, {threads})"
+                    );
+                    for a in 0..3 {
+                        assert_eq!(got_p[a][i].to_bits(), want_p[a][i].to_bits(), "case {case} p of {i}");
+                    }
+                }
+            }
+        }
+        assert!(data.active_blocks() > 0);
+    }
+}
+
+#[test]
+fn rest_neighbours_are_never_listed() {
+    let mut rng = signed(3);
+    let (rows, cols, s) = (12, 9, 0.02f32);
+    let (mut data, x0) = folded(rows, cols, s, 1.1 * s, 0.0, &mut rng);
+    data.config = Some(SelfCollision::default());
+    let n = rows * cols;
+    let x = [&x0[0][..], &x0[1][..], &x0[2][..]];
+    assert!(data.begin_step(x, n, &vec![0.0; n]).unwrap());
+    let lists = data.lists().unwrap();
+    let d = data.distance();
+    // Fold rows r and rows - 1 - r lie `gap` apart; only rows 3 or more apart at rest are kept.
+    assert!(lists.total() > 0);
+    assert!(
+        (0..n).all(|i| lists.of(i).iter().all(|&j| j as usize > i)),
+        "each pair once, under its smaller id"
+    );
+    for (i, j) in lists.pairs() {
+        let (ri, rj) = (i as usize / cols, j as usize / cols);
+        assert!(ri.abs_diff(rj) >= 3, "{i} {j}");
+        assert!(!data.rest_skipped(i as usize, j as usize, d));
+    }
+    // A flat cloth: the step has nothing to do.
+    let flat: Vec<f32> = (0..n).map(|i| (i / cols) as f32 * s).collect();
+    let zero = vec![0.0; n];
+    let xs: Vec<f32> = (0..n).map(|i| (i % cols) as f32 * s).collect();
+    assert!(data.begin_step([&xs, &zero, &flat], n, &zero).unwrap());
+    assert_eq!(data.lists().unwrap().total(), 0);
+    assert_eq!(data.active_blocks(), 0);
+}
