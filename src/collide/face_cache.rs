@@ -75,7 +75,8 @@ impl CachedFaces {
 
     /// The contact of the step `x -> p` within `reach`: exactly
     /// [`step_contact`](super::obstacle_mesh::step_contact), using and refreshing the list
-    /// (module doc). `margin` (>= 0) grows the box of a new gathering.
+    /// (module doc). A new gathering grows the query box by [`margin`] when `keep`, by
+    /// nothing otherwise (a fresh search every step, the reference).
     #[allow(clippy::too_many_arguments)]
     pub fn step_contact<B: FaceBroadphase + ?Sized>(
         &mut self,
@@ -84,11 +85,18 @@ impl CachedFaces {
         x: [f32; 3],
         p: [f32; 3],
         reach: f32,
-        margin: f32,
+        keep: bool,
         scratch: &mut Vec<u32>,
     ) -> Option<Contact> {
         let (lo, hi) = query_box(x, p, reach);
+        if !keep {
+            self.clear();
+        }
+        if self.holds(lo, hi) && self.faces.is_empty() {
+            return None;
+        }
         if !self.holds(lo, hi) {
+            let margin = if keep { margin(x, p, reach) } else { 0.0 };
             let (glo, ghi) = (lo.map(|v| v - margin), hi.map(|v| v + margin));
             bp.candidates(mesh, glo, ghi, scratch);
             self.faces.clear();
@@ -160,7 +168,7 @@ mod tests {
                 let d = [0; 3].map(|_| (rng() - 0.5) * 0.006);
                 let p = [0, 1, 2].map(|k| x[k] + d[k]);
                 let before = c.faces().len();
-                let got = c.step_contact(&m, &bp, x, p, 0.004, margin(x, p, 0.004), &mut scratch);
+                let got = c.step_contact(&m, &bp, x, p, 0.004, true, &mut scratch);
                 let want = step_contact(&m, &bp, x, p, 0.004, &mut Vec::new());
                 assert_eq!(got, want, "x {x:?} p {p:?}");
                 hits += got.is_some() as usize;
@@ -180,7 +188,7 @@ mod tests {
         cache.sync(2, m.stamp());
         let e = &mut cache.entries_mut()[0];
         let top = [0.0, crate::collide::dressform::HEIGHT + 0.001, 0.0];
-        e.step_contact(&m, &bp, top, top, 0.004, 0.01, &mut Vec::new());
+        e.step_contact(&m, &bp, top, top, 0.004, true, &mut Vec::new());
         assert!(!e.faces().is_empty());
         cache.sync(2, m.stamp());
         assert!(!cache.entries_mut()[0].faces().is_empty());
@@ -188,7 +196,7 @@ mod tests {
         assert!(cache.entries_mut()[0].faces().is_empty());
         let e = &mut cache.entries_mut()[1];
         for (x, p) in [([f32::NAN; 3], top), (top, [f32::NAN; 3]), (top, top)] {
-            let got = e.step_contact(&m, &bp, x, p, 0.004, 0.01, &mut Vec::new());
+            let got = e.step_contact(&m, &bp, x, p, 0.004, true, &mut Vec::new());
             assert_eq!(got, step_contact(&m, &bp, x, p, 0.004, &mut Vec::new()));
         }
     }

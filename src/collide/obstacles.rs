@@ -22,7 +22,10 @@
 //!
 //! Mesh obstacles use one of three broadphases ([`BroadphaseKind`]), all giving the same
 //! contacts, and optionally the paper's face memory ([`face_memory`](super::face_memory)): a
-//! particle over the face it touched last tests only that face. A world without obstacles
+//! particle over the face it touched last tests only that face. Each particle keeps the
+//! candidate faces of a box around its path from step to step ([`face_cache`]) and asks the
+//! broadphase again only when its path leaves that box: the same contacts for a fraction of
+//! the broadphase work. A world without obstacles
 //! skips all of this: no pass, no allocation.
 //!
 //! Checkpoints (`src/checkpoint.rs`) rebuild obstacles from the scene, and moving obstacles'
@@ -33,7 +36,7 @@
 use rayon::prelude::*;
 
 use super::face_broadphase::FaceBroadphase;
-use super::face_cache::{self, CachedFaces, FaceCache};
+use super::face_cache::{CachedFaces, FaceCache};
 use super::face_memory::NO_FACE;
 use super::mesh::TriMesh;
 use super::obstacle_kernels::{self as k, GenInput, SLOT_BLOCK};
@@ -312,11 +315,7 @@ impl ObstacleSet {
                                 let (x, p) = g.path(i);
                                 let reach = g.reach[i];
                                 let entry = &mut cache[l];
-                                if fresh {
-                                    entry.clear();
-                                }
-                                let margin = if fresh { 0.0 } else { face_cache::margin(x, p, reach) };
-                                let mut search = || entry.step_contact(mesh, bp, x, p, reach, margin, scratch);
+                                let mut search = || entry.step_contact(mesh, bp, x, p, reach, !fresh, scratch);
                                 if remember {
                                     remembered_with(mesh, &mut mem[l], x, p, reach, 2.0 * reach, search)
                                 } else {
