@@ -134,6 +134,18 @@ impl GenInput<'_> {
         let x = [0, 1, 2].map(|k| self.x[k][i] - self.shift[k]);
         (x, [0, 1, 2].map(|k| self.p[k][i]))
     }
+    /// [`path`](Self::path) and reach of each particle of block `b`, `None` for the lanes
+    /// that are not [`live`](Self::live) (the same values, read once per block).
+    #[inline]
+    pub fn block(&self, b: usize) -> [Option<([f32; 3], [f32; 3], f32)>; LANES] {
+        let r = b * LANES..(b + 1) * LANES;
+        let (x, p) = (self.x.map(|a| &a[r.clone()]), self.p.map(|a| &a[r.clone()]));
+        let (w, reach) = (&self.w[r.clone()], &self.reach[r]);
+        std::array::from_fn(|l| {
+            let live = b * LANES + l < self.n && w[l] > 0.0;
+            live.then(|| ([0, 1, 2].map(|k| x[k][l] - self.shift[k]), [0, 1, 2].map(|k| p[k][l]), reach[l]))
+        })
+    }
     /// Is particle `i` a real, movable particle?
     #[inline]
     pub fn live(&self, i: usize) -> bool {

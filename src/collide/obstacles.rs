@@ -230,6 +230,7 @@ impl ObstacleSet {
 
     /// Gathers candidate faces afresh every substep (`true`) or keeps them while they still
     /// cover the step (`false`, the default); both give the same contacts.
+    #[cfg(test)]
     pub(crate) fn set_fresh_search(&mut self, on: bool) {
         self.fresh_search = on;
     }
@@ -307,13 +308,8 @@ impl ObstacleSet {
                     let remember = !memory.is_empty();
                     let fresh = self.fresh_search;
                     for_blocks(slots, memory, m.cache.entries_mut(), parallel, |b, out, mem, cache, scratch| {
-                        for l in 0..LANES {
-                            let i = b * LANES + l;
-                            let c = if !g.live(i) {
-                                None
-                            } else {
-                                let (x, p) = g.path(i);
-                                let reach = g.reach[i];
+                        for (l, lane) in g.block(b).into_iter().enumerate() {
+                            let c = lane.and_then(|(x, p, reach)| {
                                 let entry = &mut cache[l];
                                 let mut search = || entry.step_contact(mesh, bp, x, p, reach, !fresh, scratch);
                                 if remember {
@@ -321,7 +317,7 @@ impl ObstacleSet {
                                 } else {
                                     search()
                                 }
-                            };
+                            });
                             let (pt, nr) = c.map_or(([0.0; 3], [0.0; 3]), |c| (c.point, c.normal));
                             k::write_slot(out, l, pt, nr);
                         }
