@@ -118,7 +118,8 @@ impl FaceHash {
 
     /// Hash with the cell edge set to [`mean_face_size`].
     pub fn auto(mesh: &TriMesh) -> Result<Self> {
-        Self::new(mesh, mean_face_size(mesh))
+        let f: f32 = std::env::var("WEFT_HF").ok().and_then(|v| v.parse().ok()).unwrap_or(1.0);
+        Self::new(mesh, f * mean_face_size(mesh))
     }
 
     /// Cell edge length.

@@ -89,7 +89,7 @@ pub fn block_touched(slots: &[Vec<f32>], b: usize) -> bool {
 /// may hold a contact: `i` itself unless it starts a whole block without any.
 #[inline]
 fn skip_untouched(slots: &[Vec<f32>], start: usize, len: usize, mut i: usize) -> usize {
-    while (start + i) % LANES == 0 && i + LANES <= len && !block_touched(slots, (start + i) / LANES) {
+    while (start + i).is_multiple_of(LANES) && i + LANES <= len && !block_touched(slots, (start + i) / LANES) {
         i += LANES;
     }
     i
@@ -107,6 +107,9 @@ pub fn read_slot(blocks: &[f32], i: usize) -> ([f32; 3], [f32; 3]) {
 fn load_block(blocks: &[f32], b: usize, k: usize) -> F32s {
     crate::lanes::load(blocks, b * SLOT_BLOCK + k * LANES)
 }
+
+/// One live particle of a block: start (in the obstacle's end frame), prediction, reach.
+pub type Lane = ([f32; 3], [f32; 3], f32);
 
 /// Read-only particle data a generator needs, all padded arrays of the same length.
 #[derive(Clone, Copy)]
@@ -137,7 +140,7 @@ impl GenInput<'_> {
     /// [`path`](Self::path) and reach of each particle of block `b`, `None` for the lanes
     /// that are not [`live`](Self::live) (the same values, read once per block).
     #[inline]
-    pub fn block(&self, b: usize) -> [Option<([f32; 3], [f32; 3], f32)>; LANES] {
+    pub fn block(&self, b: usize) -> [Option<Lane>; LANES] {
         let r = b * LANES..(b + 1) * LANES;
         let (x, p) = (self.x.map(|a| &a[r.clone()]), self.p.map(|a| &a[r.clone()]));
         let (w, reach) = (&self.w[r.clone()], &self.reach[r]);
