@@ -217,8 +217,9 @@ pub struct ObstacleSet {
     reach: Vec<f32>,
     friction: f32,
     busy: std::time::Duration,
-    /// Gather candidate faces afresh every substep instead of keeping them ([`face_cache`]);
-    /// the contacts are the same (a test holds them together).
+    /// Gather candidate faces afresh every substep instead of keeping them ([`face_cache`]),
+    /// and search blocks far from the mesh too: the reference the fast path is tested against
+    /// (same contacts).
     fresh_search: bool,
 }
 
@@ -307,8 +308,16 @@ impl ObstacleSet {
                     let (mesh, bp, memory) = (&m.mesh, &m.broadphase, &mut m.memory);
                     let remember = !memory.is_empty();
                     let fresh = self.fresh_search;
+                    let (mlo, mhi) = mesh.bounds();
                     for_blocks(slots, memory, m.cache.entries_mut(), parallel, |b, out, mem, cache, scratch| {
-                        for (l, lane) in g.block(b).into_iter().enumerate() {
+                        let lanes = g.block(b);
+                        // A block far from the mesh box has no contact (with face memory the
+                        // per-particle path runs: it also keeps the memories).
+                        if !remember && !fresh && k::lanes_miss(&lanes, mlo, mhi) {
+                            out.fill(0.0);
+                            return;
+                        }
+                        for (l, lane) in lanes.into_iter().enumerate() {
                             let c = lane.and_then(|(x, p, reach)| {
                                 let entry = &mut cache[l];
                                 let mut search = || entry.step_contact(mesh, bp, x, p, reach, !fresh, scratch);
