@@ -256,4 +256,47 @@ mod tests {
             }
         }
     }
+
+    /// `weft reproduce landovsky` counts one step of `h` with one substep as one iteration
+    /// and says the physics is bit for bit that of steps of `4 h` with four substeps: the
+    /// obstacle stages (and their kept lists) see the same substeps either way.
+    #[test]
+    fn steps_of_one_substep_equal_a_quarter_of_steps_of_four() {
+        use crate::collide::obstacles::{BroadphaseKind, Obstacle};
+        use crate::{ClothDesc, Effects, Fabric, SolverParams, World};
+        let run = |dt: f32, substeps: u32, steps: usize| {
+            let params = SolverParams {
+                dt,
+                substeps,
+                iterations: 1,
+                ..SolverParams::default()
+            };
+            let mut w = World::new(params, Effects::gravity()).unwrap();
+            w.add_cloth(&ClothDesc {
+                rows: 40,
+                cols: 30,
+                spacing: 0.009,
+                origin: [-0.13, crate::collide::dressform::HEIGHT + 0.005, -0.18],
+                u: [1.0, 0.0, 0.0],
+                v: [0.0, 0.0, 1.0],
+                fabric: Fabric::preset("cotton").unwrap(),
+                ..ClothDesc::default()
+            })
+            .unwrap();
+            w.set_friction(0.3).unwrap();
+            let form = Obstacle::mesh(dress_form(4800).unwrap(), BroadphaseKind::Grid(Some([15, 30, 15])), false);
+            w.add_obstacle(form.unwrap()).unwrap();
+            for _ in 0..steps {
+                w.step(dt).unwrap();
+            }
+            let mut pos = Vec::new();
+            w.positions_interleaved(&mut pos);
+            (pos, w.obstacle_contacts())
+        };
+        let (four, touched) = run(1.0 / 200.0, 4, 40);
+        let (one, touched_one) = run(1.0 / 800.0, 1, 160);
+        assert!(touched > 20, "the sheet must land on the form: {touched}");
+        assert_eq!(touched, touched_one);
+        assert!(four.iter().zip(&one).all(|(a, b)| a.map(f32::to_bits) == b.map(f32::to_bits)));
+    }
 }

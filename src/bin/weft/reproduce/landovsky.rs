@@ -1,5 +1,5 @@
-//! `weft reproduce landovsky [--quick] [--json] [--png DIR]`: the timing table of Landovskaya,
-//! Landovsky & Frolovsky (SEEDS.md section D).
+//! `weft reproduce landovsky [--quick] [--json] [--png DIR] [--only TEXT]`: the timing table of
+//! Landovskaya, Landovsky & Frolovsky (SEEDS.md section D).
 //!
 //! The paper drops fabric (particles at the warp/weft crossings) on dress-form meshes of 4800
 //! and 8350 faces and times 500 or 150 "iterations" with uniform grids of 1x1x1, 5x5x5,
@@ -31,7 +31,8 @@
 //! accuracy (`deviation`: the largest distance between a particle's final position with and
 //! without face memory). `--quick` leaves out the two brute-force (1x1x1) rows, which take
 //! most of the run; every other row runs all its iterations (no scaling). `--png DIR` writes
-//! the last frame of the paper's 15x30x15 and 25x25x25 rows to `DIR/landovsky_<faces>.png`.
+//! the last frame of the paper's 15x30x15 and 25x25x25 rows to `DIR/landovsky_<faces>.png`;
+//! `--only TEXT` runs the rows whose "particles faces broadphase" line contains `TEXT`.
 
 use std::process::ExitCode;
 use std::time::Instant;
