@@ -35,12 +35,18 @@ pub fn margin(x: [f32; 3], p: [f32; 3], reach: f32) -> f32 {
     MARGIN_REACH * reach + MARGIN_STEPS * d
 }
 
+/// Faces a list keeps inline (in the entry itself, so the entries of neighbouring particles
+/// share cache lines); longer lists live in the entry's own heap vector.
+pub const INLINE_FACES: usize = 12;
+
 /// One particle's gathered box and the faces whose box overlaps it.
 #[derive(Debug, Clone)]
 pub struct CachedFaces {
     lo: [f32; 3],
     hi: [f32; 3],
-    faces: Vec<u32>,
+    len: u32,
+    inline: [u32; INLINE_FACES],
+    spill: Vec<u32>,
 }
 
 impl Default for CachedFaces {
@@ -49,7 +55,9 @@ impl Default for CachedFaces {
         CachedFaces {
             lo: [f32::INFINITY; 3],
             hi: [f32::NEG_INFINITY; 3],
-            faces: Vec::new(),
+            len: 0,
+            inline: [0; INLINE_FACES],
+            spill: Vec::new(),
         }
     }
 }
@@ -59,7 +67,8 @@ impl CachedFaces {
     pub fn clear(&mut self) {
         self.lo = [f32::INFINITY; 3];
         self.hi = [f32::NEG_INFINITY; 3];
-        self.faces.clear();
+        self.len = 0;
+        self.spill.clear();
     }
 
     /// Does the gathered box contain `[lo, hi]`?
@@ -70,7 +79,21 @@ impl CachedFaces {
 
     /// The faces gathered (at least every face overlapping the gathered box).
     pub fn faces(&self) -> &[u32] {
-        &self.faces
+        match self.len as usize {
+            n if n <= INLINE_FACES => &self.inline[..n],
+            _ => &self.spill,
+        }
+    }
+
+    /// Keeps `faces` as the list.
+    fn store(&mut self, faces: &[u32]) {
+        self.len = faces.len() as u32;
+        self.spill.clear();
+        if faces.len() <= INLINE_FACES {
+            self.inline[..faces.len()].copy_from_slice(faces);
+        } else {
+            self.spill.extend_from_slice(faces);
+        }
     }
 
     /// The contact of the step `x -> p` within `reach`: exactly
@@ -92,32 +115,25 @@ impl CachedFaces {
         if !keep {
             self.clear();
         }
-        if self.holds(lo, hi) && self.faces.is_empty() {
+        if self.holds(lo, hi) && self.len == 0 {
             return None;
         }
         if !self.holds(lo, hi) {
             let margin = if keep { margin(x, p, reach) } else { 0.0 };
             let (glo, ghi) = (lo.map(|v| v - margin), hi.map(|v| v + margin));
             bp.candidates(mesh, glo, ghi, scratch);
-            self.faces.clear();
-            let n = mesh.face_count();
-            self.faces.extend(
-                scratch
-                    .iter()
-                    .copied()
-                    .filter(|&f| (f as usize) < n && mesh.face_overlaps(f, glo, ghi)),
-            );
             // A NaN or a margin lost to rounding leaves a box that does not hold the query:
-            // then the list is used for this step only (it still holds every face overlapping
-            // the query when the box does; otherwise fall back to the fresh candidates).
-            if margin >= 0.0 && (0..3).all(|k| glo[k] <= lo[k] && hi[k] <= ghi[k]) {
-                (self.lo, self.hi) = (glo, ghi);
-            } else {
+            // then this step uses the fresh candidates and keeps nothing.
+            if !(margin >= 0.0 && (0..3).all(|k| glo[k] <= lo[k] && hi[k] <= ghi[k])) {
                 self.clear();
                 return best_contact(mesh, scratch, x, p, reach, lo, hi);
             }
+            let n = mesh.face_count();
+            scratch.retain(|&f| (f as usize) < n && mesh.face_overlaps(f, glo, ghi));
+            self.store(scratch);
+            (self.lo, self.hi) = (glo, ghi);
         }
-        best_contact(mesh, &self.faces, x, p, reach, lo, hi)
+        best_contact(mesh, self.faces(), x, p, reach, lo, hi)
     }
 }
 
