@@ -48,12 +48,46 @@ pub struct MeshReport {
     pub warnings: Vec<String>,
 }
 
+/// A face's plane as the narrowphase ([`face_contact`](super::narrow::face_contact)) uses it,
+/// computed once per mesh state in `f64` from the `f32` corners `a, b, c`: the first corner
+/// `a`, the unnormalised normal `n = (b - a) x (c - a)`, `nn = n.n` and the unit normal
+/// `u = n / sqrt(nn)` (each component divided by the square root, the very operations the
+/// narrowphase performed per test before, so its results are unchanged).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FacePlane {
+    /// First corner.
+    pub a: [f64; 3],
+    /// Unnormalised normal `(b - a) x (c - a)`.
+    pub n: [f64; 3],
+    /// `n.n`.
+    pub nn: f64,
+    /// Unit normal.
+    pub u: [f64; 3],
+}
+
+impl FacePlane {
+    /// The plane of the triangle with corners `c`.
+    pub fn of(c: [[f32; 3]; 3]) -> FacePlane {
+        let [a, b, c] = c.map(|v| v.map(|x| x as f64));
+        let (e, g) = ([0, 1, 2].map(|k| b[k] - a[k]), [0, 1, 2].map(|k| c[k] - a[k]));
+        let n = [e[1] * g[2] - e[2] * g[1], e[2] * g[0] - e[0] * g[2], e[0] * g[1] - e[1] * g[0]];
+        let nn = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+        FacePlane {
+            a,
+            n,
+            nn,
+            u: n.map(|k| k / nn.sqrt()),
+        }
+    }
+}
+
 /// A validated triangle mesh with face normals and face boxes.
 #[derive(Debug, Clone)]
 pub struct TriMesh {
     vertices: Vec<[f32; 3]>,
     faces: Vec<[u32; 3]>,
     normals: Vec<[f32; 3]>,
+    planes: Vec<FacePlane>,
     face_lo: Vec<[f32; 3]>,
     face_hi: Vec<[f32; 3]>,
     lo: [f32; 3],
@@ -163,6 +197,7 @@ impl TriMesh {
             vertices,
             faces: kept,
             normals: Vec::new(),
+            planes: Vec::new(),
             face_lo: Vec::new(),
             face_hi: Vec::new(),
             lo: [0.0; 3],
@@ -204,6 +239,7 @@ impl TriMesh {
     fn recompute(&mut self) {
         let n = self.faces.len();
         self.normals = Vec::with_capacity(n);
+        self.planes = Vec::with_capacity(n);
         self.face_lo = Vec::with_capacity(n);
         self.face_hi = Vec::with_capacity(n);
         self.lo = [f32::INFINITY; 3];
@@ -214,6 +250,7 @@ impl TriMesh {
             // Computed in f64 so that a tiny (but accepted) face still gets a unit normal.
             let l = nn.iter().map(|&x| x as f64 * x as f64).sum::<f64>().sqrt();
             self.normals.push(nn.map(|x| (x as f64 / l) as f32));
+            self.planes.push(FacePlane::of([a, b, c]));
             let lo = [0, 1, 2].map(|k| a[k].min(b[k]).min(c[k]));
             let hi = [0, 1, 2].map(|k| a[k].max(b[k]).max(c[k]));
             for k in 0..3 {
@@ -241,6 +278,10 @@ impl TriMesh {
     /// Unit normal of each face (right-hand rule on the winding).
     pub fn normals(&self) -> &[[f32; 3]] {
         &self.normals
+    }
+    /// The narrowphase's `f64` plane data of each face ([`FacePlane`]).
+    pub fn planes(&self) -> &[FacePlane] {
+        &self.planes
     }
     /// The three corners of face `f`.
     pub fn corners(&self, f: u32) -> [[f32; 3]; 3] {

@@ -23,6 +23,7 @@
 pub mod bvh;
 pub mod dressform;
 pub mod face_broadphase;
+pub mod face_cache;
 pub mod face_hash;
 pub mod face_memory;
 pub mod grid;

@@ -23,6 +23,13 @@
 //! 3. **Proximity.** Otherwise, if the closest point `c` of the triangle to `p` is closer than
 //!    `Th`, the particle ends inside the fabric's thickness layer: a contact at `t = 1`.
 //!
+//! The plane data of step 1 (corner, normal, unit normal) is computed once per mesh state
+//! ([`FacePlane`]), with the same operations, and a face is rejected right after the two
+//! heights when the path does not cross its plane and `p` lies farther than `Th` from it on
+//! either side (behind the plane with a tiny relative pad, [`PLANE_SLACK`]): no triangle
+//! point can then be within `Th`. Both change the cost, not the answer (a test compares with
+//! the full computation).
+//!
 //! A contact carries the face, the point (`q` or `c`), the face normal turned to the
 //! particle's side (`s n`), the time of impact `t`, and `depth = Th - s*hp`, how far `p` must
 //! move along that normal to stand `Th` off the face's plane.
@@ -34,10 +41,12 @@
 //! broadphase gives bit-identical contacts.
 
 use super::face_broadphase::FaceBroadphase;
-use super::mesh::TriMesh;
+use super::mesh::{FacePlane, TriMesh};
 
 /// Barycentric slack accepted when deciding that a crossing point is inside a face.
 pub const EDGE_TOLERANCE: f64 = 1e-9;
+/// Relative padding of the behind-the-plane reject in [`face_contact`].
+pub const PLANE_SLACK: f64 = 1e-9;
 /// The query box is grown by this times `1 + max |coordinate|` beyond the thickness.
 pub const QUERY_PAD: f32 = 1e-6;
 
@@ -136,10 +145,7 @@ pub(crate) fn inside(q: V, a: V, b: V, c: V, n: V, nn: f64, tol: f64) -> bool {
 
 /// Tests the step `x -> p` of a particle with thickness `th` against face `f` alone.
 pub fn face_contact(mesh: &TriMesh, f: u32, x: [f32; 3], p: [f32; 3], th: f32) -> Option<Contact> {
-    let [a, b, c] = mesh.corners(f).map(d);
-    let n = cross(sub(b, a), sub(c, a));
-    let nn = dot(n, n);
-    let u = n.map(|k| k / nn.sqrt());
+    let FacePlane { a, n, nn, u } = mesh.planes()[f as usize];
     let (xd, pd) = (d(x), d(p));
     let hx = dot(u, sub(xd, a));
     let hp = dot(u, sub(pd, a));
@@ -148,6 +154,16 @@ pub fn face_contact(mesh: &TriMesh, f: u32, x: [f32; 3], p: [f32; 3], th: f32) -
         None if hx < 0.0 => -1.0,
         None => 1.0,
     };
+    let crossing = s * hp < 0.0 && s * hx >= 0.0;
+    // Cheap reject: no crossing, and `p` is farther than `th` from the plane (so from the
+    // triangle) on either side. Behind the plane the bound is padded by `PLANE_SLACK`
+    // relative to the coordinates, far above the rounding of `hp` and of the closest point,
+    // so no proximity the full test would find is dropped.
+    let slack = PLANE_SLACK * (1.0 + pd.iter().fold(0.0f64, |m, v| m.max(v.abs())));
+    if !crossing && (th.is_nan() || s * hp >= th as f64 || s * hp <= -(th as f64) - slack) {
+        return None;
+    }
+    let [_, b, c] = mesh.corners(f).map(d);
     let fnorm = mesh.normals()[f as usize];
     let make = |point: V, t: f64, kind| Contact {
         face: f,
@@ -157,7 +173,7 @@ pub fn face_contact(mesh: &TriMesh, f: u32, x: [f32; 3], p: [f32; 3], th: f32) -
         depth: (th as f64 - s * hp) as f32,
         kind,
     };
-    if s * hp < 0.0 && s * hx >= 0.0 {
+    if crossing {
         let t = hx / (hx - hp);
         let q = axpy(xd, t, sub(pd, xd));
         if inside(q, a, b, c, n, nn, EDGE_TOLERANCE) {
@@ -308,5 +324,80 @@ mod tests {
         let bp = BruteForce::new(&m);
         assert!(mesh_contact(&m, &bp, [f32::NAN, 0.5, 1.0], [0.5, 0.5, -1.0], 0.1).is_none());
         assert!(mesh_contact(&m, &bp, [0.5, 0.5, 1.0], [0.5, 0.5, -1.0], f32::NAN).is_none());
+    }
+
+    /// The old per-test computation, without the precomputed plane and the cheap reject.
+    fn full(mesh: &TriMesh, f: u32, x: [f32; 3], p: [f32; 3], th: f32) -> Option<Contact> {
+        let [a, b, c] = mesh.corners(f).map(d);
+        let n = cross(sub(b, a), sub(c, a));
+        let nn = dot(n, n);
+        let u = n.map(|k| k / nn.sqrt());
+        let (xd, pd) = (d(x), d(p));
+        let (hx, hp) = (dot(u, sub(xd, a)), dot(u, sub(pd, a)));
+        let s = match mesh.solid_side() {
+            Some(side) => side as f64,
+            None if hx < 0.0 => -1.0,
+            None => 1.0,
+        };
+        let fnorm = mesh.normals()[f as usize];
+        let make = |point: V, t: f64, kind| Contact {
+            face: f,
+            point: point.map(|k| k as f32),
+            normal: fnorm.map(|k| if s < 0.0 { -k } else { k }),
+            t: t as f32,
+            depth: (th as f64 - s * hp) as f32,
+            kind,
+        };
+        if s * hp < 0.0 && s * hx >= 0.0 {
+            let t = hx / (hx - hp);
+            let q = axpy(xd, t, sub(pd, xd));
+            if inside(q, a, b, c, n, nn, EDGE_TOLERANCE) {
+                return Some(make(q, t, ContactKind::Crossing));
+            }
+        }
+        if th > 0.0 && s * hp < th as f64 {
+            let cp = closest_point_on_triangle(pd, a, b, c);
+            let r = sub(pd, cp);
+            if dot(r, r) < th as f64 * th as f64 {
+                return Some(make(cp, 1.0, ContactKind::Proximity));
+            }
+        }
+        None
+    }
+
+    #[test]
+    fn precomputed_planes_and_the_cheap_reject_change_no_answer() {
+        let mut m = crate::collide::dressform::dress_form(600).unwrap();
+        let (lo, hi) = m.bounds();
+        let mut r = crate::test_rng::unit(11);
+        let mut hits = 0;
+        for round in 0..2 {
+            if round == 1 {
+                m.set_two_sided();
+            }
+            for _ in 0..400 {
+                let f = (r() * m.face_count() as f32) as u32;
+                let [a, b, c] = m.corners(f);
+                let (wa, wb) = (r(), r());
+                let on = [0, 1, 2].map(|k| a[k] + wa * (b[k] - a[k]) * (1.0 - wb) + wb * (c[k] - a[k]) * (1.0 - wa));
+                let nrm = m.normals()[f as usize];
+                for _ in 0..8 {
+                    let h = (r() - 0.5) * 0.02;
+                    let x = [0, 1, 2].map(|k| on[k] + nrm[k] * h + (r() - 0.5) * 0.01);
+                    let p = [0, 1, 2].map(|k| x[k] + (r() - 0.5) * 0.012);
+                    let th = [0.0, 0.001, 0.004, f32::NAN][(r() * 4.0) as usize % 4];
+                    for g in 0..m.face_count() as u32 {
+                        let want = full(&m, g, x, p, th);
+                        hits += want.is_some() as usize;
+                        // Debug text: NaN depths (th = NaN) compare equal too
+                        let got = format!("{:?}", face_contact(&m, g, x, p, th));
+                        assert_eq!(got, format!("{want:?}"), "face {g} x {x:?} p {p:?} th {th}");
+                    }
+                    let far = [0, 1, 2].map(|k| lo[k] + (hi[k] - lo[k]) * r());
+                    assert_eq!(face_contact(&m, f, far, p, 0.004), full(&m, f, far, p, 0.004));
+                }
+            }
+        }
+        assert!(hits > 1000, "{hits}");
     }
 }

@@ -46,6 +46,10 @@ pub fn write_slot(blocks: &mut [f32], i: usize, point: [f32; 3], normal: [f32; 3
 /// Sets the approach speeds `max(0, -n.(v - u))` of the eight slots of one block (`out`, the
 /// block's floats) from the velocities of particles `b * 8 ..`; slots without contact get 0.
 pub fn fill_approach(out: &mut [f32], b: usize, v: [&[f32]; 3], u: [f32; 3]) {
+    if out[3 * LANES..6 * LANES].iter().all(|&c| c == 0.0) {
+        out[6 * LANES..7 * LANES].fill(0.0);
+        return;
+    }
     for l in 0..LANES {
         let i = b * LANES + l;
         let n = [3, 4, 5].map(|k| out[k * LANES + l]);
@@ -72,6 +76,25 @@ pub fn contact_velocity(w: [f32; 3], n: [f32; 3], a: f32, mu: f32) -> [f32; 3] {
     [0, 1, 2].map(|k| wt[k] * f + keep_n * n[k])
 }
 
+/// Does any of the eight slots of block `b` hold a contact (a normal other than zero) in any
+/// of `slots`? The passes below skip whole blocks that do not.
+#[inline]
+pub fn block_touched(slots: &[Vec<f32>], b: usize) -> bool {
+    slots
+        .iter()
+        .any(|s| s[b * SLOT_BLOCK + 3 * LANES..b * SLOT_BLOCK + 6 * LANES].iter().any(|&c| c != 0.0))
+}
+
+/// The next particle index from `i` (of a run starting at particle `start`, `len` long) that
+/// may hold a contact: `i` itself unless it starts a whole block without any.
+#[inline]
+fn skip_untouched(slots: &[Vec<f32>], start: usize, len: usize, mut i: usize) -> usize {
+    while (start + i).is_multiple_of(LANES) && i + LANES <= len && !block_touched(slots, (start + i) / LANES) {
+        i += LANES;
+    }
+    i
+}
+
 /// Reads slot `i`: `(point, normal)`.
 #[inline]
 pub fn read_slot(blocks: &[f32], i: usize) -> ([f32; 3], [f32; 3]) {
@@ -83,6 +106,26 @@ pub fn read_slot(blocks: &[f32], i: usize) -> ([f32; 3], [f32; 3]) {
 #[inline(always)]
 fn load_block(blocks: &[f32], b: usize, k: usize) -> F32s {
     crate::lanes::load(blocks, b * SLOT_BLOCK + k * LANES)
+}
+
+/// One live particle of a block: start (in the obstacle's end frame), prediction, reach.
+pub type Lane = ([f32; 3], [f32; 3], f32);
+
+/// Do the query boxes ([`query_box`](super::narrow::query_box): path box grown by the reach
+/// and the relative pad) of all `lanes` miss the box `[lo, hi]`? The lanes' common box is
+/// grown by the largest growth, computed as `query_box` does; rounding is monotonic, so every
+/// lane's own query box lies inside and no face within `[lo, hi]` can overlap it.
+pub fn lanes_miss(lanes: &[Option<Lane>; LANES], lo: [f32; 3], hi: [f32; 3]) -> bool {
+    let (mut blo, mut bhi, mut grow) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3], 0.0f32);
+    for (x, p, reach) in lanes.iter().flatten() {
+        let big = x.iter().chain(p.iter()).fold(0.0f32, |m, v| m.max(v.abs()));
+        grow = grow.max(reach + super::narrow::QUERY_PAD * (1.0 + big));
+        for k in 0..3 {
+            blo[k] = blo[k].min(x[k].min(p[k]));
+            bhi[k] = bhi[k].max(x[k].max(p[k]));
+        }
+    }
+    (0..3).any(|k| bhi[k] + grow < lo[k] || blo[k] - grow > hi[k])
 }
 
 /// Read-only particle data a generator needs, all padded arrays of the same length.
@@ -110,6 +153,18 @@ impl GenInput<'_> {
     pub fn path(&self, i: usize) -> ([f32; 3], [f32; 3]) {
         let x = [0, 1, 2].map(|k| self.x[k][i] - self.shift[k]);
         (x, [0, 1, 2].map(|k| self.p[k][i]))
+    }
+    /// [`path`](Self::path) and reach of each particle of block `b`, `None` for the lanes
+    /// that are not [`live`](Self::live) (the same values, read once per block).
+    #[inline]
+    pub fn block(&self, b: usize) -> [Option<Lane>; LANES] {
+        let r = b * LANES..(b + 1) * LANES;
+        let (x, p) = (self.x.map(|a| &a[r.clone()]), self.p.map(|a| &a[r.clone()]));
+        let (w, reach) = (&self.w[r.clone()], &self.reach[r]);
+        std::array::from_fn(|l| {
+            let live = b * LANES + l < self.n && w[l] > 0.0;
+            live.then(|| ([0, 1, 2].map(|k| x[k][l] - self.shift[k]), [0, 1, 2].map(|k| p[k][l]), reach[l]))
+        })
     }
     /// Is particle `i` a real, movable particle?
     #[inline]
@@ -266,7 +321,12 @@ pub fn project_simd(slots: &[Vec<f32>], th: &[f32], start: usize, p: [&mut [f32]
 /// Element-wise; the parallel and serial runs give the same bits.
 pub fn resolve_along_path(slots: &[Vec<f32>], shifts: &[[f32; 3]], th: &[f32], start: usize, x: [&[f32]; 3], p: [&mut [f32]; 3]) {
     let [px, py, pz] = p;
-    for i in 0..px.len() {
+    let mut i = 0;
+    while i < px.len() {
+        i = skip_untouched(slots, start, px.len(), i);
+        if i >= px.len() {
+            break;
+        }
         let g = start + i;
         let mut q = [px[i], py[i], pz[i]];
         for (s, u) in slots.iter().zip(shifts) {
@@ -285,6 +345,7 @@ pub fn resolve_along_path(slots: &[Vec<f32>], shifts: &[[f32; 3]], th: &[f32], s
             }
         }
         (px[i], py[i], pz[i]) = (q[0], q[1], q[2]);
+        i += 1;
     }
 }
 
@@ -292,7 +353,12 @@ pub fn resolve_along_path(slots: &[Vec<f32>], shifts: &[[f32; 3]], th: &[f32], s
 /// slot touches the particle, `v = u_k + contact_velocity(v - u_k, n, a, mu_k)`.
 pub fn velocity_pass(slots: &[Vec<f32>], motion: &[([f32; 3], f32)], th: &[f32], start: usize, x: [&[f32]; 3], v: [&mut [f32]; 3]) {
     let [vx, vy, vz] = v;
-    for i in 0..vx.len() {
+    let mut i = 0;
+    while i < vx.len() {
+        i = skip_untouched(slots, start, vx.len(), i);
+        if i >= vx.len() {
+            break;
+        }
         let g = start + i;
         let q = [x[0][i], x[1][i], x[2][i]];
         for (s, &(u, mu)) in slots.iter().zip(motion) {
@@ -304,6 +370,7 @@ pub fn velocity_pass(slots: &[Vec<f32>], motion: &[([f32; 3], f32)], th: &[f32],
             let w = contact_velocity(rel, n, read_approach(s, g), mu);
             (vx[i], vy[i], vz[i]) = (w[0] + u[0], w[1] + u[1], w[2] + u[2]);
         }
+        i += 1;
     }
 }
 

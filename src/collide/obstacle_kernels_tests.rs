@@ -114,3 +114,40 @@ fn velocity_pass_removes_approach_and_applies_friction() {
     assert_eq!((vx[1], vy[1]), (3.0, -1.0));
     assert_eq!((vx[2], vy[2]), (3.0, -1.0));
 }
+
+/// Skipping whole blocks without contact changes nothing: a pass over the whole range equals
+/// passes over one particle at a time (which never skip), for sparse random contacts in two
+/// obstacles.
+#[test]
+fn block_skipping_passes_equal_particle_by_particle() {
+    let n = 8 * LANES;
+    let mut r = crate::test_rng::signed(5);
+    let mut slots = vec![vec![0.0; n / LANES * SLOT_BLOCK]; 2];
+    for (k, s) in slots.iter_mut().enumerate() {
+        for i in (0..n).filter(|i| (i / LANES) % 3 == k && i % 3 != 1) {
+            let nrm = [r(), 1.0 + r().abs(), r()];
+            let l = (nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]).sqrt();
+            write_slot(s, i, [r() * 0.1, r() * 0.01, r() * 0.1], nrm.map(|c| c / l));
+        }
+        fill_approach(s, 0, [&vec![0.5; n], &vec![-1.0; n], &vec![0.0; n]], [0.0; 3]);
+    }
+    let th = vec![0.01; n];
+    let shifts = [[0.0; 3], [0.001, 0.0, 0.0]];
+    let motion = [([0.0; 3], 0.4), ([0.001, 0.0, 0.0], 0.2)];
+    let x: [Vec<f32>; 3] = [0, 1, 2].map(|_| (0..n).map(|_| r() * 0.02).collect());
+    let p0: [Vec<f32>; 3] = [0, 1, 2].map(|_| (0..n).map(|_| r() * 0.02).collect());
+    let (mut whole, mut single) = (p0.clone(), p0.clone());
+    let [a, b, c] = &mut whole;
+    resolve_along_path(&slots, &shifts, &th, 0, [&x[0], &x[1], &x[2]], [a, b, c]);
+    let [vw0, vw1, vw2] = &mut whole;
+    velocity_pass(&slots, &motion, &th, 0, [&x[0], &x[1], &x[2]], [vw0, vw1, vw2]);
+    for i in 0..n {
+        let [a, b, c] = &mut single;
+        let xs = [&x[0][i..i + 1], &x[1][i..i + 1], &x[2][i..i + 1]];
+        resolve_along_path(&slots, &shifts, &th, i, xs, [&mut a[i..i + 1], &mut b[i..i + 1], &mut c[i..i + 1]]);
+        velocity_pass(&slots, &motion, &th, i, xs, [&mut a[i..i + 1], &mut b[i..i + 1], &mut c[i..i + 1]]);
+    }
+    assert_eq!(whole, single);
+    assert_ne!(whole, p0, "some particles must move");
+    assert!(!block_touched(&slots, 2) && block_touched(&slots, 0) && !block_touched(&slots[..1], 1));
+}

@@ -107,8 +107,22 @@ pub fn step_contact<B: FaceBroadphase + ?Sized>(
 ) -> Option<Contact> {
     let (lo, hi) = query_box(x, p, reach);
     bp.candidates(mesh, lo, hi, scratch);
+    best_contact(mesh, scratch, x, p, reach, lo, hi)
+}
+
+/// The preferred contact (module doc) among the `faces` whose box overlaps the step's query
+/// box `[lo, hi]`; `faces` must hold at least every face overlapping it, in any order.
+pub(crate) fn best_contact(
+    mesh: &TriMesh,
+    faces: &[u32],
+    x: [f32; 3],
+    p: [f32; 3],
+    reach: f32,
+    lo: [f32; 3],
+    hi: [f32; 3],
+) -> Option<Contact> {
     let mut best: Option<Contact> = None;
-    for &f in scratch.iter() {
+    for &f in faces {
         if (f as usize) < mesh.face_count() && mesh.face_overlaps(f, lo, hi) {
             if let Some(c) = face_contact(mesh, f, x, p, reach) {
                 if best.as_ref().is_none_or(|b| better(&c, b, p)) {
@@ -133,11 +147,25 @@ pub fn step_contact_remembered<B: FaceBroadphase + ?Sized>(
     band: f32,
     scratch: &mut Vec<u32>,
 ) -> Option<Contact> {
+    remembered_with(mesh, memory, x, p, reach, band, || step_contact(mesh, bp, x, p, reach, scratch))
+}
+
+/// The face-memory rule around any full search `search` of the step (which must return
+/// [`step_contact`]'s answer, e.g. from a [`CachedFaces`](super::face_cache::CachedFaces)).
+pub(crate) fn remembered_with(
+    mesh: &TriMesh,
+    memory: &mut u32,
+    x: [f32; 3],
+    p: [f32; 3],
+    reach: f32,
+    band: f32,
+    search: impl FnOnce() -> Option<Contact>,
+) -> Option<Contact> {
     let f = *memory;
     if f != NO_FACE && over_face(mesh, f, x, band) && over_face(mesh, f, p, band) {
         return face_contact(mesh, f, x, p, reach);
     }
-    let c = step_contact(mesh, bp, x, p, reach, scratch);
+    let c = search();
     *memory = c.map_or(NO_FACE, |c| c.face);
     c
 }

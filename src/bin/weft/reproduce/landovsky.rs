@@ -1,17 +1,23 @@
-//! `weft reproduce landovsky [--quick] [--json]`: the timing table of Landovskaya, Landovsky &
-//! Frolovsky (SEEDS.md section D).
+//! `weft reproduce landovsky [--quick] [--json] [--png DIR] [--only TEXT]`: the timing table of
+//! Landovskaya, Landovsky & Frolovsky (SEEDS.md section D).
 //!
 //! The paper drops fabric (particles at the warp/weft crossings) on dress-form meshes of 4800
 //! and 8350 faces and times 500 or 150 "iterations" with uniform grids of 1x1x1, 5x5x5,
-//! 15x30x15 and 25x25x25 cells (Intel i7-4770). We read an iteration as one simulation step:
-//! here one `World::step` of `dt = 1/200 s` with [`SUBSTEPS`] XPBD substeps of one sweep each
-//! (collision detection runs every substep). The paper integrates with leapfrog, one force
-//! evaluation per step; with a single substep our nearly inextensible cotton sheet of 15000
-//! or 32500 particles does not converge (strain above 1000%), hangs through and slides off the
-//! form, so four substeps are the honest equivalent of a converged step. The cloth is a horizontal cotton
-//! sheet of the paper's particle count (130 x 250 = 32500, 100 x 150 = 15000) released just
-//! above the form's neck, so it falls on the form and drapes over it while being timed. The
-//! forms are our procedural ones (`weft::collide::dressform`: exactly 4800, and 8352 faces).
+//! 15x30x15 and 25x25x25 cells (Intel i7-4770). It integrates with leapfrog: one iteration is
+//! one force evaluation, one position update and one collision test per particle. Our unit of
+//! the same work is one `World::step` of [`DT`] `= 1/800 s` with one XPBD substep of one
+//! constraint sweep: one integration, one sweep over the cloth constraints and one obstacle
+//! pass (contacts, response, projection, velocity pass) per particle. A step of 1/800 s is
+//! what our nearly inextensible cotton needs to converge with one sweep (with `1/200 s` and one
+//! sweep the sheet stretches above 1000%, hangs through and slides off the form): the physics
+//! is bit for bit the earlier "one step of 1/200 s with four substeps", each of our iterations
+//! being one of those substeps. 500 iterations cover 0.625 s of simulated time, 150 cover
+//! 0.1875 s. The cloth is a horizontal cotton sheet of the paper's particle count
+//! (130 x 250 = 32500, 100 x 150 = 15000) released [`DROP`] above the top of the form's
+//! neck, so it lands within the first tens of iterations and drapes over the form while being
+//! timed (the `contact` column: the mean share of particles holding an obstacle contact over
+//! the timed iterations). The forms are our procedural ones (`weft::collide::dressform`:
+//! exactly 4800, and 8352 faces).
 //!
 //! Each row times the whole step (cloth constraints included) on all cores: `seconds` is wall
 //! time, `cpu_seconds` the process's CPU time over the same steps (on a machine shared with
@@ -23,8 +29,10 @@
 //! rows: the BVH and hash broadphases and an automatically sized grid (no hand-tuned cells),
 //! and the paper's face memory on the best grids, to show what it saves and what it costs in
 //! accuracy (`deviation`: the largest distance between a particle's final position with and
-//! without face memory). `--quick` runs a tenth of the iterations and scales the seconds by
-//! ten, and says so.
+//! without face memory). `--quick` leaves out the two brute-force (1x1x1) rows, which take
+//! most of the run; every other row runs all its iterations (no scaling). `--png DIR` writes
+//! the last frame of the paper's 15x30x15 and 25x25x25 rows to `DIR/landovsky_<faces>.png`;
+//! `--only TEXT` runs the rows whose "particles faces broadphase" line contains `TEXT`.
 
 use std::process::ExitCode;
 use std::time::Instant;
@@ -36,18 +44,25 @@ use weft::{ClothDesc, Effects, Fabric, SolverParams, World};
 /// Options of `weft reproduce landovsky`.
 #[derive(clap::Args)]
 pub struct Args {
-    /// Run a tenth of the iterations and scale the times (says so in the output).
+    /// Leave out the two brute-force (1x1x1) rows (says so in the output).
     #[arg(long)]
     quick: bool,
+    /// Write the last frame of the paper's 15x30x15 and 25x25x25 rows as PNGs into this folder.
+    #[arg(long)]
+    png: Option<std::path::PathBuf>,
+    /// Run only the rows whose line (particles, faces, broadphase) contains this text, e.g.
+    /// `4800 grid 15x30x15` or `bvh`.
+    #[arg(long)]
+    only: Option<String>,
     /// Print one JSON array instead of a table.
     #[arg(long)]
     json: bool,
 }
 
-/// Step length of one "iteration", s.
-const DT: f32 = 1.0 / 200.0;
-/// XPBD substeps per iteration (module doc).
-const SUBSTEPS: u32 = 4;
+/// Step length of one "iteration", s (one substep, one sweep: module doc).
+const DT: f32 = 1.0 / 800.0;
+/// Height of the sheet above the top of the form when released, m.
+const DROP: f32 = 0.005;
 
 /// One row to run.
 struct Spec {
@@ -67,7 +82,7 @@ struct Row {
     particles: usize,
     faces: usize,
     iterations: u32,
-    measured_iterations: u32,
+    contact_share: f64,
     broadphase: String,
     cells: Option<[usize; 3]>,
     face_memory: bool,
@@ -124,7 +139,7 @@ fn specs() -> Vec<Spec> {
 fn world(s: &Spec) -> weft::Result<World> {
     let params = SolverParams {
         dt: DT,
-        substeps: SUBSTEPS,
+        substeps: 1,
         iterations: 1,
         ..SolverParams::default()
     };
@@ -134,7 +149,7 @@ fn world(s: &Spec) -> weft::Result<World> {
         rows: s.rows,
         cols: s.cols,
         spacing: s.spacing,
-        origin: [-wx / 2.0, weft::collide::dressform::HEIGHT + 0.02, -wz / 2.0],
+        origin: [-wx / 2.0, weft::collide::dressform::HEIGHT + DROP, -wz / 2.0],
         u: [1.0, 0.0, 0.0],
         v: [0.0, 0.0, 1.0],
         fabric: Fabric::preset("cotton")?,
@@ -157,34 +172,80 @@ fn cpu_seconds() -> Option<f64> {
     Some(ticks / 100.0)
 }
 
-/// What one row's run gives: wall seconds, CPU seconds, final positions, the world.
-type Measured = (f64, Option<f64>, Vec<[f32; 3]>, World);
+/// What one row's run gives: wall seconds, CPU seconds, mean contact share, final
+/// positions, the world.
+type Measured = (f64, Option<f64>, f64, Vec<[f32; 3]>, World);
+
+/// Times the contact share is sampled during a run (evenly spaced; the counting, a read of
+/// one slot per particle, is timed with the steps and costs well under 1% of them).
+const CONTACT_SAMPLES: u32 = 20;
 
 /// Runs one row.
-fn measure(s: &Spec, steps: u32) -> weft::Result<Measured> {
+fn measure(s: &Spec) -> weft::Result<Measured> {
     let mut w = world(s)?;
+    let every = (s.iterations / CONTACT_SAMPLES).max(1);
+    let (mut share, mut samples) = (0.0f64, 0u32);
     let (t0, c0) = (Instant::now(), cpu_seconds());
-    for _ in 0..steps {
+    for i in 1..=s.iterations {
         w.step(DT)?;
+        if i % every == 0 {
+            share += w.obstacle_contacts() as f64 / w.particle_count().max(1) as f64;
+            samples += 1;
+        }
     }
     let secs = t0.elapsed().as_secs_f64();
     let cpu = cpu_seconds().zip(c0).map(|(b, a)| b - a);
     let mut pos = Vec::new();
     w.positions_interleaved(&mut pos);
-    Ok((secs, cpu, pos, w))
+    Ok((secs, cpu, share / samples.max(1) as f64, pos, w))
+}
+
+/// The row's broadphase label, the mesh's face count and the grid's cells.
+fn label(w: &World, face_memory: bool) -> (String, usize, Option<[usize; 3]>) {
+    use weft::collide::face_broadphase::FaceBroadphase;
+    use weft::collide::obstacles::{Geometry, MeshBroadphase};
+    match w.obstacles().first().map(|o| o.geometry()) {
+        Some(Geometry::Mesh(m)) => {
+            let cells = match m.broadphase() {
+                MeshBroadphase::Grid(g) => Some(g.dims()),
+                _ => None,
+            };
+            let text = m.broadphase().describe();
+            let text = if face_memory { format!("{text} + face memory") } else { text };
+            (text, m.mesh().face_count(), cells)
+        }
+        _ => (String::new(), 0, None),
+    }
+}
+
+/// Writes the world's current frame to `dir/landovsky_<faces>.png`.
+fn write_png(dir: &std::path::Path, w: &World, pos: Vec<[f32; 3]>, faces: usize) -> weft::Result<()> {
+    std::fs::create_dir_all(dir).map_err(|e| weft::WeftError::Scene(format!("{}: {e}", dir.display())))?;
+    let frame = crate::pictures::Frame {
+        positions: pos,
+        obstacles: crate::pictures::obstacle_items(w),
+    };
+    let style = crate::pictures::Style::default();
+    let (width, height) = (800, 800);
+    let frames = [frame];
+    let cam = crate::pictures::shared_camera(w, &frames, 1.0, None, None, style)?;
+    let img = crate::pictures::render_frame(w, &frames[0], width, height, cam, style)?;
+    let p = dir.join(format!("landovsky_{faces}.png"));
+    img.write_png(&p)?;
+    eprintln!("wrote {}", p.display());
+    Ok(())
 }
 
 pub fn run(args: &Args) -> weft::Result<ExitCode> {
-    let scale = if args.quick { 10 } else { 1 };
     let mut rows: Vec<Row> = Vec::new();
     let mut plain: Vec<(usize, BroadphaseKind, Vec<[f32; 3]>)> = Vec::new();
     if !args.json {
-        println!("weft reproduce landovsky: cloth dropped on a dress form; one iteration = one step of 1/200 s ({SUBSTEPS} substeps)");
+        println!("weft reproduce landovsky: cloth dropped on a dress form; one iteration = one step of 1/800 s (one substep, one sweep)");
         if args.quick {
-            println!("QUICK: every row runs a tenth of its iterations; seconds are the measured time x 10");
+            println!("QUICK: the brute-force 1x1x1 rows are left out; every other row runs all its iterations");
         }
         println!(
-            "{:>9} {:>6} {:>6} {:<30} {:>9} {:>8} {:>10} {:>7} {:>8} {:>8} {:>11} {:>9}",
+            "{:>9} {:>6} {:>6} {:<30} {:>9} {:>8} {:>10} {:>7} {:>7} {:>8} {:>8} {:>11} {:>9}",
             "particles",
             "faces",
             "iters",
@@ -192,6 +253,7 @@ pub fn run(args: &Args) -> weft::Result<ExitCode> {
             "ours (s)",
             "cpu (s)",
             "collide(s)",
+            "contact",
             "paper",
             "x (wall)",
             "x (cpu)",
@@ -200,22 +262,21 @@ pub fn run(args: &Args) -> weft::Result<ExitCode> {
         );
     }
     for s in specs() {
-        let steps = (s.iterations / scale).max(1);
-        let (secs, cpu, pos, w) = measure(&s, steps)?;
-        let seconds = secs * (s.iterations as f64 / steps as f64);
-        let cpu_seconds = cpu.map(|c| c * (s.iterations as f64 / steps as f64));
-        let om = &w.obstacles()[0];
-        let (faces, label, cells) = match om.geometry() {
-            weft::collide::obstacles::Geometry::Mesh(m) => {
-                use weft::collide::face_broadphase::FaceBroadphase;
-                let cells = match m.broadphase() {
-                    weft::collide::obstacles::MeshBroadphase::Grid(g) => Some(g.dims()),
-                    _ => None,
-                };
-                (m.mesh().face_count(), m.broadphase().describe(), cells)
+        if args.quick && s.broadphase == BroadphaseKind::Grid(Some([1, 1, 1])) {
+            continue;
+        }
+        if let Some(text) = &args.only {
+            let line = format!("{} {} {}", s.rows * s.cols, s.faces, label(&world(&s)?, s.face_memory).0);
+            if !line.contains(text.as_str()) {
+                continue;
             }
-            _ => (0, String::new(), None),
-        };
+        }
+        let (seconds, cpu_seconds, contact_share, pos, w) = measure(&s)?;
+        let best_grid = matches!(s.broadphase, BroadphaseKind::Grid(Some([15, 30, 15] | [25, 25, 25])));
+        if let (Some(dir), true) = (&args.png, best_grid && !s.face_memory) {
+            write_png(dir, &w, pos.clone(), s.faces)?;
+        }
+        let (label, faces, cells) = label(&w, s.face_memory);
         let deviation = if s.face_memory {
             plain.iter().find(|(f, b, _)| *f == s.faces && *b == s.broadphase).map(|(_, _, p)| {
                 p.iter()
@@ -231,13 +292,13 @@ pub fn run(args: &Args) -> weft::Result<ExitCode> {
             particles: w.particle_count(),
             faces,
             iterations: s.iterations,
-            measured_iterations: steps,
-            broadphase: if s.face_memory { format!("{label} + face memory") } else { label },
+            contact_share,
+            broadphase: label,
             cells,
             face_memory: s.face_memory,
             seconds,
             cpu_seconds,
-            collision_seconds: w.obstacle_time().as_secs_f64() * (s.iterations as f64 / steps as f64),
+            collision_seconds: w.obstacle_time().as_secs_f64(),
             paper_seconds: s.paper_seconds,
             speedup_wall: s.paper_seconds.map(|p| p / seconds),
             speedup_cpu: s.paper_seconds.zip(cpu_seconds).map(|(p, c)| p / c),
@@ -246,7 +307,7 @@ pub fn run(args: &Args) -> weft::Result<ExitCode> {
         };
         if !args.json {
             println!(
-                "{:>9} {:>6} {:>6} {:<30} {:>9.3} {:>8} {:>10.3} {:>7} {:>8} {:>8} {:>11.2e} {:>9}",
+                "{:>9} {:>6} {:>6} {:<30} {:>9.3} {:>8} {:>10.3} {:>6.0}% {:>7} {:>8} {:>8} {:>11.2e} {:>9}",
                 row.particles,
                 row.faces,
                 row.iterations,
@@ -254,6 +315,7 @@ pub fn run(args: &Args) -> weft::Result<ExitCode> {
                 row.seconds,
                 row.cpu_seconds.map_or("-".into(), |c| format!("{c:.2}")),
                 row.collision_seconds,
+                row.contact_share * 100.0,
                 row.paper_seconds.map_or("-".into(), |p| format!("{p}")),
                 row.speedup_wall.map_or("-".into(), |x| format!("{x:.0}x")),
                 row.speedup_cpu.map_or("-".into(), |x| format!("{x:.0}x")),
