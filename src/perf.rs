@@ -1,6 +1,13 @@
 //! Quick performance report (`weft bench`): per-kernel cost, SIMD/scalar and 2-thread/1-thread
 //! ratios, the integrate kernel against a memory-bandwidth reference, and whole-scene step
-//! times. Medians over repeated runs, measured in one process so the ratios are comparable;
+//! times.
+//!
+//! The bandwidth reference for integrate is [`stream_reference`]: two passes that read exactly
+//! the arrays predict and update read and write exactly the arrays they write, in place, in
+//! the same chunks on the same pool, with one add or subtract per value. Both therefore move
+//! the same bytes with the same write-allocate traffic, so `t_stream / t_integrate` is the
+//! fraction of what the memory system allows for this access pattern, with no byte counting
+//! (a triad `a = b + s c` has a different read/write mix and overstates or understates it). Medians over repeated runs, measured in one process so the ratios are comparable;
 //! criterion benches (`cargo bench`) are the careful version of the same figures.
 
 use std::time::Instant;
@@ -10,14 +17,10 @@ use crate::constraints::DistanceSet;
 use crate::effects::Effects;
 use crate::error::{Result, WeftError};
 use crate::integrate::{predict, update, PredictParams};
+use crate::lanes::{load, Vec3x8, LANES};
 use crate::params::SolverParams;
-use crate::particles::Particles;
+use crate::particles::{ParticleChunk, Particles};
 use crate::world::World;
-
-/// Bytes the integrate kernels (predict + update) move per particle: predict reads x, y, z,
-/// vx, vy, vz, w and writes vx, vy, vz, px, py, pz; update reads px, py, pz, x, y, z and
-/// writes vx, vy, vz, x, y, z — 25 arrays of f32.
-pub const INTEGRATE_BYTES_PER_PARTICLE: f64 = 25.0 * 4.0;
 
 /// Median of `reps` timings of `f`, in seconds.
 pub fn median_secs(reps: usize, mut f: impl FnMut()) -> f64 {
@@ -62,28 +65,82 @@ pub fn cloth_world(n: usize, threads: usize) -> Result<World> {
     Ok(w)
 }
 
-/// Memory bandwidth reference: a triad `a = b + s c` over arrays totalling `bytes`, on the
-/// current rayon pool (in parallel chunks), in bytes per second (loads plus stores, the same
-/// accounting as the kernels). Use a size far beyond the last-level cache.
-pub fn triad_bandwidth(bytes: usize, reps: usize) -> f64 {
-    use rayon::prelude::*;
-    let n = (bytes / 12).max(1024);
-    let b = vec![1.0f32; n];
-    let c = vec![2.0f32; n];
-    let mut a = vec![0.0f32; n];
-    let s = 0.5f32;
-    let t = median_secs(reps, || {
-        a.par_chunks_mut(1 << 16)
-            .zip(b.par_chunks(1 << 16))
-            .zip(c.par_chunks(1 << 16))
-            .for_each(|((a, b), c)| {
-                for ((a, b), c) in a.iter_mut().zip(b).zip(c) {
-                    *a = *b + s * *c;
-                }
-            });
-        std::hint::black_box(&mut a);
-    });
-    (n * 12) as f64 / t
+/// Pass 1 of the stream reference: reads x, v, w and writes v, p (as predict does):
+/// `v += w`, `p = x + v`.
+fn stream_predict(c: ParticleChunk<'_>) {
+    for i in (0..c.x.len()).step_by(LANES) {
+        let w = load(c.w, i);
+        let v = Vec3x8::load(c.vx, c.vy, c.vz, i) + Vec3x8 { x: w, y: w, z: w };
+        let p = Vec3x8::load(c.x, c.y, c.z, i) + v;
+        v.store(c.vx, c.vy, c.vz, i);
+        p.store(c.px, c.py, c.pz, i);
+    }
+}
+
+/// Pass 2 of the stream reference: reads p, x and writes v, x (as update does): `v = p − x`,
+/// `x = p`.
+fn stream_update(c: ParticleChunk<'_>) {
+    for i in (0..c.x.len()).step_by(LANES) {
+        let p = Vec3x8::load(c.px, c.py, c.pz, i);
+        let v = p - Vec3x8::load(c.x, c.y, c.z, i);
+        v.store(c.vx, c.vy, c.vz, i);
+        p.store(c.x, c.y, c.z, i);
+    }
+}
+
+/// Seconds for one pass of the stream reference over `p` (both passes, SIMD, parallel chunks
+/// when `parallel`): the memory ceiling of the integrate kernels' access pattern.
+pub fn time_stream_reference(p: &mut Particles, parallel: bool, reps: usize) -> f64 {
+    median_secs(reps, || {
+        p.for_chunks(parallel, stream_predict);
+        p.for_chunks(parallel, stream_update);
+    })
+}
+
+/// Integrate against its memory ceiling at one size and thread count.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct BandwidthFigures {
+    /// Particles.
+    pub particles: usize,
+    /// Threads (1: serial chunks; 2: parallel chunks on a 2-thread pool).
+    pub threads: usize,
+    /// Scalar twin on one thread, ns per particle.
+    pub scalar_ns: f64,
+    /// SIMD integrate (predict + update), ns per particle.
+    pub simd_ns: f64,
+    /// The stream reference over the same arrays, ns per particle.
+    pub ceiling_ns: f64,
+    /// `ceiling_ns / simd_ns`: the fraction of the memory ceiling integrate reaches.
+    pub fraction: f64,
+}
+
+/// Measures integrate (scalar, SIMD) and the stream reference over `n` free particles on
+/// `threads` threads, interleaving the two SIMD timings so that load from other processes
+/// hits both alike.
+pub fn stream_figures(n: usize, threads: usize, reps: usize) -> Result<BandwidthFigures> {
+    let mut p = particle_cloud(n);
+    let par = threads > 1;
+    let pool = pool(threads)?;
+    let scalar = pool.install(|| time_integrate(&mut p, false, false, reps));
+    let (mut kern, mut ceil) = (Vec::new(), Vec::new());
+    for _ in 0..3 {
+        kern.push(pool.install(|| time_integrate(&mut p, true, par, reps)));
+        ceil.push(pool.install(|| time_stream_reference(&mut p, par, reps)));
+    }
+    let med = |v: &mut Vec<f64>| {
+        v.sort_by(|a, b| a.total_cmp(b));
+        v[v.len() / 2]
+    };
+    let (kern, ceil) = (med(&mut kern), med(&mut ceil));
+    let per = |t: f64| t * 1e9 / n as f64;
+    Ok(BandwidthFigures {
+        particles: n,
+        threads,
+        scalar_ns: per(scalar),
+        simd_ns: per(kern),
+        ceiling_ns: per(ceil),
+        fraction: ceil / kern,
+    })
 }
 
 /// Particles for a bandwidth measurement: `n` free particles on a line (no constraints).
@@ -92,14 +149,6 @@ pub fn particle_cloud(n: usize) -> Particles {
     let pos: Vec<[f32; 3]> = (0..n).map(|i| [i as f32 * 1e-3, 1.0, 0.0]).collect();
     p.extend(&pos, &vec![1.0; n]);
     p
-}
-
-/// Bandwidth of the integrate kernels (SIMD, parallel on the current pool) over `n` particles,
-/// in bytes per second, counting [`INTEGRATE_BYTES_PER_PARTICLE`].
-pub fn integrate_bandwidth(n: usize, reps: usize) -> f64 {
-    let mut p = particle_cloud(n);
-    let t = time_integrate(&mut p, true, true, reps);
-    n as f64 * INTEGRATE_BYTES_PER_PARTICLE / t
 }
 
 /// Seconds for one predict + update over `p` (SIMD or scalar twin, parallel or not).

@@ -6,11 +6,17 @@
 //! The SIMD kernel and the scalar twin perform the same operations in the same order without
 //! fused multiply-add, so they agree bit for bit; within a colour no particle repeats, so the
 //! order of constraints (and therefore chunking and thread count) cannot change the result.
+//!
+//! That freedom is used for speed: each colour is sorted by index offset `b − a`, then by `a`,
+//! so that on a grid most blocks of eight constraints read contiguous particles, and a
+//! [block plan](super::blocks) lets the kernel use contiguous loads and stores (or a fixed
+//! permutation of a 16-particle window) instead of gathers and scatters.
 
 use rayon::prelude::*;
 
+use crate::constraints::blocks::{plan, Block, Window, GATHER, RUN, WINDOW};
 use crate::constraints::colour::colour_pairs;
-use crate::lanes::{gather1, load, load_idx, round_up, store, F32s, SharedVec3, LANES};
+use crate::lanes::{gather1, load, load_idx, pick16, pick16_vec, round_up, store, F32s, SharedVec3, Vec3x8, LANES};
 
 /// Below this length a constraint has no direction and is skipped for the substep.
 pub const MIN_LENGTH: f32 = 1e-9;
@@ -33,6 +39,18 @@ pub struct Colour {
     pub lambda: Vec<f32>,
     /// Number of real (non-padding) constraints.
     pub real: usize,
+    /// One plan per block of eight constraints, derived from `a` and `b` (call
+    /// [`Colour::replan`] after changing them).
+    pub blocks: Vec<Block>,
+    /// The distinct window permutations the blocks name.
+    pub windows: Vec<Window>,
+}
+
+impl Colour {
+    /// Recomputes [`blocks`](Self::blocks) and [`windows`](Self::windows) from `a` and `b`.
+    pub fn replan(&mut self) {
+        (self.blocks, self.windows) = plan(&self.a, &self.b);
+    }
 }
 
 /// All distance constraints of a world, grouped by colour.
@@ -58,11 +76,17 @@ pub struct DistanceInput {
 impl DistanceSet {
     /// Colours the constraints and lays them out; `sink` is an inert padding particle.
     pub fn new(input: &[DistanceInput], particle_count: usize, sink: u32) -> Self {
-        let pairs: Vec<(u32, u32)> = input.iter().map(|c| (c.a, c.b)).collect();
+        // Colour (greedily) and lay out in order of index offset `b − a`, then `a`: on a grid
+        // each offset is one edge family, so each colour takes whole families in regular
+        // patterns, and every colour comes out sorted the same way, which the block plans
+        // turn into contiguous loads and stores.
+        let mut order: Vec<usize> = (0..input.len()).collect();
+        order.sort_by_key(|&k| (input[k].b as i64 - input[k].a as i64, input[k].a));
+        let pairs: Vec<(u32, u32)> = order.iter().map(|&k| (input[k].a, input[k].b)).collect();
         let (colour_of, count) = colour_pairs(&pairs, particle_count);
         let mut colours = vec![Colour::default(); count as usize];
-        for (c, &k) in input.iter().zip(&colour_of) {
-            let col = &mut colours[k as usize];
+        for (&k, &col) in order.iter().zip(&colour_of) {
+            let (c, col) = (&input[k], &mut colours[col as usize]);
             col.a.push(c.a);
             col.b.push(c.b);
             col.rest.push(c.rest);
@@ -76,6 +100,7 @@ impl DistanceSet {
             col.rest.resize(len, 0.0);
             col.compliance.resize(len, 0.0);
             col.lambda = vec![0.0; len];
+            col.replan();
         }
         colours.retain(|c| c.real > 0);
         DistanceSet { colours }
@@ -110,9 +135,20 @@ impl DistanceSet {
                     .zip(col.rest.par_chunks(CHUNK))
                     .zip(col.compliance.par_chunks(CHUNK))
                     .zip(col.lambda.par_chunks_mut(CHUNK))
-                    .for_each(|((((a, b), rest), comp), lambda)| solve_block_simd(a, b, rest, comp, lambda, &p, w, inv_h2));
+                    .zip(col.blocks.par_chunks(CHUNK / LANES))
+                    .for_each(|(((((a, b), rest), comp), lambda), blocks)| {
+                        let cons = Cons { a, b, rest, comp, blocks };
+                        solve_block_simd(&cons, lambda, &col.windows, &p, w, inv_h2)
+                    });
             } else {
-                solve_block_simd(&col.a, &col.b, &col.rest, &col.compliance, &mut col.lambda, &p, w, inv_h2);
+                let cons = Cons {
+                    a: &col.a,
+                    b: &col.b,
+                    rest: &col.rest,
+                    comp: &col.compliance,
+                    blocks: &col.blocks,
+                };
+                solve_block_simd(&cons, &mut col.lambda, &col.windows, &p, w, inv_h2);
             }
         }
     }
@@ -145,36 +181,82 @@ impl DistanceSet {
     }
 }
 
-#[allow(clippy::too_many_arguments)]
+/// One chunk of a colour's constraint arrays (a multiple of the lane width long).
+struct Cons<'a> {
+    a: &'a [u32],
+    b: &'a [u32],
+    rest: &'a [f32],
+    comp: &'a [f32],
+    blocks: &'a [Block],
+}
+
 #[inline]
-fn solve_block_simd(a: &[u32], b: &[u32], rest: &[f32], comp: &[f32], lambda: &mut [f32], p: &SharedVec3, w: &[f32], inv_h2: f32) {
+fn solve_block_simd(cons: &Cons<'_>, lambda: &mut [f32], windows: &[Window], p: &SharedVec3, w: &[f32], inv_h2: f32) {
     let inv_h2 = F32s::splat(inv_h2);
     let zero = F32s::ZERO;
     let min_len = F32s::splat(MIN_LENGTH);
-    for i in (0..a.len()).step_by(LANES) {
-        let ia = load_idx(a, i);
-        let ib = load_idx(b, i);
-        // SAFETY: indices were built below the padded particle count, and within one colour no
-        // particle appears in two constraints, so no other task touches these elements.
-        let (pa, pb) = unsafe { (p.gather(&ia), p.gather(&ib)) };
-        let wa = gather1(w, &ia);
-        let wb = gather1(w, &ib);
+    for (k, bl) in cons.blocks.iter().enumerate() {
+        let i = k * LANES;
+        let s = bl.first as usize;
+        // SAFETY (all particle accesses below): every index or run of indices comes from this
+        // block's constraints, which are below the padded particle count, and within one
+        // colour no particle appears in two constraints, so no other task touches them. A run
+        // block's `a` and `b` runs are disjoint; a window block owns all sixteen particles.
+        let (pa, pb, wa, wb) = match bl.kind {
+            GATHER => {
+                let (ia, ib) = (load_idx(cons.a, i), load_idx(cons.b, i));
+                unsafe { (p.gather(&ia), p.gather(&ib), gather1(w, &ia), gather1(w, &ib)) }
+            }
+            RUN => {
+                let t = bl.second as usize;
+                unsafe { (p.load_run(s), p.load_run(t), load(w, s), load(w, t)) }
+            }
+            kind => {
+                let win = &windows[(kind - WINDOW) as usize];
+                let (lo, hi) = unsafe { (p.load_run(s), p.load_run(s + LANES)) };
+                let (wl, wh) = (load(w, s), load(w, s + LANES));
+                let pa = pick16_vec(lo, hi, &win.pos_a);
+                let pb = pick16_vec(lo, hi, &win.pos_b);
+                (pa, pb, pick16(wl, wh, &win.pos_a), pick16(wl, wh, &win.pos_b))
+            }
+        };
         let d = pb - pa;
         let len = d.length_sq().sqrt();
-        let c = len - load(rest, i);
-        let alpha = load(comp, i) * inv_h2;
+        let c = len - load(cons.rest, i);
+        let alpha = load(cons.comp, i) * inv_h2;
         let denom = wa + wb + alpha;
         let lam = load(lambda, i);
         let valid = len.simd_gt(min_len) & denom.simd_gt(zero);
         let dl = valid.select((-c - alpha * lam) / denom, zero);
-        let s = valid.select(dl / len, zero);
-        let pa = pa - d.scale(wa * s);
-        let pb = pb + d.scale(wb * s);
+        let sc = valid.select(dl / len, zero);
+        let pa = pa - d.scale(wa * sc);
+        let pb = pb + d.scale(wb * sc);
         store(lambda, i, lam + dl);
-        // SAFETY: as above; `a` is scattered before `b`, and `a != b` for real constraints.
-        unsafe {
-            p.scatter(&ia, pa);
-            p.scatter(&ib, pb);
+        write_back(bl, windows, p, cons, i, pa, pb);
+    }
+}
+
+/// Writes a block's new positions back the way its plan read them.
+#[inline(always)]
+fn write_back(bl: &Block, windows: &[Window], p: &SharedVec3, cons: &Cons<'_>, i: usize, pa: Vec3x8, pb: Vec3x8) {
+    let s = bl.first as usize;
+    // SAFETY: as in `solve_block_simd`; for gathers `a` is scattered before `b`, and
+    // `a != b` for real constraints.
+    unsafe {
+        match bl.kind {
+            GATHER => {
+                p.scatter(&load_idx(cons.a, i), pa);
+                p.scatter(&load_idx(cons.b, i), pb);
+            }
+            RUN => {
+                p.store_run(s, pa);
+                p.store_run(bl.second as usize, pb);
+            }
+            kind => {
+                let win = &windows[(kind - WINDOW) as usize];
+                p.store_run(s, pick16_vec(pa, pb, &win.src_lo));
+                p.store_run(s + LANES, pick16_vec(pa, pb, &win.src_hi));
+            }
         }
     }
 }
@@ -235,6 +317,73 @@ mod tests {
                 prop_assert_eq!(bits(&s.1[k]), bits(&par.1[k]));
             }
         }
+    }
+
+    /// Grid edges as the cloth builder makes them: stretch, shear and bend.
+    fn grid_set(side: u32, seed: u64) -> (Vec<DistanceInput>, Vec<f32>, [Vec<f32>; 3]) {
+        let mut rnd = crate::test_rng::unit(seed);
+        let n = (side * side) as usize;
+        let len = round_up(n + 1);
+        let mut pos = [vec![0.0; len], vec![0.0; len], vec![0.0; len]];
+        let mut w = vec![0.0; len];
+        let mut cons = Vec::new();
+        for r in 0..side {
+            for c in 0..side {
+                let i = (r * side + c) as usize;
+                pos[0][i] = c as f32 * 0.01 + 0.002 * rnd();
+                pos[1][i] = 0.002 * rnd();
+                pos[2][i] = r as f32 * 0.01 + 0.002 * rnd();
+                w[i] = if r == 0 { 0.0 } else { 1.0 + rnd() };
+                let id = |r: u32, c: u32| r * side + c;
+                let mut push = |a, b, rest| cons.push(DistanceInput { a, b, rest, compliance: 1e-6 * rnd() });
+                for (dr, dc, rest) in [(0, 1, 0.01), (1, 0, 0.01), (1, 1, 0.014), (0, 2, 0.02), (2, 0, 0.02)] {
+                    if r + dr < side && c + dc < side {
+                        push(id(r, c), id(r + dr, c + dc), rest);
+                    }
+                }
+                if r + 1 < side && c + 1 < side {
+                    push(id(r, c + 1), id(r + 1, c), 0.014);
+                }
+            }
+        }
+        (cons, w, pos)
+    }
+
+    /// On a grid most blocks read contiguous runs or windows, and the SIMD kernel (serial and
+    /// in parallel chunks, 1 and 2 threads) still equals the scalar twin bit for bit.
+    #[test]
+    fn grid_blocks_are_planned_and_match_scalar_bitwise() {
+        use crate::constraints::blocks::{GATHER, RUN};
+        let side = 110;
+        let (cons, w, pos) = grid_set(side, 7);
+        let n = (side * side) as usize;
+        let set = DistanceSet::new(&cons, n, (round_up(n + 1) - 1) as u32);
+        let blocks: Vec<_> = set.colours.iter().flat_map(|c| c.blocks.iter().map(|b| b.kind)).collect();
+        let count = |f: &dyn Fn(u32) -> bool| blocks.iter().filter(|&&k| f(k)).count();
+        let (runs, windows, gathers) = (count(&|k| k == RUN), count(&|k| k > RUN), count(&|k| k == GATHER));
+        assert!(runs > blocks.len() / 3 && windows > blocks.len() / 4, "runs {runs} windows {windows} of {}", blocks.len());
+        assert!(gathers < blocks.len() / 4, "gathers {gathers} of {}", blocks.len());
+        assert!(set.colours.iter().any(|c| c.a.len() > 2 * CHUNK), "parallel chunks exercised");
+        let bits = |p: &[Vec<f32>; 3]| p.iter().flat_map(|a| a.iter().map(|f| f.to_bits())).collect::<Vec<_>>();
+        let run = |simd: bool, parallel: bool, threads: usize| {
+            let (mut s, mut p) = (set.clone(), pos.clone());
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| {
+                for _ in 0..3 {
+                    let [x, y, z] = &mut p;
+                    if simd {
+                        s.solve_simd(x, y, z, &w, 3.6e5, parallel);
+                    } else {
+                        s.solve_scalar(x, y, z, &w, 3.6e5);
+                    }
+                }
+            });
+            (bits(&p), s.colours.iter().flat_map(|c| c.lambda.iter().map(|l| l.to_bits())).collect::<Vec<_>>())
+        };
+        let want = run(false, false, 1);
+        assert_eq!(want, run(true, false, 1));
+        assert_eq!(want, run(true, true, 1));
+        assert_eq!(want, run(true, true, 2));
     }
 
     #[test]
