@@ -236,3 +236,108 @@ pub fn step_ms(world: &mut World, steps: usize) -> Result<f64> {
         None => Ok(t * 1e3),
     }
 }
+
+/// The large case: a square cloth of about `n` particles with stretch and bend only
+/// (no shear, no tethers, no pins) lying just above a sphere it drapes over, 5 substeps and
+/// 1 iteration, on `threads` threads.
+pub fn sphere_drape_world(n: usize, threads: usize) -> Result<World> {
+    use crate::collide::obstacles::Obstacle;
+    use crate::collide::shapes::Shape;
+    let side = (n as f64).sqrt().round().max(2.0) as u32;
+    let spacing = 2.0 / side as f32;
+    let desc = ClothDesc {
+        rows: side,
+        cols: side,
+        spacing,
+        origin: [-1.0, 1.0, -1.0],
+        u: [1.0, 0.0, 0.0],
+        v: [0.0, 0.0, 1.0],
+        pins: Vec::new(),
+        shear: false,
+        bend: true,
+        tethers: None,
+        ..Default::default()
+    };
+    let params = SolverParams {
+        threads,
+        substeps: 5,
+        iterations: 1,
+        ..Default::default()
+    };
+    let mut w = World::new(params, Effects::gravity())?;
+    w.add_cloth(&desc)?;
+    w.add_obstacle(Obstacle::shape(Shape::Sphere {
+        center: [0.0, 0.49, 0.0],
+        radius: 0.5,
+    })?)?;
+    Ok(w)
+}
+
+/// One stage of the XPBD substep, timed on its own.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct StageFigure {
+    /// Stage name (as in the step's stage list, [`crate::step`]).
+    pub stage: &'static str,
+    /// Milliseconds per substep.
+    pub ms: f64,
+    /// Nanoseconds per particle per substep.
+    pub ns_per_particle: f64,
+}
+
+/// Times each stage of one substep of `world` (XPBD, SIMD, on a pool of `threads` threads),
+/// median of `reps` runs each, running the same kernels the step runs on the world's own
+/// state (which the repeated runs advance; only the cost is of interest). Step the world a few
+/// times first so that contacts exist.
+pub fn stage_times(world: &mut World, threads: usize, reps: usize) -> Result<Vec<StageFigure>> {
+    let pool = pool(threads)?;
+    let n = world.particle_count() as f64;
+    let h = world.params.dt / world.params.substeps as f32;
+    let inv_h2 = 1.0 / (h * h);
+    let t = world.time;
+    let w = world;
+    let mut out = Vec::new();
+    let mut add = |stage, secs: f64| {
+        out.push(StageFigure {
+            stage,
+            ms: secs * 1e3,
+            ns_per_particle: secs * 1e9 / n,
+        })
+    };
+    pool.install(|| {
+        let pp = PredictParams {
+            h,
+            gravity: w.effects.gravity,
+            drag: w.effects.drag,
+            force: None,
+        };
+        add("predict", median_secs(reps, || w.particles.for_chunks(true, |c| predict(c, &pp, true))));
+        if !w.obstacles.is_empty() {
+            w.obstacles.prepare(&w.particles, &w.cloths, &w.strands);
+            let contacts = median_secs(reps, || {
+                w.obstacles.generate(&w.particles, t, h, true, true);
+                w.obstacles.resolve(&mut w.particles, h, true);
+            });
+            add("obstacle contacts", contacts);
+        }
+        let solve = median_secs(reps, || {
+            let p = &mut w.particles;
+            w.distance.reset_lambda();
+            w.distance.solve_simd(&mut p.px, &mut p.py, &mut p.pz, &p.w, inv_h2, true);
+        });
+        add("distance constraints", solve);
+        if !w.tethers.is_empty() {
+            let p = &mut w.particles;
+            add("tethers", median_secs(reps, || w.tethers.solve_simd(&mut p.px, &mut p.py, &mut p.pz, true)));
+        }
+        if !w.obstacles.is_empty() {
+            add("obstacle projection", median_secs(reps, || w.obstacles.project(&mut w.particles, true, true)));
+        }
+        let sized = w.damp_factor.len() >= w.particles.padded_len();
+        let damp = (w.has_damping && sized).then_some(&w.damp_factor[..]);
+        add("update", median_secs(reps, || w.particles.for_chunks(true, |c| update(c, h, damp, true))));
+        if !w.obstacles.is_empty() {
+            add("obstacle velocity", median_secs(reps, || w.obstacles.velocity_pass(&mut w.particles, true)));
+        }
+    });
+    Ok(out)
+}
