@@ -88,13 +88,16 @@ fn stream_update(c: ParticleChunk<'_>) {
     }
 }
 
-/// Seconds for one pass of the stream reference over `p` (both passes, SIMD, parallel chunks
-/// when `parallel`): the memory ceiling of the integrate kernels' access pattern.
+/// The stream reference over `p`: both passes, SIMD, in parallel chunks when `parallel` (on
+/// the current rayon pool) — the memory ceiling of the integrate kernels' access pattern.
+pub fn stream_reference(p: &mut Particles, parallel: bool) {
+    p.for_chunks(parallel, stream_predict);
+    p.for_chunks(parallel, stream_update);
+}
+
+/// Median seconds of [`stream_reference`] over `reps` runs.
 pub fn time_stream_reference(p: &mut Particles, parallel: bool, reps: usize) -> f64 {
-    median_secs(reps, || {
-        p.for_chunks(parallel, stream_predict);
-        p.for_chunks(parallel, stream_update);
-    })
+    median_secs(reps, || stream_reference(p, parallel))
 }
 
 /// Integrate against its memory ceiling at one size and thread count.
@@ -310,7 +313,10 @@ pub fn stage_times(world: &mut World, threads: usize, reps: usize) -> Result<Vec
             drag: w.effects.drag,
             force: None,
         };
-        add("predict", median_secs(reps, || w.particles.for_chunks(true, |c| predict(c, &pp, true))));
+        add(
+            "predict",
+            median_secs(reps, || w.particles.for_chunks(true, |c| predict(c, &pp, true))),
+        );
         if !w.obstacles.is_empty() {
             w.obstacles.prepare(&w.particles, &w.cloths, &w.strands);
             let contacts = median_secs(reps, || {
@@ -327,16 +333,28 @@ pub fn stage_times(world: &mut World, threads: usize, reps: usize) -> Result<Vec
         add("distance constraints", solve);
         if !w.tethers.is_empty() {
             let p = &mut w.particles;
-            add("tethers", median_secs(reps, || w.tethers.solve_simd(&mut p.px, &mut p.py, &mut p.pz, true)));
+            add(
+                "tethers",
+                median_secs(reps, || w.tethers.solve_simd(&mut p.px, &mut p.py, &mut p.pz, true)),
+            );
         }
         if !w.obstacles.is_empty() {
-            add("obstacle projection", median_secs(reps, || w.obstacles.project(&mut w.particles, true, true)));
+            add(
+                "obstacle projection",
+                median_secs(reps, || w.obstacles.project(&mut w.particles, true, true)),
+            );
         }
         let sized = w.damp_factor.len() >= w.particles.padded_len();
         let damp = (w.has_damping && sized).then_some(&w.damp_factor[..]);
-        add("update", median_secs(reps, || w.particles.for_chunks(true, |c| update(c, h, damp, true))));
+        add(
+            "update",
+            median_secs(reps, || w.particles.for_chunks(true, |c| update(c, h, damp, true))),
+        );
         if !w.obstacles.is_empty() {
-            add("obstacle velocity", median_secs(reps, || w.obstacles.velocity_pass(&mut w.particles, true)));
+            add(
+                "obstacle velocity",
+                median_secs(reps, || w.obstacles.velocity_pass(&mut w.particles, true)),
+            );
         }
     });
     Ok(out)

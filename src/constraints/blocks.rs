@@ -90,9 +90,7 @@ pub fn plan(a: &[u32], b: &[u32]) -> (Vec<Block>, Vec<Window>) {
         .chunks_exact(LANES)
         .zip(b.chunks_exact(LANES))
         .map(|(a, b)| {
-            let run = (0..LANES).all(|l| {
-                a[0].checked_add(l as u32) == Some(a[l]) && b[0].checked_add(l as u32) == Some(b[l])
-            });
+            let run = (0..LANES).all(|l| a[0].checked_add(l as u32) == Some(a[l]) && b[0].checked_add(l as u32) == Some(b[l]));
             let disjoint = a[0].abs_diff(b[0]) >= LANES as u32;
             if run && disjoint {
                 return Block {

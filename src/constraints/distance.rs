@@ -335,7 +335,14 @@ mod tests {
                 pos[2][i] = r as f32 * 0.01 + 0.002 * rnd();
                 w[i] = if r == 0 { 0.0 } else { 1.0 + rnd() };
                 let id = |r: u32, c: u32| r * side + c;
-                let mut push = |a, b, rest| cons.push(DistanceInput { a, b, rest, compliance: 1e-6 * rnd() });
+                let mut push = |a, b, rest| {
+                    cons.push(DistanceInput {
+                        a,
+                        b,
+                        rest,
+                        compliance: 1e-6 * rnd(),
+                    })
+                };
                 for (dr, dc, rest) in [(0, 1, 0.01), (1, 0, 0.01), (1, 1, 0.014), (0, 2, 0.02), (2, 0, 0.02)] {
                     if r + dr < side && c + dc < side {
                         push(id(r, c), id(r + dr, c + dc), rest);
@@ -361,7 +368,11 @@ mod tests {
         let blocks: Vec<_> = set.colours.iter().flat_map(|c| c.blocks.iter().map(|b| b.kind)).collect();
         let count = |f: &dyn Fn(u32) -> bool| blocks.iter().filter(|&&k| f(k)).count();
         let (runs, windows, gathers) = (count(&|k| k == RUN), count(&|k| k > RUN), count(&|k| k == GATHER));
-        assert!(runs > blocks.len() / 3 && windows > blocks.len() / 4, "runs {runs} windows {windows} of {}", blocks.len());
+        assert!(
+            runs > blocks.len() / 3 && windows > blocks.len() / 4,
+            "runs {runs} windows {windows} of {}",
+            blocks.len()
+        );
         assert!(gathers < blocks.len() / 4, "gathers {gathers} of {}", blocks.len());
         assert!(set.colours.iter().any(|c| c.a.len() > 2 * CHUNK), "parallel chunks exercised");
         let bits = |p: &[Vec<f32>; 3]| p.iter().flat_map(|a| a.iter().map(|f| f.to_bits())).collect::<Vec<_>>();
@@ -378,7 +389,13 @@ mod tests {
                     }
                 }
             });
-            (bits(&p), s.colours.iter().flat_map(|c| c.lambda.iter().map(|l| l.to_bits())).collect::<Vec<_>>())
+            (
+                bits(&p),
+                s.colours
+                    .iter()
+                    .flat_map(|c| c.lambda.iter().map(|l| l.to_bits()))
+                    .collect::<Vec<_>>(),
+            )
         };
         let want = run(false, false, 1);
         assert_eq!(want, run(true, false, 1));

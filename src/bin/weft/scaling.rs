@@ -46,10 +46,16 @@ fn measure() -> weft::Result<Vec<Point>> {
 
 fn table(points: &[Point]) -> String {
     let mut s = String::new();
-    let _ = writeln!(s, "| scene | particles | 1 thread ms/step | 2 threads ms/step | 2t speedup | 2t ns/particle/step |");
+    let _ = writeln!(
+        s,
+        "| scene | particles | 1 thread ms/step | 2 threads ms/step | 2t speedup | 2t ns/particle/step |"
+    );
     let _ = writeln!(s, "|---|---:|---:|---:|---:|---:|");
     for one in points.iter().filter(|p| p.threads == 1) {
-        let Some(two) = points.iter().find(|p| p.threads == 2 && p.scene == one.scene && p.particles == one.particles) else {
+        let Some(two) = points
+            .iter()
+            .find(|p| p.threads == 2 && p.scene == one.scene && p.particles == one.particles)
+        else {
             continue;
         };
         let _ = writeln!(
