@@ -35,7 +35,9 @@ pub struct Colour {
     pub rest: Vec<f32>,
     /// Compliance, m/N.
     pub compliance: Vec<f32>,
-    /// Accumulated Lagrange multiplier of the current substep.
+    /// Accumulated Lagrange multiplier of the current substep. After
+    /// [`DistanceSet::reset_lambda`] the stored values are stale and read as zero by the next
+    /// sweep, which overwrites them.
     pub lambda: Vec<f32>,
     /// Number of real (non-padding) constraints.
     pub real: usize,
@@ -58,6 +60,8 @@ impl Colour {
 pub struct DistanceSet {
     /// The colours, solved in order.
     pub colours: Vec<Colour>,
+    /// Multipliers were reset and not yet written: the next sweep reads them as zero.
+    lambda_reset: bool,
 }
 
 /// A distance constraint given to [`DistanceSet::new`] (global particle indices).
@@ -103,7 +107,10 @@ impl DistanceSet {
             col.replan();
         }
         colours.retain(|c| c.real > 0);
-        DistanceSet { colours }
+        DistanceSet {
+            colours,
+            lambda_reset: false,
+        }
     }
 
     /// Number of real constraints.
@@ -116,17 +123,23 @@ impl DistanceSet {
         self.len() == 0
     }
 
-    /// Sets every multiplier to zero (start of a substep).
+    /// Sets every multiplier to zero (start of a substep). Lazily: the next sweep reads zero
+    /// instead of the stored values and writes them, which saves one pass over the
+    /// multipliers and one read of them per substep (with one iteration, the common case,
+    /// the multipliers are then only ever written).
     pub fn reset_lambda(&mut self) {
-        for c in &mut self.colours {
-            c.lambda.fill(0.0);
-        }
+        self.lambda_reset = true;
     }
 
     /// One Gauss–Seidel sweep over all colours, SIMD, each colour in parallel chunks when
     /// `parallel` (on the current rayon pool).
     pub fn solve_simd(&mut self, px: &mut [f32], py: &mut [f32], pz: &mut [f32], w: &[f32], inv_h2: f32, parallel: bool) {
         let p = SharedVec3::new(px, py, pz);
+        let solve = if std::mem::take(&mut self.lambda_reset) {
+            solve_block_simd::<true>
+        } else {
+            solve_block_simd::<false>
+        };
         for col in &mut self.colours {
             if parallel && col.a.len() > CHUNK {
                 col.a
@@ -138,7 +151,7 @@ impl DistanceSet {
                     .zip(col.blocks.par_chunks(CHUNK / LANES))
                     .for_each(|(((((a, b), rest), comp), lambda), blocks)| {
                         let cons = Cons { a, b, rest, comp, blocks };
-                        solve_block_simd(&cons, lambda, &col.windows, &p, w, inv_h2)
+                        solve(&cons, lambda, &col.windows, &p, w, inv_h2)
                     });
             } else {
                 let cons = Cons {
@@ -148,7 +161,7 @@ impl DistanceSet {
                     comp: &col.compliance,
                     blocks: &col.blocks,
                 };
-                solve_block_simd(&cons, &mut col.lambda, &col.windows, &p, w, inv_h2);
+                solve(&cons, &mut col.lambda, &col.windows, &p, w, inv_h2);
             }
         }
     }
@@ -156,8 +169,10 @@ impl DistanceSet {
     /// The scalar f32 twin of [`solve_simd`](Self::solve_simd): one constraint at a time,
     /// one thread, the same arithmetic.
     pub fn solve_scalar(&mut self, px: &mut [f32], py: &mut [f32], pz: &mut [f32], w: &[f32], inv_h2: f32) {
+        let reset = std::mem::take(&mut self.lambda_reset);
         for col in &mut self.colours {
             for k in 0..col.a.len() {
+                let lam = if reset { 0.0 } else { col.lambda[k] };
                 let (a, b) = (col.a[k] as usize, col.b[k] as usize);
                 let (wa, wb) = (w[a], w[b]);
                 let (dx, dy, dz) = (px[b] - px[a], py[b] - py[a], pz[b] - pz[a]);
@@ -166,7 +181,7 @@ impl DistanceSet {
                 let alpha = col.compliance[k] * inv_h2;
                 let denom = wa + wb + alpha;
                 let valid = len > MIN_LENGTH && denom > 0.0;
-                let dl = if valid { (-c - alpha * col.lambda[k]) / denom } else { 0.0 };
+                let dl = if valid { (-c - alpha * lam) / denom } else { 0.0 };
                 let s = if valid { dl / len } else { 0.0 };
                 let (sa, sb) = (wa * s, wb * s);
                 px[a] -= dx * sa;
@@ -175,7 +190,7 @@ impl DistanceSet {
                 px[b] += dx * sb;
                 py[b] += dy * sb;
                 pz[b] += dz * sb;
-                col.lambda[k] += dl;
+                col.lambda[k] = lam + dl;
             }
         }
     }
@@ -190,8 +205,9 @@ struct Cons<'a> {
     blocks: &'a [Block],
 }
 
+/// One chunk of a colour, eight constraints at a time; `RESET`: the multipliers read as zero.
 #[inline]
-fn solve_block_simd(cons: &Cons<'_>, lambda: &mut [f32], windows: &[Window], p: &SharedVec3, w: &[f32], inv_h2: f32) {
+fn solve_block_simd<const RESET: bool>(cons: &Cons<'_>, lambda: &mut [f32], windows: &[Window], p: &SharedVec3, w: &[f32], inv_h2: f32) {
     let inv_h2 = F32s::splat(inv_h2);
     let zero = F32s::ZERO;
     let min_len = F32s::splat(MIN_LENGTH);
@@ -225,7 +241,7 @@ fn solve_block_simd(cons: &Cons<'_>, lambda: &mut [f32], windows: &[Window], p: 
         let c = len - load(cons.rest, i);
         let alpha = load(cons.comp, i) * inv_h2;
         let denom = wa + wb + alpha;
-        let lam = load(lambda, i);
+        let lam = if RESET { zero } else { load(lambda, i) };
         let valid = len.simd_gt(min_len) & denom.simd_gt(zero);
         let dl = valid.select((-c - alpha * lam) / denom, zero);
         let sc = valid.select(dl / len, zero);
@@ -303,7 +319,13 @@ mod tests {
             let mut s = (set.clone(), pos.clone());
             let mut v = (set.clone(), pos.clone());
             let mut par = (set, pos);
-            for _ in 0..3 {
+            for sweep in 0..3 {
+                if sweep == 1 {
+                    // A new substep between sweeps: the lazy reset must act like zeroing.
+                    s.0.reset_lambda();
+                    v.0.reset_lambda();
+                    par.0.reset_lambda();
+                }
                 let [x, y, z] = &mut s.1;
                 s.0.solve_scalar(x, y, z, &w, inv_h2);
                 let [x, y, z] = &mut v.1;
@@ -380,7 +402,10 @@ mod tests {
             let (mut s, mut p) = (set.clone(), pos.clone());
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
             pool.install(|| {
-                for _ in 0..3 {
+                for sweep in 0..3 {
+                    if sweep == 2 {
+                        s.reset_lambda();
+                    }
                     let [x, y, z] = &mut p;
                     if simd {
                         s.solve_simd(x, y, z, &w, 3.6e5, parallel);
@@ -401,6 +426,32 @@ mod tests {
         assert_eq!(want, run(true, false, 1));
         assert_eq!(want, run(true, true, 1));
         assert_eq!(want, run(true, true, 2));
+    }
+
+    /// The lazy reset gives the bits of explicitly zeroed multipliers, SIMD and scalar.
+    #[test]
+    fn lazy_reset_equals_zeroed_multipliers() {
+        let (cons, w, pos) = grid_set(40, 3);
+        let n = 1600;
+        let mut set = DistanceSet::new(&cons, n, (round_up(n + 1) - 1) as u32);
+        let mut p0 = pos.clone();
+        let [x, y, z] = &mut p0;
+        set.solve_simd(x, y, z, &w, 1e4, false);
+        for simd in [false, true] {
+            let (mut lazy, mut eager) = (set.clone(), set.clone());
+            let (mut pl, mut pe) = (p0.clone(), p0.clone());
+            lazy.reset_lambda();
+            eager.colours.iter_mut().for_each(|c| c.lambda.fill(0.0));
+            for (s, p) in [(&mut lazy, &mut pl), (&mut eager, &mut pe)] {
+                let [x, y, z] = p;
+                if simd {
+                    s.solve_simd(x, y, z, &w, 1e4, false);
+                } else {
+                    s.solve_scalar(x, y, z, &w, 1e4);
+                }
+            }
+            assert!(pl == pe && lazy.colours == eager.colours, "simd {simd}");
+        }
     }
 
     #[test]
