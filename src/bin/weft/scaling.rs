@@ -44,8 +44,23 @@ fn measure() -> weft::Result<Vec<Point>> {
     Ok(out)
 }
 
-fn table(points: &[Point]) -> String {
+/// The 1-minute load average before and after the sweep (Linux), so a reader can tell whether
+/// other processes shared the cores: 2-thread figures mean little when the load exceeds the
+/// core count minus two.
+fn load_average() -> Option<String> {
+    let s = std::fs::read_to_string("/proc/loadavg").ok()?;
+    s.split_whitespace().next().map(str::to_string)
+}
+
+fn table(points: &[Point], load: (Option<String>, Option<String>)) -> String {
     let mut s = String::new();
+    let cores = std::thread::available_parallelism().map_or(0, |n| n.get());
+    if let (Some(a), Some(b)) = load {
+        let _ = writeln!(
+            s,
+            "Measured on {cores} cores; 1-minute load average {a} before, {b} after the sweep.\n"
+        );
+    }
     let _ = writeln!(
         s,
         "| scene | particles | 1 thread ms/step | 2 threads ms/step | 2t speedup | 2t ns/particle/step |"
@@ -131,8 +146,9 @@ fn plot(points: &[Point], path: &Path) -> weft::Result<()> {
 /// Runs the sweep, prints the table, writes `dir/scaling.md` and `dir/scaling.svg`.
 pub fn scaling(dir: &Path) -> weft::Result<()> {
     std::fs::create_dir_all(dir).map_err(|e| weft::WeftError::io(dir, e))?;
+    let before = load_average();
     let points = measure()?;
-    let t = table(&points);
+    let t = table(&points, (before, load_average()));
     print!("{t}");
     let md = dir.join("scaling.md");
     std::fs::write(&md, &t).map_err(|e| weft::WeftError::io(&md, e))?;
