@@ -24,8 +24,8 @@ pub const MIN_LENGTH: f32 = 1e-9;
 /// Constraints per parallel task (a multiple of the lane width).
 pub const CHUNK: usize = 2048;
 
-/// An offset family (constraints with the same `b − a`) at least this large gets colours of its
-/// own (see [`DistanceSet::new`]).
+/// An offset family (constraints with the same `b − a`) at least this large is coloured apart
+/// from the irregular rest, in order of `a` (see [`DistanceSet::new`]).
 pub const FAMILY_MIN: usize = 1024;
 
 /// One colour: constraints that share no particle.
@@ -84,27 +84,26 @@ pub struct DistanceInput {
 impl DistanceSet {
     /// Colours the constraints and lays them out; `sink` is an inert padding particle.
     pub fn new(input: &[DistanceInput], particle_count: usize, sink: u32) -> Self {
-        // A large offset family (same `b − a`: on a grid, horizontal stretch, vertical bend, one
-        // shear diagonal...) is coloured greedily on its own, in order of `a`, which gives it
-        // two regular colours (alternate edges, alternate rows). The rest (irregular meshes,
-        // short pieces, any world below `FAMILY_MIN` per family) is coloured together in input
-        // order, as it always was, so small worlds keep their Gauss–Seidel order. Each colour is
-        // then laid out by offset and `a` (free within a colour), which the block plans turn
-        // into contiguous loads and stores.
+        // Large offset families (same `b − a`: on a grid, horizontal stretch, vertical bend, a
+        // shear diagonal...) are coloured greedily family after family, each in order of `a`,
+        // which gives mostly regular colours (alternate edges, alternate rows). The rest
+        // (irregular meshes, short pieces, any world below `FAMILY_MIN` per family) is coloured
+        // on its own in input order, as it always was, so small worlds keep their Gauss–Seidel
+        // order. Each colour is then laid out by offset and `a` (free within a colour), which
+        // the block plans turn into contiguous loads and stores.
         let offset = |k: usize| input[k].b as i64 - input[k].a as i64;
         let mut order: Vec<usize> = (0..input.len()).collect();
         order.sort_by_key(|&k| (offset(k), input[k].a));
-        let mut groups: Vec<Vec<usize>> = Vec::new();
-        let mut rest: Vec<usize> = Vec::new();
+        let (mut large, mut rest) = (Vec::new(), Vec::new());
         for family in order.chunk_by(|&i, &j| offset(i) == offset(j)) {
             if family.len() >= FAMILY_MIN {
-                groups.push(family.to_vec());
+                large.extend_from_slice(family);
             } else {
                 rest.extend_from_slice(family);
             }
         }
         rest.sort_unstable();
-        groups.push(rest);
+        let groups = [large, rest];
         let (mut colour_of, mut count) = (vec![0u32; input.len()], 0u32);
         for g in &groups {
             let pairs: Vec<(u32, u32)> = g.iter().map(|&k| (input[k].a, input[k].b)).collect();
