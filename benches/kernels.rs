@@ -2,6 +2,12 @@
 //! twin, SIMD on one thread, and SIMD on two threads, for N = 1k, 10k, 100k, 1M particles.
 //! Ratios are always against the scalar f32 twin (never the f64 reference).
 //!
+//! `integrate/stream_ref*` is the memory ceiling of the integrate kernels' access pattern
+//! (`weft::perf::stream_reference`: the same arrays read and written, in place, in the
+//! same chunks, trivial arithmetic); integrate's fraction of it is `stream_ref / simd`.
+//! `drape_1m` is the large case: a 1M-particle cloth (stretch + bend) over a sphere,
+//! 5 substeps, 1 iteration, on 2 threads.
+//!
 //! Run: `cargo bench --bench kernels` (add `-- --quick` for a shorter run).
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
@@ -63,6 +69,12 @@ fn integrate(c: &mut Criterion) {
         g.bench_with_input(BenchmarkId::new("simd_2threads", n), &n, |b, _| {
             two.install(|| b.iter(|| run(&mut p, true, true)))
         });
+        g.bench_with_input(BenchmarkId::new("stream_ref", n), &n, |b, _| {
+            one.install(|| b.iter(|| weft::perf::stream_reference(&mut p, false)))
+        });
+        g.bench_with_input(BenchmarkId::new("stream_ref_2threads", n), &n, |b, _| {
+            two.install(|| b.iter(|| weft::perf::stream_reference(&mut p, true)))
+        });
     }
     g.finish();
 }
@@ -111,5 +123,14 @@ fn step(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, integrate, solve, step);
+fn drape(c: &mut Criterion) {
+    let mut g = c.benchmark_group("drape_1m");
+    g.sample_size(10);
+    let mut w = weft::perf::sphere_drape_world(1_000_000, 2).unwrap();
+    g.throughput(Throughput::Elements(w.particle_count() as u64));
+    g.bench_function("sphere_2threads", |b| b.iter(|| w.step(1.0 / 60.0).unwrap()));
+    g.finish();
+}
+
+criterion_group!(benches, integrate, solve, step, drape);
 criterion_main!(benches);

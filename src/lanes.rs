@@ -146,6 +146,51 @@ pub fn gather1(s: &[f32], idx: &Idx8) -> F32s {
     F32s::from(v)
 }
 
+/// Lane positions in a window of two lane groups: entry `l` (0..16) names element `l % 8` of
+/// the low (`l < 8`) or high group.
+pub type Pos8 = [u32; LANES];
+
+/// Picks from the 16-element window `lo ‖ hi`: lane `l` of the result is element `pos[l]`.
+/// Pure data movement (no rounding), so it cannot change a result bit. On AVX2 this is two
+/// `vpermps` and one `vblendvps`; elsewhere a portable array version.
+#[inline(always)]
+pub fn pick16(lo: F32s, hi: F32s, pos: &Pos8) -> F32s {
+    #[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
+    {
+        use std::arch::x86_64::{__m256, __m256i, _mm256_blendv_ps, _mm256_castsi256_ps, _mm256_permutevar8x32_ps, _mm256_slli_epi32};
+        let idx: __m256i = bytemuck::cast(*pos);
+        let lo: __m256 = bytemuck::cast(lo);
+        let hi: __m256 = bytemuck::cast(hi);
+        // SAFETY: the cfg guarantees AVX2 at compile time; these are register-only intrinsics.
+        let r = unsafe {
+            // Bit 3 of the position (high group) moved to the sign bit selects the blend.
+            let high = _mm256_castsi256_ps(_mm256_slli_epi32::<28>(idx));
+            _mm256_blendv_ps(_mm256_permutevar8x32_ps(lo, idx), _mm256_permutevar8x32_ps(hi, idx), high)
+        };
+        bytemuck::cast(r)
+    }
+    #[cfg(not(all(target_arch = "x86_64", target_feature = "avx2")))]
+    {
+        let (lo, hi) = (lo.to_array(), hi.to_array());
+        let mut v = [0.0f32; LANES];
+        for l in 0..LANES {
+            let q = pos[l] as usize & 15;
+            v[l] = if q < LANES { lo[q] } else { hi[q - LANES] };
+        }
+        F32s::from(v)
+    }
+}
+
+/// [`pick16`] on each component of two 3-vector groups.
+#[inline(always)]
+pub fn pick16_vec(lo: Vec3x8, hi: Vec3x8, pos: &Pos8) -> Vec3x8 {
+    Vec3x8 {
+        x: pick16(lo.x, hi.x, pos),
+        y: pick16(lo.y, hi.y, pos),
+        z: pick16(lo.z, hi.z, pos),
+    }
+}
+
 /// A raw view of three particle arrays (`x`, `y`, `z`) that parallel tasks may gather from and
 /// scatter into at indices that no other task touches at the same time.
 ///
@@ -235,6 +280,38 @@ impl SharedVec3 {
         }
     }
 
+    /// Loads the eight consecutive 3-vectors at `i..i + 8` (contiguous loads, no gather).
+    ///
+    /// # Safety
+    /// `i + 8 <= len`, and no other thread may be writing these elements.
+    #[inline(always)]
+    pub unsafe fn load_run(&self, i: usize) -> Vec3x8 {
+        debug_assert!(i + LANES <= self.len);
+        // SAFETY: the caller guarantees the range is in bounds and not concurrently written.
+        unsafe {
+            Vec3x8 {
+                x: F32s::from(self.x.add(i).cast::<[f32; LANES]>().read_unaligned()),
+                y: F32s::from(self.y.add(i).cast::<[f32; LANES]>().read_unaligned()),
+                z: F32s::from(self.z.add(i).cast::<[f32; LANES]>().read_unaligned()),
+            }
+        }
+    }
+
+    /// Stores eight 3-vectors at `i..i + 8` (contiguous stores, no scatter).
+    ///
+    /// # Safety
+    /// `i + 8 <= len`, and no other thread may read or write these elements.
+    #[inline(always)]
+    pub unsafe fn store_run(&self, i: usize, v: Vec3x8) {
+        debug_assert!(i + LANES <= self.len);
+        // SAFETY: the caller guarantees the range is in bounds and exclusively owned.
+        unsafe {
+            self.x.add(i).cast::<[f32; LANES]>().write_unaligned(v.x.to_array());
+            self.y.add(i).cast::<[f32; LANES]>().write_unaligned(v.y.to_array());
+            self.z.add(i).cast::<[f32; LANES]>().write_unaligned(v.z.to_array());
+        }
+    }
+
     /// Reads one 3-vector.
     ///
     /// # Safety
@@ -272,6 +349,29 @@ mod tests {
         assert_eq!(round_up(1), 8);
         assert_eq!(round_up(8), 8);
         assert_eq!(round_up(9), 16);
+    }
+
+    #[test]
+    fn pick16_reads_the_named_window_element() {
+        let lo = F32s::from([0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0]);
+        let hi = F32s::from([8.0, 9.0, 10.0, 11.0, 12.0, 13.0, 14.0, 15.0]);
+        let pos: Pos8 = [15, 0, 9, 7, 8, 3, 12, 1];
+        let want: Vec<f32> = pos.iter().map(|&q| q as f32).collect();
+        assert_eq!(pick16(lo, hi, &pos).to_array().to_vec(), want);
+    }
+
+    #[test]
+    fn run_load_store_roundtrip() {
+        let mut x: Vec<f32> = (0..20).map(|i| i as f32).collect();
+        let mut y = x.clone();
+        let mut z = x.clone();
+        let s = SharedVec3::new(&mut x, &mut y, &mut z);
+        // SAFETY: single thread, 3 + 8 <= 20.
+        let v = unsafe { s.load_run(3) };
+        assert_eq!(v.y.to_array(), [3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0, 10.0]);
+        // SAFETY: as above.
+        unsafe { s.store_run(3, v + Vec3x8::splat([1.0, 2.0, 3.0])) };
+        assert_eq!((x[2], x[3], y[10], z[11]), (2.0, 4.0, 12.0, 11.0));
     }
 
     #[test]

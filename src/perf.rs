@@ -1,6 +1,13 @@
 //! Quick performance report (`weft bench`): per-kernel cost, SIMD/scalar and 2-thread/1-thread
 //! ratios, the integrate kernel against a memory-bandwidth reference, and whole-scene step
-//! times. Medians over repeated runs, measured in one process so the ratios are comparable;
+//! times.
+//!
+//! The bandwidth reference for integrate is [`stream_reference`]: two passes that read exactly
+//! the arrays predict and update read and write exactly the arrays they write, in place, in
+//! the same chunks on the same pool, with one add or subtract per value. Both therefore move
+//! the same bytes with the same write-allocate traffic, so `t_stream / t_integrate` is the
+//! fraction of what the memory system allows for this access pattern, with no byte counting
+//! (a triad `a = b + s c` has a different read/write mix and overstates or understates it). Medians over repeated runs, measured in one process so the ratios are comparable;
 //! criterion benches (`cargo bench`) are the careful version of the same figures.
 
 use std::time::Instant;
@@ -10,14 +17,10 @@ use crate::constraints::DistanceSet;
 use crate::effects::Effects;
 use crate::error::{Result, WeftError};
 use crate::integrate::{predict, update, PredictParams};
+use crate::lanes::{load, Vec3x8, LANES};
 use crate::params::SolverParams;
-use crate::particles::Particles;
+use crate::particles::{ParticleChunk, Particles};
 use crate::world::World;
-
-/// Bytes the integrate kernels (predict + update) move per particle: predict reads x, y, z,
-/// vx, vy, vz, w and writes vx, vy, vz, px, py, pz; update reads px, py, pz, x, y, z and
-/// writes vx, vy, vz, x, y, z — 25 arrays of f32.
-pub const INTEGRATE_BYTES_PER_PARTICLE: f64 = 25.0 * 4.0;
 
 /// Median of `reps` timings of `f`, in seconds.
 pub fn median_secs(reps: usize, mut f: impl FnMut()) -> f64 {
@@ -62,28 +65,85 @@ pub fn cloth_world(n: usize, threads: usize) -> Result<World> {
     Ok(w)
 }
 
-/// Memory bandwidth reference: a triad `a = b + s c` over arrays totalling `bytes`, on the
-/// current rayon pool (in parallel chunks), in bytes per second (loads plus stores, the same
-/// accounting as the kernels). Use a size far beyond the last-level cache.
-pub fn triad_bandwidth(bytes: usize, reps: usize) -> f64 {
-    use rayon::prelude::*;
-    let n = (bytes / 12).max(1024);
-    let b = vec![1.0f32; n];
-    let c = vec![2.0f32; n];
-    let mut a = vec![0.0f32; n];
-    let s = 0.5f32;
-    let t = median_secs(reps, || {
-        a.par_chunks_mut(1 << 16)
-            .zip(b.par_chunks(1 << 16))
-            .zip(c.par_chunks(1 << 16))
-            .for_each(|((a, b), c)| {
-                for ((a, b), c) in a.iter_mut().zip(b).zip(c) {
-                    *a = *b + s * *c;
-                }
-            });
-        std::hint::black_box(&mut a);
-    });
-    (n * 12) as f64 / t
+/// Pass 1 of the stream reference: reads x, v, w and writes v, p (as predict does):
+/// `v += w`, `p = x + v`.
+fn stream_predict(c: ParticleChunk<'_>) {
+    for i in (0..c.x.len()).step_by(LANES) {
+        let w = load(c.w, i);
+        let v = Vec3x8::load(c.vx, c.vy, c.vz, i) + Vec3x8 { x: w, y: w, z: w };
+        let p = Vec3x8::load(c.x, c.y, c.z, i) + v;
+        v.store(c.vx, c.vy, c.vz, i);
+        p.store(c.px, c.py, c.pz, i);
+    }
+}
+
+/// Pass 2 of the stream reference: reads p, x and writes v, x (as update does): `v = p − x`,
+/// `x = p`.
+fn stream_update(c: ParticleChunk<'_>) {
+    for i in (0..c.x.len()).step_by(LANES) {
+        let p = Vec3x8::load(c.px, c.py, c.pz, i);
+        let v = p - Vec3x8::load(c.x, c.y, c.z, i);
+        v.store(c.vx, c.vy, c.vz, i);
+        p.store(c.x, c.y, c.z, i);
+    }
+}
+
+/// The stream reference over `p`: both passes, SIMD, in parallel chunks when `parallel` (on
+/// the current rayon pool) — the memory ceiling of the integrate kernels' access pattern.
+pub fn stream_reference(p: &mut Particles, parallel: bool) {
+    p.for_chunks(parallel, stream_predict);
+    p.for_chunks(parallel, stream_update);
+}
+
+/// Median seconds of [`stream_reference`] over `reps` runs.
+pub fn time_stream_reference(p: &mut Particles, parallel: bool, reps: usize) -> f64 {
+    median_secs(reps, || stream_reference(p, parallel))
+}
+
+/// Integrate against its memory ceiling at one size and thread count.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct BandwidthFigures {
+    /// Particles.
+    pub particles: usize,
+    /// Threads (1: serial chunks; 2: parallel chunks on a 2-thread pool).
+    pub threads: usize,
+    /// Scalar twin on one thread, ns per particle.
+    pub scalar_ns: f64,
+    /// SIMD integrate (predict + update), ns per particle.
+    pub simd_ns: f64,
+    /// The stream reference over the same arrays, ns per particle.
+    pub ceiling_ns: f64,
+    /// `ceiling_ns / simd_ns`: the fraction of the memory ceiling integrate reaches.
+    pub fraction: f64,
+}
+
+/// Measures integrate (scalar, SIMD) and the stream reference over `n` free particles on
+/// `threads` threads, interleaving the two SIMD timings so that load from other processes
+/// hits both alike.
+pub fn stream_figures(n: usize, threads: usize, reps: usize) -> Result<BandwidthFigures> {
+    let mut p = particle_cloud(n);
+    let par = threads > 1;
+    let pool = pool(threads)?;
+    let scalar = pool.install(|| time_integrate(&mut p, false, false, reps));
+    let (mut kern, mut ceil) = (Vec::new(), Vec::new());
+    for _ in 0..3 {
+        kern.push(pool.install(|| time_integrate(&mut p, true, par, reps)));
+        ceil.push(pool.install(|| time_stream_reference(&mut p, par, reps)));
+    }
+    let med = |v: &mut Vec<f64>| {
+        v.sort_by(|a, b| a.total_cmp(b));
+        v[v.len() / 2]
+    };
+    let (kern, ceil) = (med(&mut kern), med(&mut ceil));
+    let per = |t: f64| t * 1e9 / n as f64;
+    Ok(BandwidthFigures {
+        particles: n,
+        threads,
+        scalar_ns: per(scalar),
+        simd_ns: per(kern),
+        ceiling_ns: per(ceil),
+        fraction: ceil / kern,
+    })
 }
 
 /// Particles for a bandwidth measurement: `n` free particles on a line (no constraints).
@@ -92,14 +152,6 @@ pub fn particle_cloud(n: usize) -> Particles {
     let pos: Vec<[f32; 3]> = (0..n).map(|i| [i as f32 * 1e-3, 1.0, 0.0]).collect();
     p.extend(&pos, &vec![1.0; n]);
     p
-}
-
-/// Bandwidth of the integrate kernels (SIMD, parallel on the current pool) over `n` particles,
-/// in bytes per second, counting [`INTEGRATE_BYTES_PER_PARTICLE`].
-pub fn integrate_bandwidth(n: usize, reps: usize) -> f64 {
-    let mut p = particle_cloud(n);
-    let t = time_integrate(&mut p, true, true, reps);
-    n as f64 * INTEGRATE_BYTES_PER_PARTICLE / t
 }
 
 /// Seconds for one predict + update over `p` (SIMD or scalar twin, parallel or not).
@@ -186,4 +238,124 @@ pub fn step_ms(world: &mut World, steps: usize) -> Result<f64> {
         Some(e) => Err(e),
         None => Ok(t * 1e3),
     }
+}
+
+/// The large case: a square cloth of about `n` particles with stretch and bend only
+/// (no shear, no tethers, no pins) lying just above a sphere it drapes over, 5 substeps and
+/// 1 iteration, on `threads` threads.
+pub fn sphere_drape_world(n: usize, threads: usize) -> Result<World> {
+    use crate::collide::obstacles::Obstacle;
+    use crate::collide::shapes::Shape;
+    let side = (n as f64).sqrt().round().max(2.0) as u32;
+    let spacing = 2.0 / side as f32;
+    let desc = ClothDesc {
+        rows: side,
+        cols: side,
+        spacing,
+        origin: [-1.0, 1.0, -1.0],
+        u: [1.0, 0.0, 0.0],
+        v: [0.0, 0.0, 1.0],
+        pins: Vec::new(),
+        shear: false,
+        bend: true,
+        tethers: None,
+        ..Default::default()
+    };
+    let params = SolverParams {
+        threads,
+        substeps: 5,
+        iterations: 1,
+        ..Default::default()
+    };
+    let mut w = World::new(params, Effects::gravity())?;
+    w.add_cloth(&desc)?;
+    w.add_obstacle(Obstacle::shape(Shape::Sphere {
+        center: [0.0, 0.49, 0.0],
+        radius: 0.5,
+    })?)?;
+    Ok(w)
+}
+
+/// One stage of the XPBD substep, timed on its own.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct StageFigure {
+    /// Stage name (as in the step's stage list, [`crate::step`]).
+    pub stage: &'static str,
+    /// Milliseconds per substep.
+    pub ms: f64,
+    /// Nanoseconds per particle per substep.
+    pub ns_per_particle: f64,
+}
+
+/// Times each stage of one substep of `world` (XPBD, SIMD, on a pool of `threads` threads),
+/// median of `reps` runs each, running the same kernels the step runs on the world's own
+/// state (which the repeated runs advance; only the cost is of interest). Step the world a few
+/// times first so that contacts exist.
+pub fn stage_times(world: &mut World, threads: usize, reps: usize) -> Result<Vec<StageFigure>> {
+    let pool = pool(threads)?;
+    let n = world.particle_count() as f64;
+    let h = world.params.dt / world.params.substeps as f32;
+    let inv_h2 = 1.0 / (h * h);
+    let t = world.time;
+    let w = world;
+    let mut out = Vec::new();
+    let mut add = |stage, secs: f64| {
+        out.push(StageFigure {
+            stage,
+            ms: secs * 1e3,
+            ns_per_particle: secs * 1e9 / n,
+        })
+    };
+    pool.install(|| {
+        let pp = PredictParams {
+            h,
+            gravity: w.effects.gravity,
+            drag: w.effects.drag,
+            force: None,
+        };
+        add(
+            "predict",
+            median_secs(reps, || w.particles.for_chunks(true, |c| predict(c, &pp, true))),
+        );
+        if !w.obstacles.is_empty() {
+            w.obstacles.prepare(&w.particles, &w.cloths, &w.strands);
+            let contacts = median_secs(reps, || {
+                w.obstacles.generate(&w.particles, t, h, true, true);
+                w.obstacles.resolve(&mut w.particles, h, true);
+            });
+            add("obstacle contacts", contacts);
+        }
+        let solve = median_secs(reps, || {
+            let p = &mut w.particles;
+            w.distance.reset_lambda();
+            w.distance.solve_simd(&mut p.px, &mut p.py, &mut p.pz, &p.w, inv_h2, true);
+        });
+        add("distance constraints", solve);
+        if !w.tethers.is_empty() {
+            let p = &mut w.particles;
+            add(
+                "tethers",
+                median_secs(reps, || w.tethers.solve_simd(&mut p.px, &mut p.py, &mut p.pz, true)),
+            );
+        }
+        if !w.obstacles.is_empty() {
+            add(
+                "obstacle projection",
+                median_secs(reps, || w.obstacles.project(&mut w.particles, true, true)),
+            );
+        }
+        let sized = w.damp_factor.len() >= w.particles.padded_len();
+        let damp = (w.has_damping && sized).then_some(&w.damp_factor[..]);
+        add(
+            "update",
+            median_secs(reps, || w.particles.for_chunks(true, |c| update(c, h, damp, true))),
+        );
+        if !w.obstacles.is_empty() {
+            add(
+                "obstacle velocity",
+                median_secs(reps, || w.obstacles.velocity_pass(&mut w.particles, true)),
+            );
+        }
+    });
+    Ok(out)
 }

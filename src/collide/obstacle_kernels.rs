@@ -44,7 +44,8 @@ pub fn write_slot(blocks: &mut [f32], i: usize, point: [f32; 3], normal: [f32; 3
 }
 
 /// Sets the approach speeds `max(0, -n.(v - u))` of the eight slots of one block (`out`, the
-/// block's floats) from the velocities of particles `b * 8 ..`; slots without contact get 0.
+/// block's floats) from the velocities of particles `b * 8 ..`; slots without contact get 0
+/// (always `+0.0`: the maximum is a comparison and a choice, as in [`fill_approach_simd`]).
 pub fn fill_approach(out: &mut [f32], b: usize, v: [&[f32]; 3], u: [f32; 3]) {
     if out[3 * LANES..6 * LANES].iter().all(|&c| c == 0.0) {
         out[6 * LANES..7 * LANES].fill(0.0);
@@ -54,8 +55,22 @@ pub fn fill_approach(out: &mut [f32], b: usize, v: [&[f32]; 3], u: [f32; 3]) {
         let i = b * LANES + l;
         let n = [3, 4, 5].map(|k| out[k * LANES + l]);
         let rel = [v[0][i] - u[0], v[1][i] - u[1], v[2][i] - u[2]];
-        out[6 * LANES + l] = (-dot(n, rel)).max(0.0);
+        let a = -dot(n, rel);
+        out[6 * LANES + l] = if a > 0.0 { a } else { 0.0 };
     }
+}
+
+/// [`fill_approach`] eight lanes at once (bitwise equal to it).
+pub fn fill_approach_simd(out: &mut [f32], b: usize, v: [&[f32]; 3], u: [f32; 3]) {
+    let zero = F32s::splat(0.0);
+    let n = Vec3x8 {
+        x: crate::lanes::load(out, 3 * LANES),
+        y: crate::lanes::load(out, 4 * LANES),
+        z: crate::lanes::load(out, 5 * LANES),
+    };
+    let rel = Vec3x8::load(v[0], v[1], v[2], b * LANES) - Vec3x8::splat(u);
+    let a = -n.dot(rel);
+    crate::lanes::store(out, 6 * LANES, a.simd_gt(zero).select(a, zero));
 }
 
 /// Approach speed of slot `i`.
@@ -193,7 +208,11 @@ pub fn shape_block_scalar(shape: &Shape, g: &GenInput, b: usize, out: &mut [f32]
 pub fn shape_block_simd(shape: &Shape, g: &GenInput, b: usize, out: &mut [f32]) {
     let i = b * LANES;
     let zero = F32s::splat(0.0);
-    let live = F32s::from(std::array::from_fn::<f32, LANES, _>(|l| if g.live(i + l) { 1.0 } else { 0.0 })).simd_gt(zero);
+    let live = if i + LANES <= g.n {
+        crate::lanes::load(g.w, i).simd_gt(zero)
+    } else {
+        F32s::from(std::array::from_fn::<f32, LANES, _>(|l| if g.live(i + l) { 1.0 } else { 0.0 })).simd_gt(zero)
+    };
     let p = Vec3x8::load(g.p[0], g.p[1], g.p[2], i);
     let reach = crate::lanes::load(g.reach, i);
     let (point, normal, hit) = match shape {

@@ -295,11 +295,12 @@ impl ObstacleSet {
                     let shape = s.translated(displacement(u, t));
                     for_blocks(slots, &mut [], &mut [], parallel, |b, out, _, _, _| {
                         if simd {
-                            k::shape_block_simd(&shape, &g, b, out)
+                            k::shape_block_simd(&shape, &g, b, out);
+                            k::fill_approach_simd(out, b, vel, u);
                         } else {
-                            k::shape_block_scalar(&shape, &g, b, out)
+                            k::shape_block_scalar(&shape, &g, b, out);
+                            k::fill_approach(out, b, vel, u);
                         }
-                        k::fill_approach(out, b, vel, u);
                     });
                 }
                 Geometry::Mesh(m) => {

@@ -13,6 +13,7 @@
 //! that no two of one colour share a particle; a colour is then solved in parallel chunks and
 //! eight constraints at a time in SIMD, and the result does not depend on chunking or threads.
 
+pub mod blocks;
 pub mod colour;
 pub mod distance;
 pub mod tethers;

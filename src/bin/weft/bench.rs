@@ -16,16 +16,28 @@ struct SceneFigure {
 }
 
 #[derive(Serialize)]
+struct DrapeFigure {
+    particles: usize,
+    threads: usize,
+    substeps: u32,
+    iterations: u32,
+    ms_per_step: f64,
+    stages: Vec<perf::StageFigure>,
+}
+
+#[derive(Serialize)]
 struct Report {
     integrate_simd_speedup: f64,
     solve_simd_speedup: f64,
     step_thread_speedup: f64,
+    /// Integrate (SIMD, 2 threads, 1M particles) as a fraction of the stream reference.
     integrate_bandwidth_fraction: f64,
-    bandwidth_reference_gb_s: f64,
+    bandwidth: Vec<perf::BandwidthFigures>,
     kernels: Vec<perf::KernelFigures>,
     step_particles: usize,
     step_ms_1_thread: f64,
     step_ms_2_threads: f64,
+    drape_1m_sphere: DrapeFigure,
     ms_per_step: Vec<SceneFigure>,
 }
 
@@ -39,17 +51,29 @@ pub fn bench(json: bool, scenes_dir: &Path) -> weft::Result<ExitCode> {
     let find = |k: &str, n: usize| kernels.iter().find(|f| f.kernel == k && f.particles.abs_diff(n) < n / 50).cloned();
     let i100 = find("integrate", 100_000).expect("measured");
     let s100 = find("solve", 100_000).expect("measured");
-    // Bandwidth: both the kernel and the triad on two threads, over 4M particles (about 400 MB
-    // moved per integrate, far beyond the last-level cache) so neither runs from cache.
-    let two = perf::pool(2)?;
-    let bw_particles = 4_000_000usize;
-    let bytes = (bw_particles as f64 * perf::INTEGRATE_BYTES_PER_PARTICLE) as usize;
-    let triad = two.install(|| perf::triad_bandwidth(bytes, 5));
-    let kernel_bw = two.install(|| perf::integrate_bandwidth(bw_particles, 5));
+    // Integrate against the stream reference (same arrays, same chunks, same pool).
+    let bandwidth = vec![
+        perf::stream_figures(1_000_000, 2, 9)?,
+        perf::stream_figures(1_000_000, 1, 9)?,
+        perf::stream_figures(100_000, 1, 21)?,
+        perf::stream_figures(100_000, 2, 21)?,
+    ];
     let mut w1 = perf::cloth_world(100_000, 1)?;
     let mut w2 = perf::cloth_world(100_000, 2)?;
     let t1 = perf::step_ms(&mut w1, 9)?;
     let t2 = perf::step_ms(&mut w2, 9)?;
+    let drape = {
+        let mut w = perf::sphere_drape_world(1_000_000, 2)?;
+        let ms = perf::step_ms(&mut w, 5)?;
+        DrapeFigure {
+            particles: w.particle_count(),
+            threads: 2,
+            substeps: w.params().substeps,
+            iterations: w.params().iterations,
+            ms_per_step: ms,
+            stages: perf::stage_times(&mut w, 2, 5)?,
+        }
+    };
     let mut scenes = Vec::new();
     let mut paths: Vec<_> = std::fs::read_dir(scenes_dir)
         .map_err(|e| weft::WeftError::io(scenes_dir, e))?
@@ -70,12 +94,13 @@ pub fn bench(json: bool, scenes_dir: &Path) -> weft::Result<ExitCode> {
         integrate_simd_speedup: i100.simd_speedup,
         solve_simd_speedup: s100.simd_speedup,
         step_thread_speedup: t1 / t2,
-        integrate_bandwidth_fraction: kernel_bw / triad,
-        bandwidth_reference_gb_s: triad / 1e9,
+        integrate_bandwidth_fraction: bandwidth[0].fraction,
+        bandwidth,
         kernels,
         step_particles: w1.particle_count(),
         step_ms_1_thread: t1,
         step_ms_2_threads: t2,
+        drape_1m_sphere: drape,
         ms_per_step: scenes,
     };
     if json {
@@ -92,17 +117,32 @@ pub fn bench(json: bool, scenes_dir: &Path) -> weft::Result<ExitCode> {
             k.kernel, k.particles, k.scalar_ns, k.simd_ns, k.simd_2t_ns, k.simd_speedup, k.thread_speedup
         );
     }
-    println!(
-        "integrate at 4M particles, 2 threads: {:.1} GB/s vs a 2-thread triad over the same bytes {:.1} GB/s = {:.0}%",
-        kernel_bw / 1e9,
-        triad / 1e9,
-        report.integrate_bandwidth_fraction * 100.0
-    );
+    println!("integrate vs its memory ceiling (stream reference: same arrays read and written, trivial arithmetic)");
+    println!("particles threads  scalar ns/p  SIMD ns/p  ceiling ns/p  fraction");
+    for b in &report.bandwidth {
+        println!(
+            "{:>9} {:>7} {:>12.2} {:>10.2} {:>13.2} {:>8.0}%",
+            b.particles,
+            b.threads,
+            b.scalar_ns,
+            b.simd_ns,
+            b.ceiling_ns,
+            b.fraction * 100.0
+        );
+    }
     println!(
         "full step, {} particles, 5 substeps: {t1:.2} ms on 1 thread, {t2:.2} ms on 2 ({:.2}x)",
         report.step_particles,
         t1 / t2
     );
+    let d = &report.drape_1m_sphere;
+    println!(
+        "cloth (stretch + bend) over a sphere, {} particles, {} substeps, {} iteration, {} threads: {:.1} ms/step",
+        d.particles, d.substeps, d.iterations, d.threads, d.ms_per_step
+    );
+    for s in &d.stages {
+        println!("  {:<22} {:>8.3} ms/substep {:>7.2} ns/particle", s.stage, s.ms, s.ns_per_particle);
+    }
     for s in &report.ms_per_step {
         println!("scene {:<28} {:>8} particles {:>9.3} ms/step", s.scene, s.particles, s.ms_per_step);
     }

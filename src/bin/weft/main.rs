@@ -17,6 +17,7 @@ mod check;
 mod pictures;
 mod reproduce;
 mod run;
+mod scaling;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -50,6 +51,10 @@ enum Command {
         /// Directory of scenes to time.
         #[arg(long, default_value = "scenes")]
         scenes: PathBuf,
+        /// Instead of the report, time ms per step for 1k .. 1M particles on 1 and 2 threads and
+        /// write DIR/scaling.md (table) and DIR/scaling.svg (plot).
+        #[arg(long, value_name = "DIR")]
+        scaling: Option<PathBuf>,
     },
     /// Time against error for a grid of integrators and settings, against a cached reference.
     Accuracy(accuracy::AccuracyArgs),
@@ -63,7 +68,8 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Run(args) => run::run(args),
         Command::Check { scene } => check::check(&scene),
-        Command::Bench { json, scenes } => bench::bench(json, &scenes),
+        Command::Bench { scaling: Some(dir), .. } => scaling::scaling(&dir).map(|()| ExitCode::SUCCESS),
+        Command::Bench { json, scenes, .. } => bench::bench(json, &scenes),
         Command::Accuracy(args) => accuracy::accuracy(args),
         Command::Reproduce(what) => reproduce::reproduce(what),
     };
