@@ -1,6 +1,7 @@
 //! Per-particle obstacle kernels of the step: contact slots, the plane and sphere contact
 //! generators in SIMD (`f32x8`) with scalar twins, the position projection (SIMD + scalar
-//! twin) and the velocity pass.
+//! twin), the response along the path and the velocity pass (scalar here, SIMD twins in
+//! `obstacle_simd.rs`).
 //!
 //! **Slots.** Each obstacle owns one contact slot per particle: the tangent plane `(c, n)` of
 //! [`ShapeContact`](super::shapes::ShapeContact) (or of a mesh face). The slots are stored in
@@ -26,6 +27,10 @@
 
 use super::shapes::{dot, sub, Shape};
 use crate::lanes::{F32s, Vec3x8, LANES};
+
+#[path = "obstacle_simd.rs"]
+mod simd;
+pub use simd::{resolve_simd, velocity_pass_simd};
 
 /// Floats per block of eight slots.
 pub const SLOT_BLOCK: usize = 7 * LANES;
@@ -84,9 +89,10 @@ pub fn read_approach(blocks: &[f32], i: usize) -> f32 {
 pub fn contact_velocity(w: [f32; 3], n: [f32; 3], a: f32, mu: f32) -> [f32; 3] {
     let wn = dot(w, n);
     let wt = [w[0] - wn * n[0], w[1] - wn * n[1], w[2] - wn * n[2]];
-    let keep_n = wn.max(0.0);
+    // maxima as a comparison and a choice, as the SIMD twin does them
+    let keep_n = if wn > 0.0 { wn } else { 0.0 };
     let lt = dot(wt, wt).sqrt();
-    let drop = mu * a.max(-wn);
+    let drop = mu * if -wn > a { -wn } else { a };
     let f = if lt <= drop { 0.0 } else { 1.0 - drop / lt };
     [0, 1, 2].map(|k| wt[k] * f + keep_n * n[k])
 }
