@@ -68,6 +68,11 @@ pub fn fill_approach(out: &mut [f32], b: usize, v: [&[f32]; 3], u: [f32; 3]) {
 /// [`fill_approach`] eight lanes at once (bitwise equal to it).
 pub fn fill_approach_simd(out: &mut [f32], b: usize, v: [&[f32]; 3], u: [f32; 3]) {
     let zero = F32s::splat(0.0);
+    // A block without contact (most of a large cloth) need not read its velocities.
+    if out[3 * LANES..6 * LANES].iter().all(|&c| c == 0.0) {
+        out[6 * LANES..7 * LANES].fill(0.0);
+        return;
+    }
     let n = Vec3x8 {
         x: crate::lanes::load(out, 3 * LANES),
         y: crate::lanes::load(out, 4 * LANES),
