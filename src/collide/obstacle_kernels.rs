@@ -52,7 +52,7 @@ pub fn write_slot(blocks: &mut [f32], i: usize, point: [f32; 3], normal: [f32; 3
 /// block's floats) from the velocities of particles `b * 8 ..`; slots without contact get 0
 /// (always `+0.0`: the maximum is a comparison and a choice, as in [`fill_approach_simd`]).
 pub fn fill_approach(out: &mut [f32], b: usize, v: [&[f32]; 3], u: [f32; 3]) {
-    if out[3 * LANES..6 * LANES].iter().all(|&c| c == 0.0) {
+    if !normals_set(out) {
         out[6 * LANES..7 * LANES].fill(0.0);
         return;
     }
@@ -69,7 +69,7 @@ pub fn fill_approach(out: &mut [f32], b: usize, v: [&[f32]; 3], u: [f32; 3]) {
 pub fn fill_approach_simd(out: &mut [f32], b: usize, v: [&[f32]; 3], u: [f32; 3]) {
     let zero = F32s::splat(0.0);
     // A block without contact (most of a large cloth) need not read its velocities.
-    if out[3 * LANES..6 * LANES].iter().all(|&c| c == 0.0) {
+    if !normals_set(out) {
         out[6 * LANES..7 * LANES].fill(0.0);
         return;
     }
@@ -106,9 +106,15 @@ pub fn contact_velocity(w: [f32; 3], n: [f32; 3], a: f32, mu: f32) -> [f32; 3] {
 /// of `slots`? The passes below skip whole blocks that do not.
 #[inline]
 pub fn block_touched(slots: &[Vec<f32>], b: usize) -> bool {
-    slots
-        .iter()
-        .any(|s| s[b * SLOT_BLOCK + 3 * LANES..b * SLOT_BLOCK + 6 * LANES].iter().any(|&c| c != 0.0))
+    slots.iter().any(|s| normals_set(&s[b * SLOT_BLOCK..(b + 1) * SLOT_BLOCK]))
+}
+
+/// Does one slot block (its [`SLOT_BLOCK`] floats) hold a normal other than zero? The same as
+/// "any normal component `!= 0.0`" (NaN counts as set), computed without branches: the bits
+/// of every component but the sign, or-ed together.
+#[inline]
+pub fn normals_set(block: &[f32]) -> bool {
+    block[3 * LANES..6 * LANES].iter().fold(0u32, |a, &c| a | (c.to_bits() << 1)) != 0
 }
 
 /// The next particle index from `i` (of a run starting at particle `start`, `len` long) that

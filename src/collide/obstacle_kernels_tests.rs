@@ -280,3 +280,18 @@ fn simd_passes_keep_untouched_lanes_bitwise() {
     }
     assert!(p[1][3] > 0.0 && v[1][3] == 0.0, "{} {}", p[1][3], v[1][3]);
 }
+
+/// The branch-free test of a block's normals equals "any component `!= 0.0`": signed zeros
+/// are unset, NaN, infinities and the smallest subnormal are set, in every normal position.
+#[test]
+fn normals_set_equals_any_nonzero_component() {
+    for v in [0.0f32, -0.0, f32::NAN, f32::INFINITY, -f32::MIN_POSITIVE, f32::from_bits(1), 1.0] {
+        for at in 0..SLOT_BLOCK {
+            let mut block = vec![0.0f32; SLOT_BLOCK];
+            block[at] = v;
+            let expect = block[3 * LANES..6 * LANES].iter().any(|&c| c != 0.0);
+            assert_eq!(normals_set(&block), expect, "{v} at {at}");
+            assert_eq!(block_touched(&[block], 0), expect);
+        }
+    }
+}
