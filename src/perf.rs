@@ -321,7 +321,7 @@ pub fn stage_times(world: &mut World, threads: usize, reps: usize) -> Result<Vec
             w.obstacles.prepare(&w.particles, &w.cloths, &w.strands);
             let contacts = median_secs(reps, || {
                 w.obstacles.generate(&w.particles, t, h, true, true);
-                w.obstacles.resolve(&mut w.particles, h, true);
+                w.obstacles.resolve(&mut w.particles, h, true, true);
             });
             add("obstacle contacts", contacts);
         }
@@ -353,7 +353,7 @@ pub fn stage_times(world: &mut World, threads: usize, reps: usize) -> Result<Vec
         if !w.obstacles.is_empty() {
             add(
                 "obstacle velocity",
-                median_secs(reps, || w.obstacles.velocity_pass(&mut w.particles, true)),
+                median_secs(reps, || w.obstacles.velocity_pass(&mut w.particles, true, true)),
             );
         }
     });

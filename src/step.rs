@@ -182,7 +182,7 @@ impl World {
                 let t0 = std::time::Instant::now();
                 let t_end = self.time + ((s + 1) as f64) * (h as f64);
                 self.obstacles.generate(&self.particles, t_end, h, parallel, simd);
-                self.obstacles.resolve(&mut self.particles, h, parallel);
+                self.obstacles.resolve(&mut self.particles, h, parallel, simd);
                 self.obstacles.add_busy(t0);
                 let p = &self.particles;
                 checkpoint!("obstacles", p.px, p.py, p.pz);
@@ -239,7 +239,7 @@ impl World {
             checkpoint!("update", p.x, p.y, p.z, p.vx, p.vy, p.vz);
             if has_obstacles {
                 let t0 = std::time::Instant::now();
-                self.obstacles.velocity_pass(&mut self.particles, parallel);
+                self.obstacles.velocity_pass(&mut self.particles, parallel, simd);
                 self.obstacles.add_busy(t0);
                 let p = &self.particles;
                 checkpoint!("obstacles", p.vx, p.vy, p.vz);

@@ -1,6 +1,7 @@
 //! Per-particle obstacle kernels of the step: contact slots, the plane and sphere contact
 //! generators in SIMD (`f32x8`) with scalar twins, the position projection (SIMD + scalar
-//! twin) and the velocity pass.
+//! twin), the response along the path and the velocity pass (scalar here, SIMD twins in
+//! `obstacle_simd.rs`).
 //!
 //! **Slots.** Each obstacle owns one contact slot per particle: the tangent plane `(c, n)` of
 //! [`ShapeContact`](super::shapes::ShapeContact) (or of a mesh face). The slots are stored in
@@ -27,6 +28,10 @@
 use super::shapes::{dot, sub, Shape};
 use crate::lanes::{F32s, Vec3x8, LANES};
 
+#[path = "obstacle_simd.rs"]
+mod simd;
+pub use simd::{resolve_simd, velocity_pass_simd};
+
 /// Floats per block of eight slots.
 pub const SLOT_BLOCK: usize = 7 * LANES;
 /// A particle within this distance beyond the thickness still counts as touching.
@@ -47,7 +52,7 @@ pub fn write_slot(blocks: &mut [f32], i: usize, point: [f32; 3], normal: [f32; 3
 /// block's floats) from the velocities of particles `b * 8 ..`; slots without contact get 0
 /// (always `+0.0`: the maximum is a comparison and a choice, as in [`fill_approach_simd`]).
 pub fn fill_approach(out: &mut [f32], b: usize, v: [&[f32]; 3], u: [f32; 3]) {
-    if out[3 * LANES..6 * LANES].iter().all(|&c| c == 0.0) {
+    if !normals_set(out) {
         out[6 * LANES..7 * LANES].fill(0.0);
         return;
     }
@@ -63,6 +68,11 @@ pub fn fill_approach(out: &mut [f32], b: usize, v: [&[f32]; 3], u: [f32; 3]) {
 /// [`fill_approach`] eight lanes at once (bitwise equal to it).
 pub fn fill_approach_simd(out: &mut [f32], b: usize, v: [&[f32]; 3], u: [f32; 3]) {
     let zero = F32s::splat(0.0);
+    // A block without contact (most of a large cloth) need not read its velocities.
+    if !normals_set(out) {
+        out[6 * LANES..7 * LANES].fill(0.0);
+        return;
+    }
     let n = Vec3x8 {
         x: crate::lanes::load(out, 3 * LANES),
         y: crate::lanes::load(out, 4 * LANES),
@@ -84,9 +94,10 @@ pub fn read_approach(blocks: &[f32], i: usize) -> f32 {
 pub fn contact_velocity(w: [f32; 3], n: [f32; 3], a: f32, mu: f32) -> [f32; 3] {
     let wn = dot(w, n);
     let wt = [w[0] - wn * n[0], w[1] - wn * n[1], w[2] - wn * n[2]];
-    let keep_n = wn.max(0.0);
+    // maxima as a comparison and a choice, as the SIMD twin does them
+    let keep_n = if wn > 0.0 { wn } else { 0.0 };
     let lt = dot(wt, wt).sqrt();
-    let drop = mu * a.max(-wn);
+    let drop = mu * if -wn > a { -wn } else { a };
     let f = if lt <= drop { 0.0 } else { 1.0 - drop / lt };
     [0, 1, 2].map(|k| wt[k] * f + keep_n * n[k])
 }
@@ -95,9 +106,15 @@ pub fn contact_velocity(w: [f32; 3], n: [f32; 3], a: f32, mu: f32) -> [f32; 3] {
 /// of `slots`? The passes below skip whole blocks that do not.
 #[inline]
 pub fn block_touched(slots: &[Vec<f32>], b: usize) -> bool {
-    slots
-        .iter()
-        .any(|s| s[b * SLOT_BLOCK + 3 * LANES..b * SLOT_BLOCK + 6 * LANES].iter().any(|&c| c != 0.0))
+    slots.iter().any(|s| normals_set(&s[b * SLOT_BLOCK..(b + 1) * SLOT_BLOCK]))
+}
+
+/// Does one slot block (its [`SLOT_BLOCK`] floats) hold a normal other than zero? The same as
+/// "any normal component `!= 0.0`" (NaN counts as set), computed without branches: the bits
+/// of every component but the sign, or-ed together.
+#[inline]
+pub fn normals_set(block: &[f32]) -> bool {
+    block[3 * LANES..6 * LANES].iter().fold(0u32, |a, &c| a | (c.to_bits() << 1)) != 0
 }
 
 /// The next particle index from `i` (of a run starting at particle `start`, `len` long) that

@@ -177,3 +177,121 @@ fn block_skipping_passes_equal_particle_by_particle() {
     assert_ne!(whole, p0, "some particles must move");
     assert!(!block_touched(&slots, 2) && block_touched(&slots, 0) && !block_touched(&slots[..1], 1));
 }
+
+/// Two obstacles' slots over `n` particles from `seed` (one tuple per particle and obstacle:
+/// point, normal direction, approach speed, and whether the slot holds a contact).
+#[allow(clippy::type_complexity)]
+fn random_slots(seed: &[((f32, f32, f32), (f32, f32, f32), f32, bool)], n: usize) -> Vec<Vec<f32>> {
+    let mut slots = vec![vec![0.0; n / LANES * SLOT_BLOCK]; 2];
+    for (j, &((cx, cy, cz), (nx, ny, nz), a, set)) in seed.iter().enumerate().take(2 * n) {
+        let (k, i) = (j % 2, j / 2);
+        let l = (nx * nx + ny * ny + nz * nz).sqrt();
+        if set && l > 1e-3 {
+            write_slot(&mut slots[k], i, [cx, cy, cz], [nx / l, ny / l, nz / l]);
+            slots[k][i / LANES * SLOT_BLOCK + 6 * LANES + i % LANES] = a;
+        }
+    }
+    slots
+}
+
+type Triple = (f32, f32, f32);
+
+fn columns(v: &[Triple], n: usize) -> [Vec<f32>; 3] {
+    let mut out = [vec![0.0; n], vec![0.0; n], vec![0.0; n]];
+    for (i, t) in v.iter().enumerate().take(n) {
+        (out[0][i], out[1][i], out[2][i]) = (t.0, t.1, t.2);
+    }
+    out
+}
+
+fn bits(v: &[Vec<f32>; 3]) -> Vec<u32> {
+    v.iter().flatten().map(|f| f.to_bits()).collect()
+}
+
+proptest! {
+    /// The SIMD response and velocity pass equal their scalar twins bit for bit, over random
+    /// sparse contacts of two (moving) obstacles, random paths, thicknesses and friction;
+    /// also over a chunk that starts at a later block.
+    #[test]
+    fn simd_resolve_and_velocity_equal_scalar(
+        seed in proptest::collection::vec(((-0.2f32..0.2, -0.2f32..0.2, -0.2f32..0.2), (-1.0f32..1.0, -1.0f32..1.0, -1.0f32..1.0), 0.0f32..2.0, any::<bool>()), 48),
+        xs in proptest::collection::vec((-0.2f32..0.2, -0.2f32..0.2, -0.2f32..0.2), 24),
+        ps in proptest::collection::vec((-0.2f32..0.2, -0.2f32..0.2, -0.2f32..0.2), 24),
+        vs in proptest::collection::vec((-3.0f32..3.0, -3.0f32..3.0, -3.0f32..3.0), 24),
+        th in proptest::collection::vec(0.0f32..0.05, 24),
+        shift in (-0.05f32..0.05, -0.05f32..0.05, -0.05f32..0.05),
+        mu in 0.0f32..1.5,
+        from in 0usize..3,
+    ) {
+        let n = 24;
+        let slots = random_slots(&seed, n);
+        let shifts = [[0.0; 3], [shift.0, shift.1, shift.2]];
+        let motion = [([0.0; 3], mu), ([shift.0 * 30.0, shift.1 * 30.0, shift.2 * 30.0], 0.5 * mu)];
+        let x = columns(&xs, n);
+        let s = from * LANES;
+        let xr = [&x[0][s..], &x[1][s..], &x[2][s..]];
+        let run = |simd: bool, p0: &[Vec<f32>; 3], v0: &[Vec<f32>; 3]| {
+            let (mut p, mut v) = (p0.clone(), v0.clone());
+            let [a, b, c] = &mut p;
+            let pp = [&mut a[s..], &mut b[s..], &mut c[s..]];
+            let [d, e, f] = &mut v;
+            let vv = [&mut d[s..], &mut e[s..], &mut f[s..]];
+            if simd {
+                resolve_simd(&slots, &shifts, &th, s, xr, pp);
+                velocity_pass_simd(&slots, &motion, &th, s, xr, vv);
+            } else {
+                resolve_along_path(&slots, &shifts, &th, s, xr, pp);
+                velocity_pass(&slots, &motion, &th, s, xr, vv);
+            }
+            (p, v)
+        };
+        let (p0, v0) = (columns(&ps, n), columns(&vs, n));
+        let (ps_, vs_) = run(false, &p0, &v0);
+        let (pv, vv) = run(true, &p0, &v0);
+        prop_assert_eq!(bits(&ps_), bits(&pv));
+        prop_assert_eq!(bits(&vs_), bits(&vv));
+        // positions at rest on the contact planes make the velocity pass act
+        let (_, vs2) = run(false, &ps_, &v0);
+        let (_, vv2) = run(true, &ps_, &v0);
+        prop_assert_eq!(bits(&vs2), bits(&vv2));
+    }
+}
+
+/// The SIMD passes keep untouched lanes exactly, signed zeros included, and do change
+/// touched ones.
+#[test]
+fn simd_passes_keep_untouched_lanes_bitwise() {
+    let mut slots = vec![vec![0.0; SLOT_BLOCK]];
+    write_slot(&mut slots[0], 3, [0.0; 3], [0.0, 1.0, 0.0]);
+    slots[0][6 * LANES + 3] = 1.0;
+    let th = vec![0.01; LANES];
+    let x = [vec![-0.0; LANES], vec![0.5; LANES], vec![-0.0; LANES]];
+    let xr = [&x[0][..], &x[1][..], &x[2][..]];
+    let mut p = [vec![-0.0; LANES], vec![-0.1; LANES], vec![-0.0; LANES]];
+    let [a, b, c] = &mut p;
+    resolve_simd(&slots, &[[0.0; 3]], &th, 0, xr, [a, b, c]);
+    let mut v = [vec![-0.0; LANES], vec![-1.0; LANES], vec![-0.0; LANES]];
+    let x2 = [vec![-0.0; LANES], vec![0.01; LANES], vec![-0.0; LANES]];
+    let [d, e, f] = &mut v;
+    velocity_pass_simd(&slots, &[([0.0; 3], 0.3)], &th, 0, [&x2[0], &x2[1], &x2[2]], [d, e, f]);
+    for l in (0..LANES).filter(|&l| l != 3) {
+        assert_eq!([p[0][l], p[2][l], v[0][l], v[2][l]].map(f32::to_bits), [(-0.0f32).to_bits(); 4]);
+        assert_eq!((p[1][l], v[1][l]), (-0.1, -1.0));
+    }
+    assert!(p[1][3] > 0.0 && v[1][3] == 0.0, "{} {}", p[1][3], v[1][3]);
+}
+
+/// The branch-free test of a block's normals equals "any component `!= 0.0`": signed zeros
+/// are unset, NaN, infinities and the smallest subnormal are set, in every normal position.
+#[test]
+fn normals_set_equals_any_nonzero_component() {
+    for v in [0.0f32, -0.0, f32::NAN, f32::INFINITY, -f32::MIN_POSITIVE, f32::from_bits(1), 1.0] {
+        for at in 0..SLOT_BLOCK {
+            let mut block = vec![0.0f32; SLOT_BLOCK];
+            block[at] = v;
+            let expect = block[3 * LANES..6 * LANES].iter().any(|&c| c != 0.0);
+            assert_eq!(normals_set(&block), expect, "{v} at {at}");
+            assert_eq!(block_touched(&[block], 0), expect);
+        }
+    }
+}

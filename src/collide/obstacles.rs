@@ -340,11 +340,16 @@ impl ObstacleSet {
 
     /// Moves every particle back along its path out of its contacts (stage 2, the paper's
     /// response; [`k::resolve_along_path`]).
-    pub(crate) fn resolve(&self, particles: &mut Particles, h: f32, parallel: bool) {
+    pub(crate) fn resolve(&self, particles: &mut Particles, h: f32, parallel: bool, simd: bool) {
         let shifts: Vec<[f32; 3]> = self.list.iter().map(|o| o.velocity.map(|c| c * h)).collect();
         let (slots, th) = (&self.slots, &self.th);
         particles.for_chunks(parallel, |c| {
-            k::resolve_along_path(slots, &shifts, th, c.start, [&*c.x, &*c.y, &*c.z], [c.px, c.py, c.pz])
+            let (x, p) = ([&*c.x, &*c.y, &*c.z], [c.px, c.py, c.pz]);
+            if simd {
+                k::resolve_simd(slots, &shifts, th, c.start, x, p)
+            } else {
+                k::resolve_along_path(slots, &shifts, th, c.start, x, p)
+            }
         });
     }
 
@@ -361,7 +366,7 @@ impl ObstacleSet {
     }
 
     /// Removes approaching normal velocity and applies friction (stage 4).
-    pub(crate) fn velocity_pass(&self, particles: &mut Particles, parallel: bool) {
+    pub(crate) fn velocity_pass(&self, particles: &mut Particles, parallel: bool, simd: bool) {
         let motion: Vec<([f32; 3], f32)> = self
             .list
             .iter()
@@ -369,7 +374,12 @@ impl ObstacleSet {
             .collect();
         let (slots, th) = (&self.slots, &self.th);
         particles.for_chunks(parallel, |c| {
-            k::velocity_pass(slots, &motion, th, c.start, [&*c.x, &*c.y, &*c.z], [c.vx, c.vy, c.vz])
+            let (x, v) = ([&*c.x, &*c.y, &*c.z], [c.vx, c.vy, c.vz]);
+            if simd {
+                k::velocity_pass_simd(slots, &motion, th, c.start, x, v)
+            } else {
+                k::velocity_pass(slots, &motion, th, c.start, x, v)
+            }
         });
     }
 

@@ -91,7 +91,7 @@ impl World {
             let t0 = std::time::Instant::now();
             let t_end = self.time + ((s + 1) as f64) * (h as f64);
             self.obstacles.generate(&self.particles, t_end, h, parallel, simd);
-            self.obstacles.resolve(&mut self.particles, h, parallel);
+            self.obstacles.resolve(&mut self.particles, h, parallel, simd);
             self.obstacles.add_busy(t0);
         }
         if let Some(a) = c.selfcol {
@@ -124,7 +124,7 @@ impl World {
         }
         if c.obstacles {
             let t0 = std::time::Instant::now();
-            self.obstacles.velocity_pass(&mut self.particles, parallel);
+            self.obstacles.velocity_pass(&mut self.particles, parallel, simd);
             self.obstacles.add_busy(t0);
         }
     }
