@@ -201,7 +201,12 @@ impl ClothDesc {
         self.apply_pins(&mut out)?;
         let id = |r: usize, c: usize| (r * cols + c) as u32;
         let f = &self.fabric;
-        let diag = s * std::f32::consts::SQRT_2;
+        // The shear diagonals' rest lengths are measured on the built grid, so a cloth whose
+        // directions u and v are not perpendicular starts at rest too (s * sqrt 2 holds only for
+        // perpendicular directions; it used to be assumed and made such cloths move by themselves).
+        let len = |a: [f32; 3]| (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+        let diag_down = s * len([u[0] + v[0], u[1] + v[1], u[2] + v[2]]);
+        let diag_up = s * len([u[0] - v[0], u[1] - v[1], u[2] - v[2]]);
         let mut push = |a: u32, b: u32, rest: f32, compliance: f32, kind| {
             out.edges.push(Edge {
                 a,
@@ -220,8 +225,8 @@ impl ClothDesc {
                     push(id(r, c), id(r + 1, c), s, f.stretch_compliance, ConstraintKind::Stretch);
                 }
                 if self.shear && r + 1 < rows && c + 1 < cols {
-                    push(id(r, c), id(r + 1, c + 1), diag, f.shear_compliance, ConstraintKind::Shear);
-                    push(id(r, c + 1), id(r + 1, c), diag, f.shear_compliance, ConstraintKind::Shear);
+                    push(id(r, c), id(r + 1, c + 1), diag_down, f.shear_compliance, ConstraintKind::Shear);
+                    push(id(r, c + 1), id(r + 1, c), diag_up, f.shear_compliance, ConstraintKind::Shear);
                 }
                 if self.bend && c + 2 < cols {
                     push(id(r, c), id(r, c + 2), 2.0 * s, f.bend_compliance, ConstraintKind::Bend);
@@ -375,6 +380,24 @@ mod tests {
             let (p, q) = (b.positions[e.a as usize], b.positions[e.b as usize]);
             let l = ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt();
             assert!((l - e.rest).abs() < 1e-5, "{e:?} {l}");
+        }
+    }
+
+    #[test]
+    fn skewed_directions_start_at_rest() {
+        // u and v 86.8 degrees apart: every rest length, the shear diagonals included, is the
+        // built distance (they used to be s * sqrt 2, 3% off, and the cloth moved by itself).
+        let b = ClothDesc {
+            u: [1.0, 0.0, 0.2],
+            v: [0.0, -1.0, 0.3],
+            ..desc(6, 7)
+        }
+        .build()
+        .unwrap();
+        for e in &b.edges {
+            let (p, q) = (b.positions[e.a as usize], b.positions[e.b as usize]);
+            let l = ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt();
+            assert!((l - e.rest).abs() < 1e-6 * e.rest.max(1.0), "{e:?} {l}");
         }
     }
 
