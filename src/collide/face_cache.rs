@@ -224,7 +224,7 @@ mod tests {
     #[test]
     fn a_draping_world_runs_bitwise_alike_with_and_without_the_cache() {
         use crate::collide::obstacles::{BroadphaseKind, Obstacle};
-        use crate::{ClothDesc, Effects, Fabric, SolverParams, World};
+        use crate::SolverParams;
         let run = |kind, memory, fresh| {
             let params = SolverParams {
                 dt: 1.0 / 400.0,
@@ -234,20 +234,8 @@ mod tests {
                 threads: if fresh { 1 } else { 2 },
                 ..SolverParams::default()
             };
-            let mut w = World::new(params, Effects::gravity()).unwrap();
-            w.add_cloth(&ClothDesc {
-                // wider than the form: blocks at the row ends lie outside the mesh box
-                rows: 24,
-                cols: 48,
-                spacing: 0.012,
-                origin: [-0.282, crate::collide::dressform::HEIGHT + 0.005, -0.138],
-                u: [1.0, 0.0, 0.0],
-                v: [0.0, 0.0, 1.0],
-                fabric: Fabric::preset("cotton").unwrap(),
-                ..ClothDesc::default()
-            })
-            .unwrap();
-            w.set_friction(0.3).unwrap();
+            // wider than the form: blocks at the row ends lie outside the mesh box
+            let mut w = sheet_over_form(params, [24, 48], 0.012, [-0.282, -0.138]);
             w.add_obstacle(Obstacle::mesh(dress_form(600).unwrap(), kind, memory).unwrap())
                 .unwrap();
             w.obstacles.set_fresh_search(fresh);
@@ -273,13 +261,33 @@ mod tests {
         }
     }
 
+    /// A horizontal cotton sheet of `rows x cols` released 5 mm above the dress form's top,
+    /// its corner at `(x, z)`, friction 0.3; the caller adds the form.
+    fn sheet_over_form(params: crate::SolverParams, [rows, cols]: [u32; 2], spacing: f32, [x, z]: [f32; 2]) -> crate::World {
+        use crate::{ClothDesc, Effects, Fabric, World};
+        let mut w = World::new(params, Effects::gravity()).unwrap();
+        w.add_cloth(&ClothDesc {
+            rows,
+            cols,
+            spacing,
+            origin: [x, crate::collide::dressform::HEIGHT + 0.005, z],
+            u: [1.0, 0.0, 0.0],
+            v: [0.0, 0.0, 1.0],
+            fabric: Fabric::preset("cotton").unwrap(),
+            ..ClothDesc::default()
+        })
+        .unwrap();
+        w.set_friction(0.3).unwrap();
+        w
+    }
+
     /// `weft reproduce landovsky` counts one step of `h` with one substep as one iteration
     /// and says the physics is bit for bit that of steps of `4 h` with four substeps: the
     /// obstacle stages (and their kept lists) see the same substeps either way.
     #[test]
     fn steps_of_one_substep_equal_a_quarter_of_steps_of_four() {
         use crate::collide::obstacles::{BroadphaseKind, Obstacle};
-        use crate::{ClothDesc, Effects, Fabric, SolverParams, World};
+        use crate::SolverParams;
         let run = |dt: f32, substeps: u32, steps: usize| {
             let params = SolverParams {
                 dt,
@@ -287,19 +295,7 @@ mod tests {
                 iterations: 1,
                 ..SolverParams::default()
             };
-            let mut w = World::new(params, Effects::gravity()).unwrap();
-            w.add_cloth(&ClothDesc {
-                rows: 40,
-                cols: 30,
-                spacing: 0.009,
-                origin: [-0.13, crate::collide::dressform::HEIGHT + 0.005, -0.18],
-                u: [1.0, 0.0, 0.0],
-                v: [0.0, 0.0, 1.0],
-                fabric: Fabric::preset("cotton").unwrap(),
-                ..ClothDesc::default()
-            })
-            .unwrap();
-            w.set_friction(0.3).unwrap();
+            let mut w = sheet_over_form(params, [40, 30], 0.009, [-0.13, -0.18]);
             let form = Obstacle::mesh(dress_form(4800).unwrap(), BroadphaseKind::Grid(Some([15, 30, 15])), false);
             w.add_obstacle(form.unwrap()).unwrap();
             for _ in 0..steps {
