@@ -23,6 +23,7 @@ pub mod perf;
 pub mod reference;
 pub mod render;
 pub mod scene;
+pub mod stage_clock;
 pub mod step;
 pub mod strands;
 #[cfg(test)]

@@ -6,6 +6,12 @@
 //! (`w = 0`, at the origin, at rest), and there is always at least one such padding slot: the
 //! last one, [`Particles::sink`], is where padded (dummy) constraints point so that SIMD loops
 //! never need a tail.
+//!
+//! Element-wise kernels run over [`CHUNK`]-particle chunks ([`Particles::for_chunks`]). The
+//! step's divergence guard rides on two such passes instead of passes of its own
+//! ([`Particles::for_chunks_saving`] copies the state at the start of the step chunk by chunk
+//! inside the first predict, [`chunk_finite_simd`] checks the end state chunk by chunk inside
+//! the last update, while the chunk is still in cache).
 
 use crate::lanes::round_up;
 
@@ -150,6 +156,7 @@ impl Particles {
 pub const CHUNK: usize = 4096;
 
 /// A contiguous range of particles handed to an element-wise kernel.
+#[derive(Debug)]
 pub struct ParticleChunk<'a> {
     /// Index of the first particle of the chunk.
     pub start: usize,
@@ -232,6 +239,129 @@ impl Particles {
     }
 }
 
+impl ParticleChunk<'_> {
+    /// The same chunk, borrowed again (to hand it to one kernel and keep it for the next).
+    pub fn reborrow(&mut self) -> ParticleChunk<'_> {
+        ParticleChunk {
+            start: self.start,
+            x: self.x,
+            y: self.y,
+            z: self.z,
+            px: self.px,
+            py: self.py,
+            pz: self.pz,
+            vx: self.vx,
+            vy: self.vy,
+            vz: self.vz,
+            w: self.w,
+        }
+    }
+
+    /// The chunk's positions and velocities, `x, y, z, vx, vy, vz`.
+    pub fn state(&self) -> [&[f32]; 6] {
+        [&*self.x, &*self.y, &*self.z, &*self.vx, &*self.vy, &*self.vz]
+    }
+}
+
+impl Particles {
+    /// [`for_chunks`](Self::for_chunks), also handing each chunk its part of `saved` (six
+    /// arrays, resized to the padded length): for a kernel that keeps a copy of the chunk's
+    /// state (`x, y, z, vx, vy, vz`) before it changes it. Allocates only when `saved` is not
+    /// yet sized.
+    pub fn for_chunks_saving<F>(&mut self, parallel: bool, saved: &mut [Vec<f32>; 6], f: F)
+    where
+        F: Fn(ParticleChunk<'_>, [&mut [f32]; 6]) + Sync + Send,
+    {
+        use rayon::prelude::*;
+        let len = self.padded_len();
+        for s in saved.iter_mut() {
+            s.resize(len, 0.0);
+        }
+        let [s0, s1, s2, s3, s4, s5] = saved;
+        if parallel && len > CHUNK {
+            let parts = (
+                s0.par_chunks_mut(CHUNK),
+                s1.par_chunks_mut(CHUNK),
+                s2.par_chunks_mut(CHUNK),
+                s3.par_chunks_mut(CHUNK),
+                s4.par_chunks_mut(CHUNK),
+                s5.par_chunks_mut(CHUNK),
+            )
+                .into_par_iter();
+            (
+                self.x.par_chunks_mut(CHUNK),
+                self.y.par_chunks_mut(CHUNK),
+                self.z.par_chunks_mut(CHUNK),
+                self.px.par_chunks_mut(CHUNK),
+                self.py.par_chunks_mut(CHUNK),
+                self.pz.par_chunks_mut(CHUNK),
+                self.vx.par_chunks_mut(CHUNK),
+                self.vy.par_chunks_mut(CHUNK),
+                self.vz.par_chunks_mut(CHUNK),
+                self.w.par_chunks(CHUNK),
+            )
+                .into_par_iter()
+                .zip(parts)
+                .enumerate()
+                .for_each(|(k, ((x, y, z, px, py, pz, vx, vy, vz, w), (a, b, c, d, e, g)))| {
+                    let chunk = ParticleChunk {
+                        start: k * CHUNK,
+                        x,
+                        y,
+                        z,
+                        px,
+                        py,
+                        pz,
+                        vx,
+                        vy,
+                        vz,
+                        w,
+                    };
+                    f(chunk, [a, b, c, d, e, g])
+                });
+        } else {
+            let chunk = ParticleChunk {
+                start: 0,
+                x: &mut self.x,
+                y: &mut self.y,
+                z: &mut self.z,
+                px: &mut self.px,
+                py: &mut self.py,
+                pz: &mut self.pz,
+                vx: &mut self.vx,
+                vy: &mut self.vy,
+                vz: &mut self.vz,
+                w: &self.w,
+            };
+            f(chunk, [s0, s1, s2, s3, s4, s5]);
+        }
+    }
+}
+
+/// Are the first `n` values of every array in `arrays` finite? Eight lanes at once: the sum
+/// of `v - v` over the values stays `0` while every value is finite and turns NaN at the first
+/// infinity or NaN (`inf - inf` and `NaN - NaN` are NaN), so the loop has no branch.
+/// A tail of fewer than eight values is checked one by one.
+#[allow(clippy::eq_op)] // `v - v` is the test: 0 for a finite value, NaN otherwise
+pub fn chunk_finite_simd(arrays: &[&[f32]], n: usize) -> bool {
+    use crate::lanes::{load, F32s, LANES};
+    let whole = n - n % LANES;
+    let mut acc = F32s::splat(0.0);
+    for a in arrays {
+        for i in (0..whole).step_by(LANES) {
+            let v = load(a, i);
+            acc += v - v;
+        }
+    }
+    let tail_finite = arrays.iter().all(|a| a[whole..n].iter().all(|v| v.is_finite()));
+    acc.to_array().iter().all(|&s| s == 0.0) && tail_finite
+}
+
+/// Scalar twin of [`chunk_finite_simd`].
+pub fn chunk_finite_scalar(arrays: &[&[f32]], n: usize) -> bool {
+    arrays.iter().all(|a| a[..n].iter().all(|v| v.is_finite()))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -250,5 +380,61 @@ mod tests {
         }
         assert_eq!(p.x[19], 19.0);
         assert_eq!(p.px, p.x);
+    }
+
+    /// The SIMD finite check equals its scalar twin and `first_non_finite`, for a NaN or an
+    /// infinity at every place in every array (tail included) and past the checked length.
+    #[test]
+    fn finite_check_finds_every_bad_value() {
+        let n = 3 * LANES + 5;
+        let base: Vec<Vec<f32>> = (0..6).map(|k| (0..n + 3).map(|i| (i * 7 + k) as f32 * -0.37).collect()).collect();
+        let views = |v: &Vec<Vec<f32>>| -> Vec<Vec<f32>> { v.clone() };
+        let check = |v: &Vec<Vec<f32>>| {
+            let r: Vec<&[f32]> = v.iter().map(|a| &a[..]).collect();
+            (chunk_finite_simd(&r, n), chunk_finite_scalar(&r, n))
+        };
+        assert_eq!(check(&base), (true, true));
+        for bad in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+            for k in 0..6 {
+                for i in 0..n + 3 {
+                    let mut v = views(&base);
+                    v[k][i] = bad;
+                    let expect = i >= n;
+                    assert_eq!(check(&v), (expect, expect), "{bad} in array {k} at {i}");
+                }
+            }
+        }
+    }
+
+    /// The chunks that `for_chunks_saving` hands out hold the state before the kernel changes
+    /// it, serially and in parallel.
+    #[test]
+    fn saving_pass_keeps_the_state_before_the_kernel() {
+        let mut p = Particles::new();
+        for i in 0..3 * CHUNK + 11 {
+            p.push([i as f32, -(i as f32), 0.5], [1.0, 2.0, i as f32], 1.0);
+        }
+        let before = p.clone();
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+        for parallel in [false, true] {
+            let mut q = before.clone();
+            let mut saved: [Vec<f32>; 6] = Default::default();
+            pool.install(|| {
+                q.for_chunks_saving(parallel, &mut saved, |mut c, s| {
+                    for (dst, src) in s.into_iter().zip(c.state()) {
+                        dst.copy_from_slice(src);
+                    }
+                    let c = c.reborrow();
+                    c.x.iter_mut().for_each(|x| *x += 1.0);
+                    c.vz.iter_mut().for_each(|v| *v = -*v);
+                })
+            });
+            assert_eq!(
+                saved,
+                [&before.x, &before.y, &before.z, &before.vx, &before.vy, &before.vz].map(|a| a.clone())
+            );
+            assert_eq!(q.x[5], before.x[5] + 1.0);
+            assert_eq!(q.vz[CHUNK + 3], -before.vz[CHUNK + 3]);
+        }
     }
 }

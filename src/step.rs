@@ -3,7 +3,7 @@
 //! ```text
 //! step(dt):
 //!   kinematic pins: stop last step's moves, v = (target - x) / dt    [embed::kinematic]
-//!   keep a copy of x, v (guard)
+//!   keep a copy of x, v (guard; XPBD: chunk by chunk inside the first predict)
 //!   self-collision pair lists from x (hash or AABB tree)  [self-collision] (if on)
 //!   for each substep h = dt / substeps:
 //!     wind forces per triangle → per particle          [effects]        (if named)
@@ -16,11 +16,18 @@
 //!     pair pass, velocity correction                    [self-collision]  (if on)
 //!     update: v = (p - x) / h, damping; x = p          [integrate]
 //!     obstacle velocity pass: normal part, friction     [collide/obstacles] (if any)
+//!       (both chunk by chunk in one pass; the last substep's pass also checks that the
+//!        chunk's x, v are finite, for the guard)
 //!   (solver.method = symplectic-euler | leapfrog | implicit-euler: the force-based step of
 //!    integrate::mass_spring / integrate::implicit replaces the substep loop above; its drift
 //!    feeds the obstacle and self-collision stages as the prediction p, integrate::contacts)
 //!   on a non-finite value: restore the copy, replay the step with a check after every stage
 //!   to name the stage and particle, and return `Diverged`
+//!
+//! The guard costs no pass of its own over the particles (at 1M particles a copy of x, v
+//! and a scan of them take milliseconds): the copy is made in the first predict's chunks,
+//! which read x and v anyway, and the check in the last update's chunks, while they are in
+//! cache. The force-based methods keep the separate copy and scan.
 //!   kinematic pins land exactly on their targets                     [embed::kinematic]
 //! ```
 
@@ -29,11 +36,22 @@ use crate::collide::self_collision::{mean_velocity, Active, ApplyParams, Respons
 use crate::error::{positive, Result, WeftError};
 use crate::integrate::{predict, update, PredictParams};
 use crate::params::{Backend, Method};
+use crate::particles::chunk_finite_simd;
 use crate::world::World;
 
 /// Index of the first entry below `n` that is not finite in any of `arrays`.
 fn first_non_finite(arrays: &[&[f32]], n: usize) -> Option<usize> {
     (0..n).find(|&i| arrays.iter().any(|a| !a[i].is_finite()))
+}
+
+/// What a run of the XPBD substeps found.
+enum Ran {
+    /// Nothing wrong (or nothing checked).
+    Clean,
+    /// The guard's check in the last update found a non-finite value.
+    NonFinite,
+    /// The stage-by-stage check (a replay) found the first non-finite value.
+    Found(usize, &'static str),
 }
 
 impl World {
@@ -45,18 +63,18 @@ impl World {
     /// the user's state is never overwritten with NaN.
     pub fn step(&mut self, dt: f32) -> Result<()> {
         positive("dt", dt)?;
+        self.clock.start();
         self.begin_kinematic(dt);
         let guard = self.params.guard;
-        if guard {
+        let method = self.params.method;
+        // XPBD saves the state inside its first predict pass.
+        if guard && method != Method::Xpbd {
             self.save_backup();
         }
-        let method = self.params.method;
+        self.clock.lap("pins, guard backup");
         let ran = match method {
-            Method::Xpbd => {
-                self.in_pool(|w| w.run_substeps(dt, false));
-                Ok(())
-            }
-            m => self.in_pool(|w| w.run_mass_spring(dt, m)),
+            Method::Xpbd => Ok(self.in_pool(|w| w.run_substeps(dt, false))),
+            m => self.in_pool(|w| w.run_mass_spring(dt, m)).map(|_| Ran::Clean),
         };
         if guard && method != Method::Xpbd && (ran.is_err() || self.particles.first_non_finite().is_some()) {
             let particle = self.particles.first_non_finite().unwrap_or(0);
@@ -66,17 +84,23 @@ impl World {
                 stage: method.name(),
             }));
         }
-        ran?;
-        if guard && self.particles.first_non_finite().is_some() {
+        let ran = ran?;
+        self.clock.lap("leave pool");
+        if matches!(ran, Ran::NonFinite) {
             self.restore_backup();
             let found = self.in_pool(|w| w.run_substeps(dt, true));
             self.restore_backup();
-            let (particle, stage) = found.unwrap_or((self.particles.first_non_finite().unwrap_or(0), "step"));
+            let (particle, stage) = match found {
+                Ran::Found(i, stage) => (i, stage),
+                _ => (self.particles.first_non_finite().unwrap_or(0), "step"),
+            };
             return Err(WeftError::Diverged { particle, stage });
         }
+        self.clock.lap("guard check");
         self.finish_kinematic();
         self.time += dt as f64;
         self.steps += 1;
+        self.clock.stop("step end");
         Ok(())
     }
 
@@ -113,8 +137,11 @@ impl World {
     }
 
     /// Runs the substeps. With `check`, stops at the first stage that leaves a non-finite
-    /// value and returns `(particle, stage)`; without, never checks (the fast path).
-    fn run_substeps(&mut self, dt: f32, check: bool) -> Option<(usize, &'static str)> {
+    /// value and returns it as [`Ran::Found`]; without (the fast path), with the guard on, saves
+    /// the state in the first predict and checks the end state in the last update
+    /// ([`Ran::NonFinite`]).
+    fn run_substeps(&mut self, dt: f32, check: bool) -> Ran {
+        self.clock.lap("enter pool");
         let n = self.particles.count();
         let n_sub = self.params.substeps;
         let h = dt / n_sub as f32;
@@ -136,12 +163,14 @@ impl World {
             ($stage:literal, $($a:expr),+) => {
                 if check {
                     if let Some(i) = first_non_finite(&[$(&$a[..]),+], n) {
-                        return Some((i, $stage));
+                        return Ran::Found(i, $stage);
                     }
                 }
             };
         }
         let has_obstacles = !self.obstacles.is_empty();
+        let fused_guard = self.params.guard && !check;
+        let all_finite = std::sync::atomic::AtomicBool::new(true);
         if has_obstacles {
             self.obstacles.prepare(&self.particles, &self.cloths, &self.strands);
         }
@@ -157,12 +186,14 @@ impl World {
             let steps = self.steps;
             self.selfcol.record_start_state([&p.x, &p.y, &p.z], n, steps, parallel);
         }
+        self.clock.lap("step setup");
         for s in 0..n_sub {
             let t = self.time + (s as f64) * (h as f64);
             if let (Some(w), Some(state)) = (&self.effects.wind, &mut self.wind) {
                 let p = &self.particles;
                 state.compute(w, t, &self.triangles, [&p.x, &p.y, &p.z], [&p.vx, &p.vy, &p.vz], parallel);
                 checkpoint!("wind", state.fx, state.fy, state.fz);
+                self.clock.lap("wind");
             }
             {
                 let force = self.wind.as_ref().map(|w| [&w.fx[..], &w.fy[..], &w.fz[..]]);
@@ -172,12 +203,22 @@ impl World {
                     drag: self.effects.drag,
                     force,
                 };
-                self.particles.for_chunks(parallel, |c| predict(c, &pp, simd));
+                if fused_guard && s == 0 {
+                    self.particles.for_chunks_saving(parallel, &mut self.backup, |c, saved| {
+                        for (dst, src) in saved.into_iter().zip(c.state()) {
+                            dst.copy_from_slice(src);
+                        }
+                        predict(c, &pp, simd)
+                    });
+                } else {
+                    self.particles.for_chunks(parallel, |c| predict(c, &pp, simd));
+                }
             }
             {
                 let p = &self.particles;
                 checkpoint!("predict", p.px, p.py, p.pz, p.vx, p.vy, p.vz);
             }
+            self.clock.lap("predict");
             if has_obstacles {
                 let t0 = std::time::Instant::now();
                 let t_end = self.time + ((s + 1) as f64) * (h as f64);
@@ -186,6 +227,7 @@ impl World {
                 self.obstacles.add_busy(t0);
                 let p = &self.particles;
                 checkpoint!("obstacles", p.px, p.py, p.pz);
+                self.clock.lap("obstacle contacts");
             }
             if let Some(a) = sc {
                 let t0 = std::time::Instant::now();
@@ -193,6 +235,7 @@ impl World {
                 sc_time += t0.elapsed();
                 let p = &self.particles;
                 checkpoint!("self-collision clamp", p.px, p.py, p.pz, p.vx, p.vy, p.vz);
+                self.clock.lap("self-collision clamp");
             }
             self.distance.reset_lambda();
             for _ in 0..self.params.iterations {
@@ -203,6 +246,7 @@ impl World {
                     self.distance.solve_scalar(&mut p.px, &mut p.py, &mut p.pz, &p.w, inv_h2);
                 }
                 checkpoint!("constraints", p.px, p.py, p.pz);
+                self.clock.lap("distance constraints");
                 if !self.tethers.is_empty() {
                     if simd {
                         self.tethers.solve_simd(&mut p.px, &mut p.py, &mut p.pz, parallel);
@@ -210,12 +254,14 @@ impl World {
                         self.tethers.solve_scalar(&mut p.px, &mut p.py, &mut p.pz);
                     }
                     checkpoint!("tethers", p.px, p.py, p.pz);
+                    self.clock.lap("tethers");
                 }
                 if has_obstacles {
                     let t0 = std::time::Instant::now();
                     self.obstacles.project(p, parallel, simd);
                     self.obstacles.add_busy(t0);
                     checkpoint!("obstacles", p.px, p.py, p.pz);
+                    self.clock.lap("obstacle projection");
                 }
                 if !self.scalps.is_empty() {
                     if parallel {
@@ -224,6 +270,7 @@ impl World {
                         self.scalps.solve_scalar(&mut p.px, &mut p.py, &mut p.pz, &p.w);
                     }
                     checkpoint!("scalp", p.px, p.py, p.pz);
+                    self.clock.lap("scalp");
                 }
             }
             if let Some(a) = sc {
@@ -232,24 +279,62 @@ impl World {
                 sc_time += t0.elapsed();
                 let p = &self.particles;
                 checkpoint!("self-collision", p.px, p.py, p.pz);
+                self.clock.lap("self-collision pairs");
             }
             let damp = self.has_damping.then_some(&self.damp_factor[..]);
+            if !check {
+                // update, the obstacle velocity pass and (last substep) the guard's check,
+                // chunk by chunk: element-wise, so the same bits as three passes
+                let last = fused_guard && s + 1 == n_sub;
+                let motion = if has_obstacles { self.obstacles.motion() } else { Vec::new() };
+                let (obstacles, finite) = (&self.obstacles, &all_finite);
+                let velocity_ns = std::sync::atomic::AtomicU64::new(0);
+                self.particles.for_chunks(parallel, |mut c| {
+                    update(c.reborrow(), h, damp, simd);
+                    if has_obstacles {
+                        let t0 = std::time::Instant::now();
+                        obstacles.velocity_pass_chunk(&motion, &mut c, simd);
+                        let ns = t0.elapsed().as_nanos() as u64;
+                        velocity_ns.fetch_add(ns, std::sync::atomic::Ordering::Relaxed);
+                    }
+                    if last {
+                        let real = n.saturating_sub(c.start).min(c.x.len());
+                        if !chunk_finite_simd(&c.state(), real) {
+                            finite.store(false, std::sync::atomic::Ordering::Relaxed);
+                        }
+                    }
+                });
+                if has_obstacles {
+                    // the velocity part's time summed over chunks, shared by the threads
+                    let threads = if parallel { rayon::current_num_threads() as u64 } else { 1 };
+                    let ns = velocity_ns.into_inner() / threads.max(1);
+                    self.obstacles.add_duration(std::time::Duration::from_nanos(ns));
+                }
+                self.clock.lap("update, obstacle velocity");
+                continue;
+            }
             self.particles.for_chunks(parallel, |c| update(c, h, damp, simd));
             let p = &self.particles;
             checkpoint!("update", p.x, p.y, p.z, p.vx, p.vy, p.vz);
+            self.clock.lap("update");
             if has_obstacles {
                 let t0 = std::time::Instant::now();
                 self.obstacles.velocity_pass(&mut self.particles, parallel, simd);
                 self.obstacles.add_busy(t0);
                 let p = &self.particles;
                 checkpoint!("obstacles", p.vx, p.vy, p.vz);
+                self.clock.lap("obstacle velocity");
             }
         }
         if sc.is_some() && !check {
             self.selfcol.stats.time_s += sc_time.as_secs_f64();
             self.selfcol.stats.steps += 1;
         }
-        None
+        if all_finite.into_inner() {
+            Ran::Clean
+        } else {
+            Ran::NonFinite
+        }
     }
 }
 

@@ -63,6 +63,8 @@ pub struct World {
     pub(crate) selfcol: crate::collide::self_collision::SelfCollisionData,
     /// Scratch of the force-based integrators (force arrays, implicit factorisation).
     pub(crate) ms: crate::integrate::mass_spring::MassSpringState,
+    /// Per-stage wall time of the step, when on.
+    pub(crate) clock: crate::stage_clock::StageClock,
 }
 
 impl World {
@@ -99,6 +101,7 @@ impl World {
             strand_area: Vec::new(),
             selfcol: Default::default(),
             ms: Default::default(),
+            clock: Default::default(),
         })
     }
 

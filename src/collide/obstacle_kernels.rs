@@ -4,15 +4,28 @@
 //! `obstacle_simd.rs`).
 //!
 //! **Slots.** Each obstacle owns one contact slot per particle: the tangent plane `(c, n)` of
-//! [`ShapeContact`](super::shapes::ShapeContact) (or of a mesh face). The slots are stored in
-//! blocks of eight particles, `[cx; 8] [cy; 8] [cz; 8] [nx; 8] [ny; 8] [nz; 8] [a; 8]`, so a SIMD
-//! lane reads contiguous values and a parallel task owns whole blocks. "No contact" is the
-//! zero normal, which makes the projection branch-free. `a` is the approach speed
-//! `max(0, -n.(v - u))` of the predicted velocity when the contact was found ([`fill_approach`]).
+//! [`ShapeContact`](super::shapes::ShapeContact) (or of a mesh face), in blocks of eight
+//! with a per-block "touched" flag ([`Slots`], `obstacle_slots.rs`). "No contact" is the zero
+//! normal. `a` is the approach speed `max(0, -n.(v - u))` of the predicted velocity when the
+//! contact was found ([`fill_approach`]). Every pass skips blocks whose flag is down.
+//!
+//! **Sphere pre-test.** Most blocks of a large cloth are far from a sphere. Before the full
+//! sphere test (three square roots, divisions) a block runs [`shape_may_touch_simd`]: the
+//! proximity test itself (the same expression, so the same bits), and a distance bound for
+//! the crossing. A path `x -> p` that enters the ball of radius `r + th <= R = r + reach` at
+//! `e = x + t (p - x)`, `0 <= t <= 1`, ends within `|p - e| <= |p - x|` of it, so
+//! `|p - c| <= R + |p - x|`. The crossing's `t` comes from a quadratic whose rounding error
+//! near tangency is of order `sqrt(eps) ~ 3e-4` relative, so the bound is taken with a margin
+//! of `2e-3` relative (and `1e-6` m): a lane is far when
+//! `|p - c| (1 - 2e-3) > (R + |p - x|) (1 + 2e-3) + 1e-6`. A block whose lanes are all far
+//! and not in proximity gets exactly the empty block the full test would write (or keeps it,
+//! without a write); `sphere_pretest_never_rejects_a_contact` tests this on paths around the
+//! proximity and thickness shells, grazing ones included.
 //!
 //! **Projection** (every solver iteration, after the constraints): the inequality
 //! `n.(p - c) >= Th` is enforced by `p += max(0, Th - n.(p - c)) n` (PBD, Müller et al. 2007;
-//! the paper's "stand off the face by the thickness"). A zero normal leaves `p` unchanged.
+//! the paper's "stand off the face by the thickness"). A zero normal leaves `p` unchanged,
+//! bit for bit (a signed zero too), so blocks without contact need not be visited.
 //!
 //! **Velocity pass** (after the velocity update): for a particle standing on its contact
 //! plane (`n.(x - c) <= Th + TOUCH_SLACK`), the velocity relative to the obstacle `w = v - u`
@@ -30,23 +43,13 @@ use crate::lanes::{F32s, Vec3x8, LANES};
 
 #[path = "obstacle_simd.rs"]
 mod simd;
+#[path = "obstacle_slots.rs"]
+mod slots;
 pub use simd::{resolve_simd, velocity_pass_simd};
-
-/// Floats per block of eight slots.
-pub const SLOT_BLOCK: usize = 7 * LANES;
+pub(crate) use slots::skip_untouched;
+pub use slots::{block_nonzero, block_touched, normals_set, read_approach, read_slot, write_slot, Slots, SLOT_BLOCK};
 /// A particle within this distance beyond the thickness still counts as touching.
 pub const TOUCH_SLACK: f32 = 1e-4;
-
-/// Writes slot `i` of `blocks` (blocks start at particle `first`).
-#[inline]
-pub fn write_slot(blocks: &mut [f32], i: usize, point: [f32; 3], normal: [f32; 3]) {
-    let (b, l) = (i / LANES, i % LANES);
-    for k in 0..3 {
-        blocks[b * SLOT_BLOCK + k * LANES + l] = point[k];
-        blocks[b * SLOT_BLOCK + (3 + k) * LANES + l] = normal[k];
-    }
-    blocks[b * SLOT_BLOCK + 6 * LANES + l] = 0.0;
-}
 
 /// Sets the approach speeds `max(0, -n.(v - u))` of the eight slots of one block (`out`, the
 /// block's floats) from the velocities of particles `b * 8 ..`; slots without contact get 0
@@ -83,12 +86,6 @@ pub fn fill_approach_simd(out: &mut [f32], b: usize, v: [&[f32]; 3], u: [f32; 3]
     crate::lanes::store(out, 6 * LANES, a.simd_gt(zero).select(a, zero));
 }
 
-/// Approach speed of slot `i`.
-#[inline]
-pub fn read_approach(blocks: &[f32], i: usize) -> f32 {
-    blocks[i / LANES * SLOT_BLOCK + 6 * LANES + i % LANES]
-}
-
 /// The velocity `w` (relative to the obstacle) after contact with normal `n`, approach speed
 /// `a` and friction `mu` (module doc).
 pub fn contact_velocity(w: [f32; 3], n: [f32; 3], a: f32, mu: f32) -> [f32; 3] {
@@ -100,39 +97,6 @@ pub fn contact_velocity(w: [f32; 3], n: [f32; 3], a: f32, mu: f32) -> [f32; 3] {
     let drop = mu * if -wn > a { -wn } else { a };
     let f = if lt <= drop { 0.0 } else { 1.0 - drop / lt };
     [0, 1, 2].map(|k| wt[k] * f + keep_n * n[k])
-}
-
-/// Does any of the eight slots of block `b` hold a contact (a normal other than zero) in any
-/// of `slots`? The passes below skip whole blocks that do not.
-#[inline]
-pub fn block_touched(slots: &[Vec<f32>], b: usize) -> bool {
-    slots.iter().any(|s| normals_set(&s[b * SLOT_BLOCK..(b + 1) * SLOT_BLOCK]))
-}
-
-/// Does one slot block (its [`SLOT_BLOCK`] floats) hold a normal other than zero? The same as
-/// "any normal component `!= 0.0`" (NaN counts as set), computed without branches: the bits
-/// of every component but the sign, or-ed together.
-#[inline]
-pub fn normals_set(block: &[f32]) -> bool {
-    block[3 * LANES..6 * LANES].iter().fold(0u32, |a, &c| a | (c.to_bits() << 1)) != 0
-}
-
-/// The next particle index from `i` (of a run starting at particle `start`, `len` long) that
-/// may hold a contact: `i` itself unless it starts a whole block without any.
-#[inline]
-fn skip_untouched(slots: &[Vec<f32>], start: usize, len: usize, mut i: usize) -> usize {
-    while (start + i).is_multiple_of(LANES) && i + LANES <= len && !block_touched(slots, (start + i) / LANES) {
-        i += LANES;
-    }
-    i
-}
-
-/// Reads slot `i`: `(point, normal)`.
-#[inline]
-pub fn read_slot(blocks: &[f32], i: usize) -> ([f32; 3], [f32; 3]) {
-    let (b, l) = (i / LANES, i % LANES);
-    let g = |k: usize| blocks[b * SLOT_BLOCK + k * LANES + l];
-    ([g(0), g(1), g(2)], [g(3), g(4), g(5)])
 }
 
 #[inline(always)]
@@ -220,6 +184,50 @@ pub fn shape_block_scalar(shape: &Shape, g: &GenInput, b: usize, out: &mut [f32]
     }
 }
 
+/// Relative margin of the sphere pre-test's distance bound (module doc).
+const PRETEST_REL: f32 = 2e-3;
+/// Absolute margin of the sphere pre-test's distance bound, m.
+const PRETEST_ABS: f32 = 1e-6;
+
+/// May block `b` touch `shape`? Always for shapes other than a sphere; for a sphere the
+/// pre-test of the module doc, eight lanes at once: `false` guarantees that
+/// [`shape_block_simd`] (and its twin) finds no contact in the block.
+pub fn shape_may_touch_simd(shape: &Shape, g: &GenInput, b: usize) -> bool {
+    let Shape::Sphere { center, radius } = shape else {
+        return true;
+    };
+    let i = b * LANES;
+    let c = Vec3x8::splat(*center);
+    let p = Vec3x8::load(g.p[0], g.p[1], g.p[2], i);
+    let x = Vec3x8::load(g.x[0], g.x[1], g.x[2], i) - Vec3x8::splat(g.shift);
+    let rr = F32s::splat(*radius) + crate::lanes::load(g.reach, i);
+    let l2 = (p - c).length_sq();
+    let prox = l2.simd_lt(rr * rr);
+    let dl = (p - x).length_sq().sqrt();
+    let bound = (rr + dl) * F32s::splat(1.0 + PRETEST_REL) + F32s::splat(PRETEST_ABS);
+    let far = (l2.sqrt() * F32s::splat(1.0 - PRETEST_REL)).simd_gt(bound);
+    (prox | !far).any()
+}
+
+/// Scalar twin of [`shape_may_touch_simd`] (the same operations lane by lane).
+pub fn shape_may_touch_scalar(shape: &Shape, g: &GenInput, b: usize) -> bool {
+    let Shape::Sphere { center, radius } = shape else {
+        return true;
+    };
+    (b * LANES..(b + 1) * LANES).any(|i| {
+        let (x, p) = g.path(i);
+        let rr = radius + g.reach[i];
+        let dp = sub(p, *center);
+        let l2 = dot(dp, dp);
+        let prox = l2 < rr * rr;
+        let d = sub(p, x);
+        let dl = dot(d, d).sqrt();
+        let bound = (rr + dl) * (1.0 + PRETEST_REL) + PRETEST_ABS;
+        let far = l2.sqrt() * (1.0 - PRETEST_REL) > bound;
+        prox || !far
+    })
+}
+
 /// Contacts of block `b` with `shape`, eight lanes at once for planes and spheres (other
 /// shapes use the scalar path). `out` is the block's 48 floats.
 pub fn shape_block_simd(shape: &Shape, g: &GenInput, b: usize, out: &mut [f32]) {
@@ -305,32 +313,46 @@ impl Div for Vec3x8 {
 }
 
 /// Scalar twin of [`project_simd`]: `p += max(0, Th - n.(p - c)) n` for every slot set, in
-/// obstacle order, over the particles `start .. start + p[0].len()`.
-pub fn project_scalar(slots: &[Vec<f32>], th: &[f32], start: usize, p: [&mut [f32]; 3]) {
+/// obstacle order, over the particles `start .. start + p[0].len()`; particles without any
+/// contact keep their bits.
+pub fn project_scalar(slots: &[Slots], th: &[f32], start: usize, p: [&mut [f32]; 3]) {
     let [px, py, pz] = p;
-    for i in 0..px.len() {
+    let mut i = 0;
+    while i < px.len() {
+        i = skip_untouched(slots, start, px.len(), i);
+        if i >= px.len() {
+            break;
+        }
         let g = start + i;
         let mut q = [px[i], py[i], pz[i]];
         for s in slots {
-            let (c, n) = read_slot(s, g);
+            let (c, n) = read_slot(&s.data, g);
+            if n == [0.0; 3] {
+                continue;
+            }
             let d = (th[g] - dot(n, sub(q, c))).max(0.0);
             q = [q[0] + n[0] * d, q[1] + n[1] * d, q[2] + n[2] * d];
         }
         (px[i], py[i], pz[i]) = (q[0], q[1], q[2]);
+        i += 1;
     }
 }
 
 /// The projection eight particles at a time (`start` and the chunk length are multiples of
-/// eight).
-pub fn project_simd(slots: &[Vec<f32>], th: &[f32], start: usize, p: [&mut [f32]; 3]) {
+/// eight); blocks without contact are skipped, lanes without contact keep their bits.
+pub fn project_simd(slots: &[Slots], th: &[f32], start: usize, p: [&mut [f32]; 3]) {
     let [px, py, pz] = p;
     let zero = F32s::splat(0.0);
     for j in (0..px.len()).step_by(LANES) {
         let g = start + j;
         let b = g / LANES;
+        if !block_touched(slots, b) {
+            continue;
+        }
         let mut q = Vec3x8::load(px, py, pz, j);
         let t = crate::lanes::load(th, g);
         for s in slots {
+            let s = &s.data;
             let c = Vec3x8 {
                 x: load_block(s, b, 0),
                 y: load_block(s, b, 1),
@@ -341,8 +363,9 @@ pub fn project_simd(slots: &[Vec<f32>], th: &[f32], start: usize, p: [&mut [f32]
                 y: load_block(s, b, 4),
                 z: load_block(s, b, 5),
             };
+            let set = n.x.simd_ne(zero) | n.y.simd_ne(zero) | n.z.simd_ne(zero);
             let d = (t - n.dot(q - c)).max(zero);
-            q = q + n.scale(d);
+            q = Vec3x8::select(set, q + n.scale(d), q);
         }
         q.store(px, py, pz, j);
     }
@@ -355,7 +378,7 @@ pub fn project_simd(slots: &[Vec<f32>], th: &[f32], start: usize, p: [&mut [f32]
 /// contact is the first crossing of the path, so the point reached lies before every crossing:
 /// outside the obstacle ([`resolve_position`](super::mesh_response::resolve_position)).
 /// Element-wise; the parallel and serial runs give the same bits.
-pub fn resolve_along_path(slots: &[Vec<f32>], shifts: &[[f32; 3]], th: &[f32], start: usize, x: [&[f32]; 3], p: [&mut [f32]; 3]) {
+pub fn resolve_along_path(slots: &[Slots], shifts: &[[f32; 3]], th: &[f32], start: usize, x: [&[f32]; 3], p: [&mut [f32]; 3]) {
     let [px, py, pz] = p;
     let mut i = 0;
     while i < px.len() {
@@ -366,7 +389,7 @@ pub fn resolve_along_path(slots: &[Vec<f32>], shifts: &[[f32; 3]], th: &[f32], s
         let g = start + i;
         let mut q = [px[i], py[i], pz[i]];
         for (s, u) in slots.iter().zip(shifts) {
-            let (c, n) = read_slot(s, g);
+            let (c, n) = read_slot(&s.data, g);
             if n == [0.0; 3] {
                 continue;
             }
@@ -387,7 +410,7 @@ pub fn resolve_along_path(slots: &[Vec<f32>], shifts: &[[f32; 3]], th: &[f32], s
 
 /// Velocity pass for particles `start .. start + v[0].len()`: for every obstacle `k` whose
 /// slot touches the particle, `v = u_k + contact_velocity(v - u_k, n, a, mu_k)`.
-pub fn velocity_pass(slots: &[Vec<f32>], motion: &[([f32; 3], f32)], th: &[f32], start: usize, x: [&[f32]; 3], v: [&mut [f32]; 3]) {
+pub fn velocity_pass(slots: &[Slots], motion: &[([f32; 3], f32)], th: &[f32], start: usize, x: [&[f32]; 3], v: [&mut [f32]; 3]) {
     let [vx, vy, vz] = v;
     let mut i = 0;
     while i < vx.len() {
@@ -398,12 +421,12 @@ pub fn velocity_pass(slots: &[Vec<f32>], motion: &[([f32; 3], f32)], th: &[f32],
         let g = start + i;
         let q = [x[0][i], x[1][i], x[2][i]];
         for (s, &(u, mu)) in slots.iter().zip(motion) {
-            let (c, n) = read_slot(s, g);
+            let (c, n) = read_slot(&s.data, g);
             if n == [0.0; 3] || dot(n, sub(q, c)) > th[g] + TOUCH_SLACK {
                 continue;
             }
             let rel = [vx[i] - u[0], vy[i] - u[1], vz[i] - u[2]];
-            let w = contact_velocity(rel, n, read_approach(s, g), mu);
+            let w = contact_velocity(rel, n, read_approach(&s.data, g), mu);
             (vx[i], vy[i], vz[i]) = (w[0] + u[0], w[1] + u[1], w[2] + u[2]);
         }
         i += 1;

@@ -88,13 +88,14 @@ proptest! {
         let v = arrays(&seed, usize::MAX);
         let g = input(&v, seed.len(), [0.0; 3]);
         let blocks = v[0].len() / LANES;
-        let mut slots = vec![vec![0.0; blocks * SLOT_BLOCK]; 2];
+        let mut data = vec![vec![0.0; blocks * SLOT_BLOCK]; 2];
         let shapes = [Shape::Sphere { center: [0.1, -0.2, 0.3], radius: 0.8 }, Shape::plane([0.0, -0.5, 0.0], [0.2, 1.0, 0.1]).unwrap()];
-        for (s, out) in shapes.iter().zip(&mut slots) {
+        for (s, out) in shapes.iter().zip(&mut data) {
             for b in 0..blocks {
                 shape_block_scalar(s, &g, b, &mut out[b * SLOT_BLOCK..(b + 1) * SLOT_BLOCK]);
             }
         }
+        let slots: Vec<Slots> = data.into_iter().map(Slots::from_data).collect();
         let (mut a, mut c) = ([v[3].clone(), v[4].clone(), v[5].clone()], [v[3].clone(), v[4].clone(), v[5].clone()]);
         {
             let [x, y, z] = &mut a;
@@ -110,7 +111,7 @@ proptest! {
         // the last projection wins: every particle with a plane contact stands off the plane (up to rounding)
         for i in 0..seed.len() {
             let q = [a[0][i], a[1][i], a[2][i]];
-            if read_slot(&slots[1], i).1 == [0.0; 3] {
+            if read_slot(&slots[1].data, i).1 == [0.0; 3] {
                 continue;
             }
             prop_assert!(shapes[1].signed_distance(q) >= v[7][i] - 1e-5, "{:?}", q);
@@ -120,9 +121,9 @@ proptest! {
 
 #[test]
 fn velocity_pass_removes_approach_and_applies_friction() {
-    let mut slots = vec![vec![0.0; SLOT_BLOCK]];
-    write_slot(&mut slots[0], 0, [0.0; 3], [0.0, 1.0, 0.0]);
-    write_slot(&mut slots[0], 1, [0.0; 3], [0.0, 1.0, 0.0]);
+    let mut slots = vec![Slots::new(1)];
+    slots[0].write(0, [0.0; 3], [0.0, 1.0, 0.0]);
+    slots[0].write(1, [0.0; 3], [0.0, 1.0, 0.0]);
     let th = vec![0.01; LANES];
     let (x, y, z) = (vec![0.0; LANES], vec![0.01, 0.5, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], vec![0.0; LANES]);
     let (mut vx, mut vy, mut vz) = (vec![3.0; LANES], vec![-1.0; LANES], vec![0.0; LANES]);
@@ -130,8 +131,8 @@ fn velocity_pass_removes_approach_and_applies_friction() {
     assert_eq!((vx[0], vy[0]), (2.5, 0.0));
     // the approach speed measured before the projection sets the friction
     let (vx2, vy2, vz2) = (vec![3.0; LANES], vec![0.0; LANES], vec![0.0; LANES]);
-    fill_approach(&mut slots[0], 0, [&[0.0; LANES], &[-4.0; LANES], &[0.0; LANES]], [0.0; 3]);
-    assert_eq!(read_approach(&slots[0], 0), 4.0);
+    fill_approach(&mut slots[0].data, 0, [&[0.0; LANES], &[-4.0; LANES], &[0.0; LANES]], [0.0; 3]);
+    assert_eq!(read_approach(&slots[0].data, 0), 4.0);
     let w = contact_velocity([vx2[0], vy2[0], vz2[0]], [0.0, 1.0, 0.0], 4.0, 0.5);
     assert!((w[0] - 1.0).abs() < 1e-6 && w[1] == 0.0 && w[2] == 0.0, "{w:?}");
     assert_eq!(contact_velocity([1.0, 0.0, 0.0], [0.0, 1.0, 0.0], 4.0, 0.5), [0.0; 3]);
@@ -148,14 +149,18 @@ fn velocity_pass_removes_approach_and_applies_friction() {
 fn block_skipping_passes_equal_particle_by_particle() {
     let n = 8 * LANES;
     let mut r = crate::test_rng::signed(5);
-    let mut slots = vec![vec![0.0; n / LANES * SLOT_BLOCK]; 2];
+    let mut slots = vec![Slots::new(n / LANES); 2];
     for (k, s) in slots.iter_mut().enumerate() {
         for i in (0..n).filter(|i| (i / LANES) % 3 == k && i % 3 != 1) {
             let nrm = [r(), 1.0 + r().abs(), r()];
             let l = (nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]).sqrt();
-            write_slot(s, i, [r() * 0.1, r() * 0.01, r() * 0.1], nrm.map(|c| c / l));
+            s.write(i, [r() * 0.1, r() * 0.01, r() * 0.1], nrm.map(|c| c / l));
         }
-        fill_approach(s, 0, [&vec![0.5; n], &vec![-1.0; n], &vec![0.0; n]], [0.0; 3]);
+        for b in 0..n / LANES {
+            let v = [&vec![0.5; n][..], &vec![-1.0; n][..], &vec![0.0; n][..]];
+            fill_approach(&mut s.data[b * SLOT_BLOCK..(b + 1) * SLOT_BLOCK], b, v, [0.0; 3]);
+        }
+        assert!(s.flags_consistent());
     }
     let th = vec![0.01; n];
     let shifts = [[0.0; 3], [0.001, 0.0, 0.0]];
@@ -165,12 +170,15 @@ fn block_skipping_passes_equal_particle_by_particle() {
     let (mut whole, mut single) = (p0.clone(), p0.clone());
     let [a, b, c] = &mut whole;
     resolve_along_path(&slots, &shifts, &th, 0, [&x[0], &x[1], &x[2]], [a, b, c]);
+    let [a, b, c] = &mut whole;
+    project_scalar(&slots, &th, 0, [a, b, c]);
     let [vw0, vw1, vw2] = &mut whole;
     velocity_pass(&slots, &motion, &th, 0, [&x[0], &x[1], &x[2]], [vw0, vw1, vw2]);
     for i in 0..n {
         let [a, b, c] = &mut single;
         let xs = [&x[0][i..i + 1], &x[1][i..i + 1], &x[2][i..i + 1]];
         resolve_along_path(&slots, &shifts, &th, i, xs, [&mut a[i..i + 1], &mut b[i..i + 1], &mut c[i..i + 1]]);
+        project_scalar(&slots, &th, i, [&mut a[i..i + 1], &mut b[i..i + 1], &mut c[i..i + 1]]);
         velocity_pass(&slots, &motion, &th, i, xs, [&mut a[i..i + 1], &mut b[i..i + 1], &mut c[i..i + 1]]);
     }
     assert_eq!(whole, single);
@@ -181,14 +189,14 @@ fn block_skipping_passes_equal_particle_by_particle() {
 /// Two obstacles' slots over `n` particles from `seed` (one tuple per particle and obstacle:
 /// point, normal direction, approach speed, and whether the slot holds a contact).
 #[allow(clippy::type_complexity)]
-fn random_slots(seed: &[((f32, f32, f32), (f32, f32, f32), f32, bool)], n: usize) -> Vec<Vec<f32>> {
-    let mut slots = vec![vec![0.0; n / LANES * SLOT_BLOCK]; 2];
+fn random_slots(seed: &[((f32, f32, f32), (f32, f32, f32), f32, bool)], n: usize) -> Vec<Slots> {
+    let mut slots = vec![Slots::new(n / LANES); 2];
     for (j, &((cx, cy, cz), (nx, ny, nz), a, set)) in seed.iter().enumerate().take(2 * n) {
         let (k, i) = (j % 2, j / 2);
         let l = (nx * nx + ny * ny + nz * nz).sqrt();
         if set && l > 1e-3 {
-            write_slot(&mut slots[k], i, [cx, cy, cz], [nx / l, ny / l, nz / l]);
-            slots[k][i / LANES * SLOT_BLOCK + 6 * LANES + i % LANES] = a;
+            slots[k].write(i, [cx, cy, cz], [nx / l, ny / l, nz / l]);
+            slots[k].set_approach(i, a);
         }
     }
     slots
@@ -257,19 +265,21 @@ proptest! {
     }
 }
 
-/// The SIMD passes keep untouched lanes exactly, signed zeros included, and do change
-/// touched ones.
+/// The SIMD passes (response, projection, velocity) keep untouched lanes exactly, signed
+/// zeros included, and do change touched ones.
 #[test]
 fn simd_passes_keep_untouched_lanes_bitwise() {
-    let mut slots = vec![vec![0.0; SLOT_BLOCK]];
-    write_slot(&mut slots[0], 3, [0.0; 3], [0.0, 1.0, 0.0]);
-    slots[0][6 * LANES + 3] = 1.0;
+    let mut slots = vec![Slots::new(1)];
+    slots[0].write(3, [0.0; 3], [0.0, 1.0, 0.0]);
+    slots[0].set_approach(3, 1.0);
     let th = vec![0.01; LANES];
     let x = [vec![-0.0; LANES], vec![0.5; LANES], vec![-0.0; LANES]];
     let xr = [&x[0][..], &x[1][..], &x[2][..]];
     let mut p = [vec![-0.0; LANES], vec![-0.1; LANES], vec![-0.0; LANES]];
     let [a, b, c] = &mut p;
     resolve_simd(&slots, &[[0.0; 3]], &th, 0, xr, [a, b, c]);
+    let [a, b, c] = &mut p;
+    project_simd(&slots, &th, 0, [a, b, c]);
     let mut v = [vec![-0.0; LANES], vec![-1.0; LANES], vec![-0.0; LANES]];
     let x2 = [vec![-0.0; LANES], vec![0.01; LANES], vec![-0.0; LANES]];
     let [d, e, f] = &mut v;
@@ -291,7 +301,100 @@ fn normals_set_equals_any_nonzero_component() {
             block[at] = v;
             let expect = block[3 * LANES..6 * LANES].iter().any(|&c| c != 0.0);
             assert_eq!(normals_set(&block), expect, "{v} at {at}");
-            assert_eq!(block_touched(&[block], 0), expect);
+            // the touched flag is "not all +0.0": a signed zero anywhere counts
+            assert_eq!(block_touched(&[Slots::from_data(block)], 0), v.to_bits() != 0);
         }
     }
+}
+
+/// A point at distance `r + off` from `center` in direction `dir` (normalised).
+fn around(center: [f32; 3], dir: (f32, f32, f32), r: f32, off: f32) -> [f32; 3] {
+    let l = (dir.0 * dir.0 + dir.1 * dir.1 + dir.2 * dir.2).sqrt().max(1e-3);
+    let d = [dir.0 / l, dir.1 / l, dir.2 / l];
+    [0, 1, 2].map(|k| center[k] + d[k] * (r + off))
+}
+
+proptest! {
+    /// The sphere pre-test: SIMD equals scalar, and a block it rejects gets no contact from
+    /// the full test (SIMD or scalar), for paths that start and end right around the sphere's
+    /// proximity and thickness shells, moving in and out, fast and slow, shifted or not.
+    #[test]
+    fn sphere_pretest_never_rejects_a_contact(
+        lanes in proptest::collection::vec(((-1.0f32..1.0, -1.0f32..1.0, -1.0f32..1.0), -0.05f32..0.08, (-1.0f32..1.0, -1.0f32..1.0, -1.0f32..1.0), -0.05f32..0.08, 0.0f32..0.02, 0.0f32..0.02), 24),
+        r in 0.2f32..1.0,
+        shift in (-0.01f32..0.01, -0.01f32..0.01, -0.01f32..0.01),
+    ) {
+        let center = [0.1, 0.4, -0.2];
+        let len = 4 * LANES;
+        let mut v: [Vec<f32>; 9] = std::array::from_fn(|_| vec![0.0; len]);
+        for (i, &(dx, ox, dp, op, th, extra)) in lanes.iter().enumerate() {
+            let (x, p) = (around(center, dx, r, ox), around(center, dp, r, op));
+            for k in 0..3 {
+                v[k][i] = x[k];
+                v[3 + k][i] = p[k];
+            }
+            v[6][i] = 1.0;
+            v[7][i] = th;
+            v[8][i] = th + extra;
+        }
+        let g = GenInput {
+            x: [&v[0], &v[1], &v[2]],
+            p: [&v[3], &v[4], &v[5]],
+            w: &v[6],
+            th: &v[7],
+            reach: &v[8],
+            n: lanes.len(),
+            shift: [shift.0, shift.1, shift.2],
+        };
+        let sphere = Shape::Sphere { center, radius: r };
+        for b in 0..len / LANES {
+            let may = shape_may_touch_simd(&sphere, &g, b);
+            prop_assert_eq!(may, shape_may_touch_scalar(&sphere, &g, b));
+            let (mut a, mut c) = (vec![7.0; SLOT_BLOCK], vec![7.0; SLOT_BLOCK]);
+            shape_block_simd(&sphere, &g, b, &mut a);
+            shape_block_scalar(&sphere, &g, b, &mut c);
+            if !may {
+                prop_assert!(!block_nonzero(&a) && !block_nonzero(&c), "block {} rejected but {:?}", b, a);
+            }
+        }
+        prop_assert!(Shape::plane([0.0; 3], [0.0, 1.0, 0.0]).map(|p| shape_may_touch_simd(&p, &g, 0)).unwrap_or(false));
+    }
+}
+
+/// The pre-test rejects far blocks and keeps near ones (it is not vacuous), and the padding
+/// block of a cloth far from the sphere is rejected too.
+#[test]
+#[allow(clippy::needless_range_loop)] // `i` indexes nine arrays alike
+fn sphere_pretest_rejects_far_blocks_only() {
+    let len = 2 * LANES;
+    let mut v: [Vec<f32>; 9] = std::array::from_fn(|_| vec![0.0; len]);
+    for i in 0..len {
+        // block 0 rests 1 mm above the unit sphere's top, block 1 is 0.5 m above it
+        let y = if i < LANES { 1.001 } else { 1.5 };
+        v[1][i] = y;
+        v[4][i] = y - 1e-4;
+        v[6][i] = 1.0;
+        v[7][i] = 0.002;
+        v[8][i] = 0.005;
+        v[0][i] = 1e-3 * i as f32;
+        v[3][i] = 1e-3 * i as f32;
+    }
+    let g = GenInput {
+        x: [&v[0], &v[1], &v[2]],
+        p: [&v[3], &v[4], &v[5]],
+        w: &v[6],
+        th: &v[7],
+        reach: &v[8],
+        n: len,
+        shift: [0.0; 3],
+    };
+    let sphere = Shape::Sphere {
+        center: [0.0; 3],
+        radius: 1.0,
+    };
+    assert!(shape_may_touch_simd(&sphere, &g, 0) && shape_may_touch_scalar(&sphere, &g, 0));
+    assert!(!shape_may_touch_simd(&sphere, &g, 1) && !shape_may_touch_scalar(&sphere, &g, 1));
+    let mut out = vec![0.0; SLOT_BLOCK];
+    shape_block_simd(&sphere, &g, 0, &mut out);
+    assert!(normals_set(&out), "the near block touches");
 }

@@ -14,7 +14,7 @@
 //! [`contact_velocity`](super::contact_velocity) are comparisons and choices, so both agree bit
 //! for bit (`obstacle_kernels_tests.rs`).
 
-use super::{block_touched, TOUCH_SLACK};
+use super::{block_touched, Slots, TOUCH_SLACK};
 use crate::lanes::{load, F32s, Vec3x8, LANES};
 
 /// Contact point and normal of the eight slots of block `b`, and the lanes holding a contact.
@@ -38,7 +38,7 @@ fn slot_lanes(s: &[f32], b: usize) -> (Vec3x8, Vec3x8, F32s) {
 
 /// [`resolve_along_path`](super::resolve_along_path) eight particles at a time (bitwise equal
 /// to it); `start` and the chunk length are multiples of eight.
-pub fn resolve_simd(slots: &[Vec<f32>], shifts: &[[f32; 3]], th: &[f32], start: usize, x: [&[f32]; 3], p: [&mut [f32]; 3]) {
+pub fn resolve_simd(slots: &[Slots], shifts: &[[f32; 3]], th: &[f32], start: usize, x: [&[f32]; 3], p: [&mut [f32]; 3]) {
     let [px, py, pz] = p;
     let (zero, one) = (F32s::splat(0.0), F32s::splat(1.0));
     for j in (0..px.len()).step_by(LANES) {
@@ -51,7 +51,7 @@ pub fn resolve_simd(slots: &[Vec<f32>], shifts: &[[f32; 3]], th: &[f32], start: 
         let t = load(th, g);
         let x0 = Vec3x8::load(x[0], x[1], x[2], j);
         for (s, u) in slots.iter().zip(shifts) {
-            let (c, n, set) = slot_lanes(s, b);
+            let (c, n, set) = slot_lanes(&s.data, b);
             let xr = x0 - Vec3x8::splat(*u);
             let (hx, hp) = (n.dot(xr - c), n.dot(q - c));
             let back = set & hx.simd_gt(hp) & hx.simd_ge(t);
@@ -69,7 +69,7 @@ pub fn resolve_simd(slots: &[Vec<f32>], shifts: &[[f32; 3]], th: &[f32], start: 
 
 /// [`velocity_pass`](super::velocity_pass) eight particles at a time (bitwise equal to it);
 /// `start` and the chunk length are multiples of eight.
-pub fn velocity_pass_simd(slots: &[Vec<f32>], motion: &[([f32; 3], f32)], th: &[f32], start: usize, x: [&[f32]; 3], v: [&mut [f32]; 3]) {
+pub fn velocity_pass_simd(slots: &[Slots], motion: &[([f32; 3], f32)], th: &[f32], start: usize, x: [&[f32]; 3], v: [&mut [f32]; 3]) {
     let [vx, vy, vz] = v;
     let zero = F32s::splat(0.0);
     for j in (0..vx.len()).step_by(LANES) {
@@ -82,9 +82,9 @@ pub fn velocity_pass_simd(slots: &[Vec<f32>], motion: &[([f32; 3], f32)], th: &[
         let limit = load(th, g) + F32s::splat(TOUCH_SLACK);
         let mut vel = Vec3x8::load(vx, vy, vz, j);
         for (s, &(u, mu)) in slots.iter().zip(motion) {
-            let (c, n, set) = slot_lanes(s, b);
+            let (c, n, set) = slot_lanes(&s.data, b);
             let touch = set & !n.dot(q - c).simd_gt(limit);
-            let a = load(s, b * super::SLOT_BLOCK + 6 * LANES);
+            let a = load(&s.data, b * super::SLOT_BLOCK + 6 * LANES);
             let uu = Vec3x8::splat(u);
             let w = vel - uu;
             let wn = w.dot(n);
