@@ -66,17 +66,22 @@
 //! pairs between `1.5 d` and `q` at rest that the response leaves to the cloth's constraints),
 //! and averaged over the steps ([`SelfCollisionStats`]).
 
+use std::sync::OnceLock;
+use std::time::Instant;
+
 use rayon::prelude::*;
 
 use super::hash::SpatialHash;
+use super::neighbours::within;
 use super::neighbours::Neighbours;
 use super::particle_tree::{ParticleTree, TreeShape};
 use super::self_active::ActiveSet;
 pub(crate) use super::self_active::ApplyParams;
 use super::self_pairs::PairCtx;
+use super::self_verlet::{NearList, VerletLists};
 use crate::error::{positive, Result, WeftError};
 
-pub use super::self_config::{Response, SelfBroadphase, SelfCollision, SelfCollisionStats, PENETRATION_TOLERANCE};
+pub use super::self_config::{Response, SelfBroadphase, SelfCollision, SelfCollisionPhases, SelfCollisionStats, PENETRATION_TOLERANCE};
 
 /// Leaf size of the AABB tree (the paper's depth 5 gives ~312 particles a leaf at 10 000
 /// particles; 16 queries much faster and gives the same pairs).
@@ -110,14 +115,28 @@ pub struct SelfCollisionData {
     state: Option<State>,
     pub(crate) stats: SelfCollisionStats,
     last_measured: Option<u64>,
+    /// Rebuild the candidate lists every step (no reuse): the reference the tests hold the
+    /// reuse to.
+    pub(crate) fresh_every_step: bool,
 }
 
 #[derive(Clone, Debug)]
 struct State {
     hash: SpatialHash,
     tree: Option<ParticleTree>,
-    /// Compact lists: partners within `q` at the step's start, rest neighbours left out.
-    lists: Neighbours,
+    /// Whether the hash (or tree) was built from the positions of this step's start.
+    structure_fresh: bool,
+    /// Candidate lists (Verlet, reach `q + skin`), reused across steps.
+    verlet: VerletLists,
+    /// Near pairs of the candidates for the substeps.
+    near: NearList,
+    /// Candidate-list build the active blocks were made from.
+    active_of: u64,
+    /// Positions at the start of the step.
+    start: [Vec<f32>; 3],
+    /// Compact lists (partners within `q` at the step's start, rest neighbours left out),
+    /// filtered from the candidates on demand.
+    lists: OnceLock<Neighbours>,
     /// Metric lists: non-neighbours within the penetration limit (not timed).
     probe: Neighbours,
     ready: bool,
@@ -162,15 +181,27 @@ impl SelfCollisionData {
         })
     }
 
-    /// Rebuilds the compact pair lists and the active blocks from the positions at the start
-    /// of a step. Returns `false` (nothing to do this step) when off.
+    /// Makes the pair lists and the active blocks hold for the positions at the start of a
+    /// step (reusing the candidate lists when they still hold, see [`super::self_verlet`]).
+    /// Returns `false` (nothing to do this step) when off.
     pub(crate) fn begin_step(&mut self, x: [&[f32]; 3], n: usize, damping: &[f32]) -> Result<bool> {
+        let t0 = Instant::now();
+        let before = self.stats.phases.build_s + self.stats.phases.query_s;
         if !self.build_lists(x, n)? {
             return Ok(false);
         }
         if let Some(st) = &mut self.state {
-            st.active.rebuild(&st.lists, n, damping);
+            if st.active_of != st.verlet.rebuilds {
+                st.active.rebuild(&st.verlet.cand, n, damping);
+                st.active_of = st.verlet.rebuilds;
+            } else {
+                st.active.refresh_damping(damping);
+            }
         }
+        let ph = &mut self.stats.phases;
+        let total = t0.elapsed().as_secs_f64();
+        ph.step_start_s += total;
+        ph.lists_s += total - (ph.build_s + ph.query_s - before);
         Ok(true)
     }
 
@@ -183,31 +214,8 @@ impl SelfCollisionData {
         self.cloth_of[i] == self.cloth_of[j] && dist2(&self.rest, i, j) <= skip * skip
     }
 
-    /// Measures the penetration of the state the lists were just built from (once per step
-    /// count `steps`, skipping the initial state). Kept out of the timed collision stage.
-    pub(crate) fn record_start_state(&mut self, x: [&[f32]; 3], n: usize, steps: u64, parallel: bool) {
-        if steps > 0 && self.last_measured != Some(steps) {
-            let pct = self.penetration_pct(x, n, parallel);
-            self.stats.record(pct);
-            self.last_measured = Some(steps);
-        }
-    }
-
-    /// Measures (and records, once per step count) the penetration of the state `x`.
-    pub(crate) fn measure(&mut self, x: [&[f32]; 3], n: usize, steps: u64, parallel: bool) -> Result<f64> {
-        if self.last_measured == Some(steps) {
-            return Ok(self.stats.last_pct);
-        }
-        if !self.build_lists(x, n)? {
-            return Ok(0.0);
-        }
-        let pct = self.penetration_pct(x, n, parallel);
-        self.stats.record(pct);
-        self.last_measured = Some(steps);
-        Ok(pct)
-    }
-
-    /// Runs the broadphase on `x` with the query radius `q = 3 d`, keeping each pair once
+    /// Copies the step's start positions and runs the broadphase on `x` with the reach
+    /// `q + skin` (`q = 3 d`) unless the candidate lists still hold, keeping each pair once
     /// (`(i, j)` in the list of `i`, `j > i`) and dropping rest neighbours; `false` when off.
     fn build_lists(&mut self, x: [&[f32]; 3], n: usize) -> Result<bool> {
         let Some(a) = self.active() else { return Ok(false) };
@@ -215,31 +223,53 @@ impl SelfCollisionData {
         let mut st = self.state.take().unwrap_or_else(|| State {
             hash: SpatialHash::new(n),
             tree: None,
-            lists: Neighbours::new(),
+            structure_fresh: false,
+            verlet: VerletLists::default(),
+            near: NearList::default(),
+            active_of: u64::MAX,
+            start: Default::default(),
+            lists: OnceLock::new(),
             probe: Neighbours::new(),
             ready: false,
             active: ActiveSet::default(),
         });
         let q = QUERY_FACTOR * a.d;
         st.ready = false;
-        // Each pair once (`j > i`), rest neighbours dropped.
-        let keep = |i: usize, j: u32| j as usize > i && !self.rest_skipped(i, j as usize, a.d);
-        let done = match broadphase {
-            SelfBroadphase::Hash => st
-                .hash
-                .build(x[0], x[1], x[2], n, q * CELL_FACTOR)
-                .and_then(|_| st.hash.query_filtered(x[0], x[1], x[2], n, q, &keep, &mut st.lists)),
-            SelfBroadphase::AabbTree => {
-                let t = match st.tree.take() {
-                    Some(mut t) if t.len() == n => t.refit(x[0], x[1], x[2], n).map(|_| t),
-                    _ => ParticleTree::build(x[0], x[1], x[2], n, TreeShape::LeafSize(TREE_LEAF)),
-                };
-                t.and_then(|t| {
-                    let r = t.query_all(x[0], x[1], x[2], n, q, &mut st.lists);
-                    st.tree = Some(t);
-                    r
-                })
-                .map(|_| st.lists.retain(keep))
+        st.lists = OnceLock::new();
+        for (s, src) in st.start.iter_mut().zip(x) {
+            s.clear();
+            s.extend_from_slice(&src[..n.min(src.len())]);
+        }
+        let done = match st.verlet.plan(x, n, a.d, broadphase, self.fresh_every_step) {
+            None => {
+                st.structure_fresh = false;
+                Ok(())
+            }
+            Some(skin) => {
+                let reach = q + skin;
+                // Each pair once (`j > i`), rest neighbours dropped.
+                let keep = |i: usize, j: u32| j as usize > i && !self.rest_skipped(i, j as usize, a.d);
+                let t0 = Instant::now();
+                let built = self.build_structure(&mut st, x, n, reach, broadphase);
+                let t1 = Instant::now();
+                let r = built.and_then(|_| match (&st.tree, broadphase) {
+                    (Some(t), SelfBroadphase::AabbTree) => t
+                        .query_all(x[0], x[1], x[2], n, reach, &mut st.verlet.cand)
+                        .map(|_| st.verlet.cand.retain(keep)),
+                    _ => st.hash.query_filtered(x[0], x[1], x[2], n, reach, &keep, &mut st.verlet.cand),
+                });
+                let ph = &mut self.stats.phases;
+                ph.build_s += t1.duration_since(t0).as_secs_f64();
+                ph.query_s += t1.elapsed().as_secs_f64();
+                match r {
+                    Ok(()) => {
+                        st.verlet.built(x, n, a.d, broadphase, skin);
+                        st.near.invalidate();
+                        self.stats.phases.rebuilds += 1;
+                    }
+                    Err(_) => st.verlet.invalidate(),
+                }
+                r
             }
         };
         st.ready = done.is_ok();
@@ -247,45 +277,21 @@ impl SelfCollisionData {
         done.map(|_| true)
     }
 
-    /// Fills the metric lists (non-neighbours within the penetration limit) from the
-    /// broadphase of the same positions `x`.
-    fn probe_lists(&mut self, x: [&[f32]; 3], n: usize) -> Result<()> {
-        let d = self.distance();
-        let lim = d * (1.0 - PENETRATION_TOLERANCE);
-        let far2 = (1.5 * d) * (1.5 * d);
-        let Some(mut st) = self.state.take() else { return Ok(()) };
-        let keep = |i: usize, j: u32| self.cloth_of[i] != self.cloth_of[j as usize] || dist2(&self.rest, i, j as usize) > far2;
-        let r = match &st.tree {
-            Some(t) if self.config.as_ref().map(|c| c.broadphase) == Some(SelfBroadphase::AabbTree) => {
-                t.query_all(x[0], x[1], x[2], n, lim, &mut st.probe).map(|_| st.probe.retain(keep))
+    /// Builds the hash (cell `reach`) or refits the tree on `x`.
+    fn build_structure(&self, st: &mut State, x: [&[f32]; 3], n: usize, reach: f32, broadphase: SelfBroadphase) -> Result<()> {
+        st.structure_fresh = false;
+        match broadphase {
+            SelfBroadphase::Hash => st.hash.build(x[0], x[1], x[2], n, reach * CELL_FACTOR)?,
+            SelfBroadphase::AabbTree => {
+                let t = match st.tree.take() {
+                    Some(mut t) if t.len() == n => t.refit(x[0], x[1], x[2], n).map(|_| t),
+                    _ => ParticleTree::build(x[0], x[1], x[2], n, TreeShape::LeafSize(TREE_LEAF)),
+                }?;
+                st.tree = Some(t);
             }
-            _ => st.hash.query_filtered(x[0], x[1], x[2], n, lim, &keep, &mut st.probe),
-        };
-        self.state = Some(st);
-        r
-    }
-
-    /// Percentage of particles in penetration in the state the lists were built from.
-    fn penetration_pct(&mut self, x: [&[f32]; 3], n: usize, parallel: bool) -> f64 {
-        if self.probe_lists(x, n).is_err() {
-            return 0.0;
         }
-        let Some(st) = self.state.as_ref().filter(|s| s.ready) else {
-            return 0.0;
-        };
-        let d = self.distance();
-        let lim = d * (1.0 - PENETRATION_TOLERANCE);
-        let hit = |i: usize| -> bool { st.probe.of(i).iter().any(|&j| dist2(&x, i, j as usize) < lim * lim) };
-        let count = if parallel {
-            (0..n).into_par_iter().filter(|&i| hit(i)).count()
-        } else {
-            (0..n).filter(|&i| hit(i)).count()
-        };
-        if n == 0 {
-            0.0
-        } else {
-            100.0 * count as f64 / n as f64
-        }
+        st.structure_fresh = true;
+        Ok(())
     }
 
     /// Copies the predicted positions (the VcCPBD box centres) of the active blocks after
@@ -296,42 +302,77 @@ impl SelfCollisionData {
         }
     }
 
-    /// The pair pass: fills the contact sums of the active blocks from the predicted positions
-    /// `p`, start positions `x` and inverse masses `w` (see the module docs). Parallel over
-    /// fixed chunks when `parallel`; the serial loop is its twin.
+    /// The pair pass: updates the near list, then fills the contact sums of the active blocks
+    /// from the predicted positions `p`, start positions `x` and inverse masses `w` (see the
+    /// module docs). Parallel over fixed chunks when `parallel`; the serial loop is its twin.
     pub(crate) fn pair_pass(&mut self, x: [&[f32]; 3], p: [&[f32]; 3], w: &[f32], n: usize, parallel: bool, simd: bool) {
+        let t0 = Instant::now();
         let Some(a) = self.active() else { return };
         let Some(st) = self.state.as_mut().filter(|s| s.ready) else {
             return;
         };
+        st.near.update(&st.verlet.cand, p, n, n, a.d, simd);
+        let q = QUERY_FACTOR * a.d;
         let ctx = PairCtx {
             x,
             p,
             w,
             rest: [&self.rest[0], &self.rest[1], &self.rest[2]],
             cloth_of: &self.cloth_of,
-            lists: &st.lists,
+            start: [&st.start[0], &st.start[1], &st.start[2]],
+            q2: q * q,
             d: a.d,
             movement: a.response == Response::MovementSpeed,
         };
-        st.active.pair_pass(&ctx, n, parallel, simd);
+        st.active.pair_pass(&ctx, &st.near.pairs, parallel, simd);
+        self.stats.phases.pairs_s += t0.elapsed().as_secs_f64();
     }
 
     /// The velocity-correction kernel on the active blocks of the predicted positions `p`.
-    pub(crate) fn apply(&self, x: [&[f32]; 3], w: &[f32], p: [&mut [f32]; 3], ap: ApplyParams, parallel: bool, simd: bool) {
+    pub(crate) fn apply(&mut self, x: [&[f32]; 3], w: &[f32], p: [&mut [f32]; 3], ap: ApplyParams, parallel: bool, simd: bool) {
+        let t0 = Instant::now();
         if let Some(st) = self.state.as_ref().filter(|s| s.ready) {
             st.active.apply(x, w, p, ap, parallel, simd);
         }
+        self.stats.phases.correction_s += t0.elapsed().as_secs_f64();
     }
 
-    /// Number of active blocks (groups of eight particles the substeps work on) this step.
+    /// Number of active blocks (groups of eight particles the substeps work on): those holding
+    /// a particle with a partner in the candidate lists (a superset of the step's lists).
     pub fn active_blocks(&self) -> usize {
         self.state.as_ref().filter(|s| s.ready).map_or(0, |s| s.active.len())
     }
 
-    /// The pair lists of the current step (empty before the first step with self-collision).
+    /// Blocks the last pair pass found a contact in.
+    pub fn touched_blocks(&self) -> usize {
+        self.state.as_ref().filter(|s| s.ready).map_or(0, |s| s.active.touched())
+    }
+
+    /// The pair lists of the current step (empty before the first step with self-collision):
+    /// the candidate lists filtered with `|x_i - x_j| <= q` at the step's start, computed on
+    /// the first call of the step.
     pub fn lists(&self) -> Option<&Neighbours> {
-        self.state.as_ref().filter(|s| s.ready).map(|s| &s.lists)
+        let st = self.state.as_ref().filter(|s| s.ready)?;
+        let q = QUERY_FACTOR * self.distance();
+        Some(st.lists.get_or_init(|| {
+            let (c, s) = (&st.verlet.cand, &st.start);
+            let mut out = Neighbours::new();
+            // Cannot fail: the candidates already fit in `u32` offsets.
+            let _ = out.fill_serial(c.len(), |i, buf| {
+                buf.extend(c.of(i).iter().filter(|&&j| {
+                    within(
+                        s[0][i],
+                        s[1][i],
+                        s[2][i],
+                        s[0][j as usize],
+                        s[1][j as usize],
+                        s[2][j as usize],
+                        q * q,
+                    )
+                }))
+            });
+            out
+        }))
     }
 }
 
@@ -386,6 +427,9 @@ pub(crate) fn validate(c: &SelfCollision) -> Result<()> {
     }
     Ok(())
 }
+
+#[path = "self_metric.rs"]
+mod metric;
 
 #[cfg(test)]
 #[path = "self_active_tests.rs"]
