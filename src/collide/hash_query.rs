@@ -81,7 +81,7 @@ impl SpatialHash {
         let same = || (0..n).into_par_iter().all(|i| self.unchanged(x, y, z, i));
         let md2 = self.check_query(x, y, z, n, max_dist, same)?;
         let r = search_radius(max_dist);
-        out.fill_parallel(n, |i, buf| self.scan::<true, K>(x, y, z, n, i, md2, r, keep, buf))
+        out.fill_parallel(n, |i, buf| self.scan::<true, false, K>(x, y, z, n, i, md2, r, keep, buf))
     }
 
     /// Serial, scalar twin of [`SpatialHash::query_filtered`]; produces identical lists.
@@ -102,13 +102,57 @@ impl SpatialHash {
         let same = || (0..n).all(|i| self.unchanged(x, y, z, i));
         let md2 = self.check_query(x, y, z, n, max_dist, same)?;
         let r = search_radius(max_dist);
-        out.fill_serial(n, |i, buf| self.scan::<false, K>(x, y, z, n, i, md2, r, keep, buf))
+        out.fill_serial(n, |i, buf| self.scan::<false, false, K>(x, y, z, n, i, md2, r, keep, buf))
+    }
+
+    /// [`SpatialHash::query_filtered`] listing each pair once, in the list of its smaller id
+    /// (`j > i` is tested on the candidates before `keep` and before they are stored).
+    /// Equal to `query_filtered` with `keep(i, j) && j > i`; parallel like it.
+    #[allow(clippy::too_many_arguments)]
+    pub fn query_upper_filtered<K>(
+        &self,
+        x: &[f32],
+        y: &[f32],
+        z: &[f32],
+        n: usize,
+        max_dist: f32,
+        keep: &K,
+        out: &mut Neighbours,
+    ) -> Result<()>
+    where
+        K: Fn(usize, u32) -> bool + Sync,
+    {
+        let same = || (0..n).into_par_iter().all(|i| self.unchanged(x, y, z, i));
+        let md2 = self.check_query(x, y, z, n, max_dist, same)?;
+        let r = search_radius(max_dist);
+        out.fill_parallel(n, |i, buf| self.scan::<true, true, K>(x, y, z, n, i, md2, r, keep, buf))
+    }
+
+    /// Serial, scalar twin of [`SpatialHash::query_upper_filtered`]; produces identical lists.
+    #[allow(clippy::too_many_arguments)]
+    pub fn query_upper_filtered_serial<K>(
+        &self,
+        x: &[f32],
+        y: &[f32],
+        z: &[f32],
+        n: usize,
+        max_dist: f32,
+        keep: &K,
+        out: &mut Neighbours,
+    ) -> Result<()>
+    where
+        K: Fn(usize, u32) -> bool,
+    {
+        let same = || (0..n).all(|i| self.unchanged(x, y, z, i));
+        let md2 = self.check_query(x, y, z, n, max_dist, same)?;
+        let r = search_radius(max_dist);
+        out.fill_serial(n, |i, buf| self.scan::<false, true, K>(x, y, z, n, i, md2, r, keep, buf))
     }
 
     /// Appends the sorted neighbours `j` of particle `i` with `keep(i, j)` to `buf`.
     #[allow(clippy::too_many_arguments)]
     #[inline]
-    fn scan<const SIMD: bool, K: Fn(usize, u32) -> bool>(
+    fn scan<const SIMD: bool, const UPPER: bool, K: Fn(usize, u32) -> bool>(
         &self,
         x: &[f32],
         y: &[f32],
@@ -132,7 +176,7 @@ impl SpatialHash {
         let wide = |a: i32, b: i32| i64::from(b) - i64::from(a) > 3;
         if wide(x0, x1) || wide(y0, y1) || wide(z0, z1) {
             for j in 0..n {
-                if j != i && within(xi, yi, zi, x[j], y[j], z[j], md2) && keep(i, j as u32) {
+                if (if UPPER { j > i } else { j != i }) && within(xi, yi, zi, x[j], y[j], z[j], md2) && keep(i, j as u32) {
                     buf.push(j as u32);
                 }
             }
@@ -148,10 +192,10 @@ impl SpatialHash {
                 let b0 = self.bucket(x0, cy, cz);
                 let b1 = b0 + cells;
                 if b1 <= ts {
-                    self.scan_buckets::<SIMD>(b0, b1, iu, p, md2, buf);
+                    self.scan_buckets::<SIMD, UPPER>(b0, b1, iu, p, md2, buf);
                 } else {
-                    self.scan_buckets::<SIMD>(b0, ts, iu, p, md2, buf);
-                    self.scan_buckets::<SIMD>(0, b1 - ts, iu, p, md2, buf);
+                    self.scan_buckets::<SIMD, UPPER>(b0, ts, iu, p, md2, buf);
+                    self.scan_buckets::<SIMD, UPPER>(0, b1 - ts, iu, p, md2, buf);
                 }
             }
         }
@@ -161,14 +205,47 @@ impl SpatialHash {
 
     /// Tests the particles of buckets `b0..b1` (one contiguous range) against `p`.
     #[inline(always)]
-    fn scan_buckets<const SIMD: bool>(&self, b0: usize, b1: usize, iu: u32, p: [f32; 3], md2: f32, buf: &mut Vec<u32>) {
+    fn scan_buckets<const SIMD: bool, const UPPER: bool>(&self, b0: usize, b1: usize, iu: u32, p: [f32; 3], md2: f32, buf: &mut Vec<u32>) {
         let range = self.cell_start[b0] as usize..self.cell_start[b1] as usize;
         let c = Candidates {
+            above: UPPER,
             ids: &self.cell_entries,
             x: &self.sx,
             y: &self.sy,
             z: &self.sz,
         };
         c.scan::<SIMD>(range, iu, p, md2, buf);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::test_rng::signed;
+
+    #[test]
+    fn upper_query_equals_the_filtered_query_and_its_twin() {
+        let mut rng = signed(5);
+        let n = 700;
+        let p: [Vec<f32>; 3] = std::array::from_fn(|_| (0..n).map(|_| 0.3 * rng()).collect());
+        let mut h = SpatialHash::new(n);
+        h.build(&p[0], &p[1], &p[2], n, 0.05).unwrap();
+        let keep = |i: usize, j: u32| !(i + j as usize).is_multiple_of(3);
+        let mut want = Neighbours::new();
+        h.query_filtered(&p[0], &p[1], &p[2], n, 0.05, &|i, j| keep(i, j) && j as usize > i, &mut want)
+            .unwrap();
+        assert!(want.total() > 100);
+        let (mut a, mut b) = (Neighbours::new(), Neighbours::new());
+        h.query_upper_filtered(&p[0], &p[1], &p[2], n, 0.05, &keep, &mut a).unwrap();
+        h.query_upper_filtered_serial(&p[0], &p[1], &p[2], n, 0.05, &keep, &mut b).unwrap();
+        assert_eq!(a, want);
+        assert_eq!(b, want);
+        // A spacing far below the radius's rounding margin takes the all-pairs path.
+        let tiny = [vec![0.0f32; 5], vec![0.0; 5], vec![0.0; 5]];
+        h.build(&tiny[0], &tiny[1], &tiny[2], 5, 1e-30).unwrap();
+        h.query_upper_filtered_serial(&tiny[0], &tiny[1], &tiny[2], 5, 1e-30, &|_, _| true, &mut b)
+            .unwrap();
+        assert_eq!(b.pairs().count(), 10);
+        assert!((0..5).all(|i| b.of(i).iter().all(|&j| j as usize > i)));
     }
 }

@@ -289,10 +289,23 @@ pub(crate) struct Candidates<'a> {
     pub x: &'a [f32],
     pub y: &'a [f32],
     pub z: &'a [f32],
+    /// Keep only ids above the skipped one (each pair once, in the list of its smaller id).
+    pub above: bool,
 }
 
 impl Candidates<'_> {
-    /// Appends to `buf` each `ids[k]`, `k` in `range`, other than `skip`, whose position passes
+    /// Whether id `j` may be listed for particle `skip`.
+    #[inline(always)]
+    fn keeps(&self, j: u32, skip: u32) -> bool {
+        if self.above {
+            j > skip
+        } else {
+            j != skip
+        }
+    }
+
+    /// Appends to `buf` each `ids[k]`, `k` in `range`, other than `skip` (above it with
+    /// [`Candidates::above`]), whose position passes
     /// the predicate against `p`. With `SIMD` eight candidates are tested per lane load, the
     /// predicate computed operation for operation like [`within`] (no FMA), so both paths pick
     /// the same ids; without it, the plain scalar loop (the twin).
@@ -302,7 +315,7 @@ impl Candidates<'_> {
         if !SIMD {
             for k in s..e {
                 let j = self.ids[k];
-                if j != skip && within(p[0], p[1], p[2], self.x[k], self.y[k], self.z[k], md2) {
+                if self.keeps(j, skip) && within(p[0], p[1], p[2], self.x[k], self.y[k], self.z[k], md2) {
                     buf.push(j);
                 }
             }
@@ -320,7 +333,7 @@ impl Candidates<'_> {
             while bits != 0 {
                 let j = self.ids[k + bits.trailing_zeros() as usize];
                 bits &= bits - 1;
-                if j != skip {
+                if self.keeps(j, skip) {
                     buf.push(j);
                 }
             }

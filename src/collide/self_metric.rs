@@ -5,6 +5,7 @@
 use rayon::prelude::*;
 
 use super::{dist2, SelfBroadphase, SelfCollisionData, PENETRATION_TOLERANCE, QUERY_FACTOR};
+use crate::collide::neighbours::{within, Neighbours};
 use crate::error::Result;
 
 impl SelfCollisionData {
@@ -77,5 +78,32 @@ impl SelfCollisionData {
         } else {
             100.0 * count as f64 / n as f64
         }
+    }
+
+    /// The pair lists of the current step (empty before the first step with self-collision):
+    /// the candidate lists filtered with `|x_i - x_j| <= q` at the step's start, computed on
+    /// the first call of the step.
+    pub fn lists(&self) -> Option<&Neighbours> {
+        let st = self.state.as_ref().filter(|s| s.ready)?;
+        let q = QUERY_FACTOR * self.distance();
+        Some(st.lists.get_or_init(|| {
+            let (c, s) = (&st.verlet.cand, &st.start);
+            let mut out = Neighbours::new();
+            // Cannot fail: the candidates already fit in `u32` offsets.
+            let _ = out.fill_serial(c.len(), |i, buf| {
+                buf.extend(c.of(i).iter().filter(|&&j| {
+                    within(
+                        s[0][i],
+                        s[1][i],
+                        s[2][i],
+                        s[0][j as usize],
+                        s[1][j as usize],
+                        s[2][j as usize],
+                        q * q,
+                    )
+                }))
+            });
+            out
+        }))
     }
 }

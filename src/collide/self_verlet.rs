@@ -30,7 +30,7 @@ use crate::lanes::{load, F32s, LANES};
 pub const SKIN_FACTOR: f32 = 1.0;
 
 /// Largest displacement a step (over the collision distance) for which the skin is used.
-pub const SLOW_FACTOR: f32 = 0.125;
+pub const SLOW_FACTOR: f32 = 0.25;
 
 /// Share of half the skin a particle may move before the lists are rebuilt.
 const SAFE: f32 = 0.98;
@@ -228,8 +228,10 @@ mod tests {
         y[2][3] = 0.048;
         assert_eq!(v.plan([&y[0], &y[1], &y[2]], n, 0.1, bp, false), None);
         y[2][3] = 0.05;
-        // Past 0.49 skin after two steps: 0.025 a step is above SLOW_FACTOR d, no skin.
-        assert_eq!(v.plan([&y[0], &y[1], &y[2]], n, 0.1, bp, false), Some(0.0));
+        // Past 0.49 skin after three steps: 0.0167 a step is below SLOW_FACTOR d, skin d.
+        assert_eq!(v.plan([&y[0], &y[1], &y[2]], n, 0.1, bp, false), Some(0.1));
+        y[2][3] = 0.5;
+        assert_eq!(v.plan([&y[0], &y[1], &y[2]], n, 0.1, bp, false), Some(0.0), "fast: no skin");
         v.built(r, n, 0.1, bp, 0.0);
         assert_eq!(v.plan(r, n, 0.1, bp, false), None, "unmoved: reused even with no skin");
         y[2][3] = 1e-3;

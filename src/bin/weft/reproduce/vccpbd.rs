@@ -75,6 +75,12 @@ struct Row {
     cpu_collision_ms: Option<f64>,
     /// Largest constraint strain `|l - l0| / l0` at the end of the row.
     max_strain: f64,
+    /// Collision wall time a step by phase, ms: hash build (or tree refit), broadphase
+    /// query, rest of the step start (reuse check, active blocks), substep pair passes,
+    /// substep corrections; the speed clamp is the rest of `collision_ms`.
+    phase_ms: [f64; 5],
+    /// Steps that ran the broadphase (the others reused the candidate lists).
+    rebuilds: u64,
 }
 
 /// CPU time (user + system) of this process so far, s, from `/proc/self/stat` (100 ticks a
@@ -195,6 +201,12 @@ fn measure(size: u32, fi: usize, ri: usize, broadphase: SelfBroadphase, cfg: Run
         cpu_step_ms: cpu,
         cpu_collision_ms: cpu.map(|c| c * share),
         max_strain: w.metrics().max_strain,
+        phase_ms: {
+            let p = &st.phases;
+            let list_rest = p.step_start_s - p.build_s - p.query_s;
+            [p.build_s, p.query_s, list_rest, p.pairs_s, p.correction_s].map(|t| t * 1e3 / steps.max(1) as f64)
+        },
+        rebuilds: st.phases.rebuilds,
     })
 }
 
@@ -265,6 +277,29 @@ pub fn run(args: VccpbdArgs) -> weft::Result<ExitCode> {
             r.paper_ms / r.collision_ms.max(1e-9),
             r.paper_ms / r.cpu_collision_ms.unwrap_or(f64::NAN).max(1e-9),
             r.max_strain
+        );
+    }
+    println!();
+    println!("collision wall ms a step by phase (clamp = the rest), broadphase runs out of {steps} steps");
+    println!(
+        "{:>9} {:>9} {:>14} {:>9} {:>7} {:>7} {:>7} {:>7} {:>7} {:>7} {:>8}",
+        "particles", "fabric", "response", "broad", "build", "query", "start", "pairs", "correct", "clamp", "rebuilds"
+    );
+    for r in &rows {
+        let p = r.phase_ms;
+        println!(
+            "{:>9} {:>9} {:>14} {:>9} {:>7.3} {:>7.3} {:>7.3} {:>7.3} {:>7.3} {:>7.3} {:>8}",
+            r.particles,
+            r.fabric,
+            r.response,
+            r.broadphase,
+            p[0],
+            p[1],
+            p[2],
+            p[3],
+            p[4],
+            r.collision_ms - p.iter().sum::<f64>(),
+            r.rebuilds
         );
     }
     println!();
