@@ -1,14 +1,15 @@
 //! The self-collision work of one step, restricted to the particles that can collide (the
 //! method is described in [`super::self_collision`]).
 //!
-//! The broadphase runs once per step and leaves, per particle, the *compact* list: partners
-//! within the query reach `q` that are not the particle's own rest neighbours. Before the fold
-//! most lists are empty. The substeps then touch only the **active blocks**: the groups of
-//! [`LANES`] consecutive particles (`8 b .. 8 b + 8`) holding at least one particle with a
-//! non-empty list. The contact sums, the predicted positions (VcCPBD box centres) and the
-//! damping rates are kept in compact arrays, block after block, so the velocity-correction
-//! kernel [`super::response::apply`] runs unchanged on each active block (`start` is the
-//! block's compact offset, `x`, `w`, `p` the block's slices of the particle arrays).
+//! The broadphase leaves, per particle, the *candidate* list: partners within the reach that
+//! are not the particle's own rest neighbours (kept across steps, see
+//! [`super::self_verlet`]). Before the fold most lists are empty. The substeps then touch
+//! only the **active blocks**: the groups of [`LANES`] consecutive particles (`8 b .. 8 b + 8`)
+//! holding at least one particle with a non-empty list. The contact sums, the predicted
+//! positions (VcCPBD box centres) and the damping rates are kept in compact arrays, block
+//! after block, so the velocity-correction kernel [`super::response::apply`] runs unchanged
+//! on each block that received a contact (`start` is the block's compact offset, `x`, `w`,
+//! `p` the block's slices of the particle arrays).
 //!
 //! Every block is computed independently (a Jacobi pass: a particle writes only its own
 //! sums and position), so the result is the same serially, in parallel and on any number of
