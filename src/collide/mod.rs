@@ -44,4 +44,5 @@ mod self_active;
 pub mod self_collision;
 pub mod self_config;
 mod self_pairs;
+mod self_verlet;
 pub mod shapes;

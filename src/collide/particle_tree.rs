@@ -323,6 +323,7 @@ impl ParticleTree {
                 let l = k - fl;
                 let range = self.leaf_start[l] as usize..self.leaf_start[l + 1] as usize;
                 let c = Candidates {
+                    above: false,
                     ids: &self.order,
                     x: &self.lx,
                     y: &self.ly,

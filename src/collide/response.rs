@@ -38,6 +38,8 @@
 //! `m x'' = a` term is the external acceleration of the next substep, which predict adds, so it
 //! is not added twice here. `β = min(b h, 1)` keeps the correction from overshooting.
 
+use rayon::prelude::*;
+
 use crate::lanes::{load, store, F32s, Vec3x8, LANES};
 
 /// Which correction [`apply`] makes (see the module docs).
@@ -270,3 +272,38 @@ fn clamp_scalar(c: crate::particles::ParticleChunk<'_>, cp: &ClampParams) {
 #[cfg(test)]
 #[path = "response_tests.rs"]
 mod tests;
+
+/// Mean velocity of the free particles (`w > 0`) among the first `n`: f64 partial sums over
+/// fixed chunks, added in chunk order, so parallel and serial give the same bits.
+pub(crate) fn mean_velocity(v: [&[f32]; 3], w: &[f32], n: usize, parallel: bool) -> [f32; 3] {
+    const C: usize = 4096;
+    let part = |k: usize| {
+        let mut s = [0.0f64; 4];
+        for i in k * C..((k + 1) * C).min(n) {
+            if w[i] > 0.0 {
+                s[0] += v[0][i] as f64;
+                s[1] += v[1][i] as f64;
+                s[2] += v[2][i] as f64;
+                s[3] += 1.0;
+            }
+        }
+        s
+    };
+    let chunks = n.div_ceil(C);
+    let parts: Vec<[f64; 4]> = if parallel {
+        (0..chunks).into_par_iter().map(part).collect()
+    } else {
+        (0..chunks).map(part).collect()
+    };
+    let mut t = [0.0f64; 4];
+    for p in parts {
+        for a in 0..4 {
+            t[a] += p[a];
+        }
+    }
+    if t[3] > 0.0 {
+        [(t[0] / t[3]) as f32, (t[1] / t[3]) as f32, (t[2] / t[3]) as f32]
+    } else {
+        [0.0; 3]
+    }
+}

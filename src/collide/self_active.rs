@@ -1,14 +1,15 @@
 //! The self-collision work of one step, restricted to the particles that can collide (the
 //! method is described in [`super::self_collision`]).
 //!
-//! The broadphase runs once per step and leaves, per particle, the *compact* list: partners
-//! within the query reach `q` that are not the particle's own rest neighbours. Before the fold
-//! most lists are empty. The substeps then touch only the **active blocks**: the groups of
-//! [`LANES`] consecutive particles (`8 b .. 8 b + 8`) holding at least one particle with a
-//! non-empty list. The contact sums, the predicted positions (VcCPBD box centres) and the
-//! damping rates are kept in compact arrays, block after block, so the velocity-correction
-//! kernel [`super::response::apply`] runs unchanged on each active block (`start` is the
-//! block's compact offset, `x`, `w`, `p` the block's slices of the particle arrays).
+//! The broadphase leaves, per particle, the *candidate* list: partners within the reach that
+//! are not the particle's own rest neighbours (kept across steps, see
+//! [`super::self_verlet`]). Before the fold most lists are empty. The substeps then touch
+//! only the **active blocks**: the groups of [`LANES`] consecutive particles (`8 b .. 8 b + 8`)
+//! holding at least one particle with a non-empty list. The contact sums, the predicted
+//! positions (VcCPBD box centres) and the damping rates are kept in compact arrays, block
+//! after block, so the velocity-correction kernel [`super::response::apply`] runs unchanged
+//! on each block that received a contact (`start` is the block's compact offset, `x`, `w`,
+//! `p` the block's slices of the particle arrays).
 //!
 //! Every block is computed independently (a Jacobi pass: a particle writes only its own
 //! sums and position), so the result is the same serially, in parallel and on any number of
@@ -21,8 +22,8 @@ use super::response::{apply, ApplyInput, ApplyMode, ContactSums};
 use super::self_pairs::PairCtx;
 use crate::lanes::LANES;
 
-/// Compact slots one parallel task handles in the pair pass's candidate search.
-const PAIR_CHUNK: usize = 128;
+/// Near pairs one parallel task handles in the pair pass's candidate search.
+const PAIR_CHUNK: usize = 2048;
 
 /// Blocks one parallel task handles in the correction pass at least.
 const APPLY_BLOCKS: usize = 16;
@@ -54,8 +55,13 @@ pub(crate) struct ActiveSet {
     damping: Vec<f32>,
     /// Candidate pairs of the pair pass, one buffer per chunk (kept between substeps).
     candidates: Vec<Vec<(u32, u32)>>,
-    /// Per-slot sums and approaching counts while the contacts are added.
+    /// Per-slot sums and approaching counts while the contacts are added (zero outside the
+    /// touched blocks).
     acc: Vec<([f32; 11], f32)>,
+    /// Compact blocks the last pair pass wrote contacts to, ascending.
+    touched: Vec<u32>,
+    /// Whether each compact block is in `touched`.
+    hit: Vec<bool>,
 }
 
 fn resize(v: &mut Vec<f32>, len: usize) {
@@ -100,7 +106,17 @@ impl ActiveSet {
         for v in &mut self.pred {
             resize(v, len);
         }
+        self.acc.clear();
+        self.acc.resize(len, ([0.0; 11], 0.0));
+        self.touched.clear();
+        self.hit.clear();
+        self.hit.resize(self.blocks.len(), false);
         resize(&mut self.damping, len);
+        self.refresh_damping(damping);
+    }
+
+    /// Gathers the damping rates of the active blocks again (a step that keeps the blocks).
+    pub(crate) fn refresh_damping(&mut self, damping: &[f32]) {
         for (k, &b) in self.blocks.iter().enumerate() {
             for l in 0..LANES {
                 let i = b as usize * LANES + l;
@@ -124,30 +140,25 @@ impl ActiveSet {
         }
     }
 
-    /// The pair pass over the active blocks: the contact sums of every particle in them (zero
-    /// for particles with no contact or `i >= n`).
+    /// The pair pass over the near pairs `near` (see [`super::self_verlet`]): the contact sums
+    /// of every particle of the active blocks (zero for particles with no contact).
     ///
-    /// Each unordered pair is tested once: the candidates `(i, j)`, `j > i`, closer than `d`
-    /// (with a margin) are found in parallel over fixed chunks of the active slots, each chunk
+    /// Each unordered pair is tested once: the near pairs `(i, j)`, `i < j`, closer than `d`
+    /// (with a margin) are found in parallel over fixed chunks of the near list, each chunk
     /// into its own buffer; then, serially in buffer order (`i` ascending, then `j`), each
     /// candidate adds its exact contact to both particles' sums. A particle thus receives its
     /// contacts in ascending partner order, as the per-particle loop over its sorted list would
-    /// (the tests hold the two equal bit for bit); nothing depends on the thread count.
-    pub(crate) fn pair_pass(&mut self, ctx: &PairCtx<'_>, n: usize, parallel: bool, simd: bool) {
-        let slots = self.blocks.len() * LANES;
-        let chunks = slots.div_ceil(PAIR_CHUNK);
+    /// (the tests hold the two equal bit for bit); nothing depends on the thread count. Only
+    /// the blocks that received a contact (the *touched* blocks) are written; those of the
+    /// last pass are zeroed first, so every other sum stays zero.
+    pub(crate) fn pair_pass(&mut self, ctx: &PairCtx<'_>, near: &[(u32, u32)], parallel: bool, simd: bool) {
+        let chunks = near.len().div_ceil(PAIR_CHUNK);
         if self.candidates.len() < chunks {
             self.candidates.resize_with(chunks, Vec::new);
         }
-        let blocks = &self.blocks;
         let find = |c: usize, buf: &mut Vec<(u32, u32)>| {
             buf.clear();
-            for s in c * PAIR_CHUNK..((c + 1) * PAIR_CHUNK).min(slots) {
-                let i = blocks[s / LANES] as usize * LANES + s % LANES;
-                if i < n {
-                    ctx.candidates(i, simd, buf);
-                }
-            }
+            ctx.near_candidates(&near[c * PAIR_CHUNK..((c + 1) * PAIR_CHUNK).min(near.len())], simd, buf);
         };
         let bufs = &mut self.candidates[..chunks];
         if parallel && chunks > 1 {
@@ -155,9 +166,24 @@ impl ActiveSet {
         } else {
             bufs.iter_mut().enumerate().for_each(|(c, b)| find(c, b));
         }
-        self.acc.clear();
-        self.acc.resize(slots, ([0.0; 11], 0.0));
-        let slot = |i: usize| match self.slot_of_block.get(i / LANES) {
+        // Zero what the last pass wrote.
+        let s = &mut self.sums;
+        for &k in &self.touched {
+            self.hit[k as usize] = false;
+            for g in k as usize * LANES..(k as usize + 1) * LANES {
+                self.acc[g] = ([0.0; 11], 0.0);
+                for a in 0..3 {
+                    s.c[a][g] = 0.0;
+                    s.f[a][g] = 0.0;
+                    s.n[a][g] = 0.0;
+                }
+                s.gap[g] = 0.0;
+                s.count[g] = 0.0;
+            }
+        }
+        self.touched.clear();
+        let slot_of_block = &self.slot_of_block;
+        let slot = |i: usize| match slot_of_block.get(i / LANES) {
             Some(&k) if k != INACTIVE => Some(k as usize * LANES + i % LANES),
             _ => None,
         };
@@ -167,25 +193,40 @@ impl ActiveSet {
                 if let Some(k) = slot(a) {
                     let (out, approaching) = &mut self.acc[k];
                     ctx.add_contact(a, b, out, approaching);
+                    let blk = k / LANES;
+                    if !self.hit[blk] {
+                        self.hit[blk] = true;
+                        self.touched.push(blk as u32);
+                    }
                 }
             }
         }
+        self.touched.sort_unstable();
         let s = &mut self.sums;
-        for (k, (out, approaching)) in self.acc.iter_mut().enumerate() {
-            PairCtx::finish(out, *approaching);
-            for a in 0..3 {
-                s.c[a][k] = out[a];
-                s.f[a][k] = out[3 + a];
-                s.n[a][k] = out[6 + a];
+        for &blk in &self.touched {
+            for k in blk as usize * LANES..(blk as usize + 1) * LANES {
+                let (out, approaching) = &mut self.acc[k];
+                PairCtx::finish(out, *approaching);
+                for a in 0..3 {
+                    s.c[a][k] = out[a];
+                    s.f[a][k] = out[3 + a];
+                    s.n[a][k] = out[6 + a];
+                }
+                s.gap[k] = out[9];
+                s.count[k] = out[10];
             }
-            s.gap[k] = out[9];
-            s.count[k] = out[10];
         }
     }
 
-    /// The velocity-correction kernel on every active block of the predicted positions `p`
+    /// Number of blocks the last pair pass wrote contacts to.
+    pub(crate) fn touched(&self) -> usize {
+        self.touched.len()
+    }
+
+    /// The velocity-correction kernel on the touched blocks of the predicted positions `p`
     /// (full particle arrays, padded to the lane width), with start positions `x` and inverse
-    /// masses `w`. Parallel over the blocks when `parallel`; same bits either way.
+    /// masses `w`. The kernel leaves a particle without contacts as it is, so the other blocks
+    /// are skipped. Parallel over the blocks when `parallel`; same bits either way.
     pub(crate) fn apply(&self, x: [&[f32]; 3], w: &[f32], p: [&mut [f32]; 3], ap: ApplyParams, parallel: bool, simd: bool) {
         let one = |k: usize, b: usize, p: [&mut [f32]; 3]| {
             let g = b * LANES..(b + 1) * LANES;
@@ -203,7 +244,7 @@ impl ActiveSet {
             apply(&inp, p, ap.mode, simd);
         };
         let [px, py, pz] = p;
-        if parallel && self.blocks.len() > APPLY_BLOCKS {
+        if parallel && self.touched.len() > APPLY_BLOCKS {
             let nb = self.slot_of_block.len();
             (
                 px[..nb * LANES].par_chunks_mut(LANES),
@@ -215,14 +256,15 @@ impl ActiveSet {
                 .enumerate()
                 .for_each(|(b, (a, c, d))| {
                     let k = self.slot_of_block[b];
-                    if k != INACTIVE {
+                    if k != INACTIVE && self.hit[k as usize] {
                         one(k as usize, b, [a, c, d]);
                     }
                 });
         } else {
-            for (k, &b) in self.blocks.iter().enumerate() {
-                let g = b as usize * LANES..(b as usize + 1) * LANES;
-                one(k, b as usize, [&mut px[g.clone()], &mut py[g.clone()], &mut pz[g]]);
+            for &k in &self.touched {
+                let b = self.blocks[k as usize] as usize;
+                let g = b * LANES..(b + 1) * LANES;
+                one(k as usize, b, [&mut px[g.clone()], &mut py[g.clone()], &mut pz[g]]);
             }
         }
     }

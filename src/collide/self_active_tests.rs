@@ -103,11 +103,12 @@ fn reference(data: &SelfCollisionData, x: &[Vec<f32>; 3], p: &[Vec<f32>; 3], w: 
         w,
         rest: [&data.rest[0], &data.rest[1], &data.rest[2]],
         cloth_of: &data.cloth_of,
-        lists: &all,
+        start: [&x[0], &x[1], &x[2]],
+        q2: f32::INFINITY,
         d: a.d,
         movement: a.response == Response::MovementSpeed,
     };
-    let sums: Vec<[f32; 11]> = (0..n).map(|i| ctx.sums(i)).collect();
+    let sums: Vec<[f32; 11]> = (0..n).map(|i| ctx.sums(&all, i)).collect();
     let len = p[0].len();
     let mut full = ContactSums::new(len);
     for (i, v) in sums.iter().enumerate() {
@@ -215,4 +216,88 @@ fn rest_neighbours_are_never_listed() {
     assert!(data.begin_step([&xs, &zero, &flat], n, &zero).unwrap());
     assert_eq!(data.lists().unwrap().total(), 0);
     assert_eq!(data.active_blocks(), 0);
+}
+
+/// The cloth of `weft reproduce vccpbd` at `size x size`: hung over its middle row, both
+/// halves fall and fold face to face.
+fn hung(size: u32, response: Response, broadphase: SelfBroadphase, threads: usize, fresh: bool) -> (crate::World, f32) {
+    let fab = crate::Fabric {
+        thickness: 1.0 / (size - 1) as f32,
+        ..crate::Fabric::preset("wool").unwrap()
+    };
+    let params = crate::SolverParams {
+        dt: fab.dt,
+        substeps: 10,
+        iterations: 1,
+        threads,
+        ..Default::default()
+    };
+    let dt = fab.dt;
+    let mut w = crate::World::new(params, crate::Effects::gravity()).unwrap();
+    w.add_cloth(&crate::ClothDesc {
+        rows: size,
+        cols: size,
+        spacing: fab.thickness,
+        origin: [-0.5, 1.5, -0.5],
+        u: [1.0, 0.0, 0.0],
+        v: [0.0, 0.0, 1.0],
+        fabric: fab,
+        pins: vec![crate::PinSpec::Row(size / 2)],
+        shear: true,
+        bend: true,
+        tethers: None,
+    })
+    .unwrap();
+    w.set_self_collision(Some(SelfCollision {
+        response,
+        broadphase,
+        ..SelfCollision::default()
+    }))
+    .unwrap();
+    w.selfcol.fresh_every_step = fresh;
+    (w, dt)
+}
+
+#[test]
+fn reused_candidate_lists_give_the_fresh_lists_and_the_same_bits() {
+    for (response, broadphase) in [
+        (Response::Vccpbd, SelfBroadphase::Hash),
+        (Response::MovementSpeed, SelfBroadphase::Hash),
+        (Response::Pbd, SelfBroadphase::AabbTree),
+    ] {
+        let steps = 100;
+        let (mut fresh, dt) = hung(24, response, broadphase, 1, true);
+        let mut reuse: Vec<_> = [1, 2].map(|t| hung(24, response, broadphase, t, false).0).into();
+        let mut contacts = 0;
+        for step in 0..steps {
+            fresh.step(dt).unwrap();
+            let want = fresh.self_collision_pairs().unwrap().clone();
+            contacts += fresh.selfcol.touched_blocks();
+            for w in &mut reuse {
+                w.step(dt).unwrap();
+                assert_eq!(w.self_collision_pairs().unwrap(), &want, "{response:?} {broadphase:?} step {step}");
+                for (a, b) in w.positions().iter().zip(fresh.positions()) {
+                    assert!(a.iter().zip(b).all(|(u, v)| u.to_bits() == v.to_bits()), "{response:?} step {step}");
+                }
+            }
+        }
+        let ph = &reuse[0].self_collision_stats().phases;
+        assert_eq!(fresh.self_collision_stats().phases.rebuilds, steps);
+        assert!(
+            ph.rebuilds < steps * 2 / 3,
+            "{response:?}: the lists were rebuilt {} times in {steps} steps",
+            ph.rebuilds
+        );
+        let near = &reuse[0].selfcol.state.as_ref().unwrap().near;
+        assert!(near.rebuilds < steps * 5, "near list rebuilt {} times", near.rebuilds);
+        eprintln!(
+            "{response:?} {broadphase:?}: {} list builds, {} near builds, {contacts} touched blocks",
+            ph.rebuilds, near.rebuilds
+        );
+        assert!(contacts > 0, "{response:?}: no contact in the run");
+        assert_eq!(
+            reuse[0].self_collision_stats().average_pct,
+            fresh.self_collision_stats().average_pct
+        );
+    }
 }

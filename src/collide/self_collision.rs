@@ -13,13 +13,28 @@
 //!   **rest neighbours** at once: pairs of one cloth whose rest distance is at most `q`
 //!   (`REST_SKIP_FACTOR`). These are held by the cloth's own stretch, shear and bend
 //!   constraints; in the flat cloth every pair the query finds is one, so before a fold the
-//!   compact lists are empty. Each pair is listed once, under its smaller id (the query tests
-//!   `j > i` before anything else, so half the hits cost one comparison). The lists are kept
-//!   for all substeps, and the substeps work only
-//!   on the **active blocks** (eight consecutive particles, one of them with a partner; see
-//!   the `self_active` module). Dropping rest neighbours is a rule, not an approximation: the
-//!   same pairs would be dropped by a recomputation in every substep (tests hold the compact
-//!   pass equal, bit for bit, to a brute force over all pairs with this rule).
+//!   compact lists are empty. Each pair is listed once, under its smaller id (the hash tests
+//!   `j > i` on the candidates before anything else). The substeps work only on the **active
+//!   blocks** (eight consecutive particles, one of them with a partner; see the `self_active`
+//!   module). Dropping rest neighbours is a rule, not an approximation: the same pairs would
+//!   be dropped by a recomputation in every substep (tests hold the compact pass equal, bit
+//!   for bit, to a brute force over all pairs with this rule).
+//! * **Reuse** (the `self_verlet` module): the broadphase actually runs with the reach
+//!   `q + skin` and its candidate lists are kept across steps while no particle has moved more
+//!   than `0.49 skin` since; each step's lists are the candidates within `q` of each other at
+//!   the step's start, exactly those of a fresh query (tests: lists equal and results bitwise
+//!   equal to a rebuild every step, 1 and 2 threads, the three responses and both
+//!   broadphases). The substeps test only a **near list** (candidates within `d + s₂` of where
+//!   it was built, kept while no particle moves more than `0.49 s₂`), and only the blocks that
+//!   received a contact are corrected; both exact too.
+//!
+//!   Why (measured on `weft reproduce vccpbd --size 100`, 150 steps): the hash query was about
+//!   two thirds of the stage and each substep tested all ~100k listed pairs of the folded
+//!   cloth, of which none was in contact. After the fold settles the lists last many steps
+//!   and the near list holds a few hundred pairs; while the cloth falls (the first ~50
+//!   steps, up to 4 d of travel a step) every step still runs the query, which is now the
+//!   largest phase. The skin is `d` only when the cloth moved at most `d / 4` a step since the
+//!   last build (otherwise zero: a wider reach would cost more than the reuse saves).
 //! * **After predict** (each substep): the speed clamp ([`super::response`]) limits a free
 //!   particle's velocity relative to the mean velocity of the free particles to `T / substeps`
 //!   a substep, so two particles close in by at most `2T` in a step: any pair that touches
@@ -66,17 +81,20 @@
 //! pairs between `1.5 d` and `q` at rest that the response leaves to the cloth's constraints),
 //! and averaged over the steps ([`SelfCollisionStats`]).
 
-use rayon::prelude::*;
+use std::sync::OnceLock;
+use std::time::Instant;
 
 use super::hash::SpatialHash;
 use super::neighbours::Neighbours;
 use super::particle_tree::{ParticleTree, TreeShape};
+pub(crate) use super::response::mean_velocity;
 use super::self_active::ActiveSet;
 pub(crate) use super::self_active::ApplyParams;
 use super::self_pairs::PairCtx;
+use super::self_verlet::{NearList, VerletLists};
 use crate::error::{positive, Result, WeftError};
 
-pub use super::self_config::{Response, SelfBroadphase, SelfCollision, SelfCollisionStats, PENETRATION_TOLERANCE};
+pub use super::self_config::{Response, SelfBroadphase, SelfCollision, SelfCollisionPhases, SelfCollisionStats, PENETRATION_TOLERANCE};
 
 /// Leaf size of the AABB tree (the paper's depth 5 gives ~312 particles a leaf at 10 000
 /// particles; 16 queries much faster and gives the same pairs).
@@ -85,7 +103,9 @@ const TREE_LEAF: u32 = 16;
 /// Query radius over collision distance: `q = d + 2 T` with the step's relative travel `T = d`.
 pub const QUERY_FACTOR: f32 = 3.0;
 
-/// Hash cell side over the query radius (section C uses 1).
+/// Hash cell side over the query radius (section C uses 1; 1.5 was tried with the list reuse
+/// on `weft reproduce vccpbd --size 100 --steps 100` and was no faster: 2.8-3.1 ms query
+/// wall a step against 2.6-2.9 with 1, loaded machine).
 pub const CELL_FACTOR: f32 = 1.0;
 
 /// Rest-neighbour skip radius over the collision distance: pairs of one cloth whose rest
@@ -110,14 +130,28 @@ pub struct SelfCollisionData {
     state: Option<State>,
     pub(crate) stats: SelfCollisionStats,
     last_measured: Option<u64>,
+    /// Rebuild the candidate lists every step (no reuse): the reference the tests hold the
+    /// reuse to.
+    pub(crate) fresh_every_step: bool,
 }
 
 #[derive(Clone, Debug)]
 struct State {
     hash: SpatialHash,
     tree: Option<ParticleTree>,
-    /// Compact lists: partners within `q` at the step's start, rest neighbours left out.
-    lists: Neighbours,
+    /// Whether the hash (or tree) was built from the positions of this step's start.
+    structure_fresh: bool,
+    /// Candidate lists (Verlet, reach `q + skin`), reused across steps.
+    verlet: VerletLists,
+    /// Near pairs of the candidates for the substeps.
+    near: NearList,
+    /// Candidate-list build the active blocks were made from.
+    active_of: u64,
+    /// Positions at the start of the step.
+    start: [Vec<f32>; 3],
+    /// Compact lists (partners within `q` at the step's start, rest neighbours left out),
+    /// filtered from the candidates on demand.
+    lists: OnceLock<Neighbours>,
     /// Metric lists: non-neighbours within the penetration limit (not timed).
     probe: Neighbours,
     ready: bool,
@@ -162,15 +196,27 @@ impl SelfCollisionData {
         })
     }
 
-    /// Rebuilds the compact pair lists and the active blocks from the positions at the start
-    /// of a step. Returns `false` (nothing to do this step) when off.
+    /// Makes the pair lists and the active blocks hold for the positions at the start of a
+    /// step (reusing the candidate lists when they still hold, see [`super::self_verlet`]).
+    /// Returns `false` (nothing to do this step) when off.
     pub(crate) fn begin_step(&mut self, x: [&[f32]; 3], n: usize, damping: &[f32]) -> Result<bool> {
+        let t0 = Instant::now();
+        let before = self.stats.phases.build_s + self.stats.phases.query_s;
         if !self.build_lists(x, n)? {
             return Ok(false);
         }
         if let Some(st) = &mut self.state {
-            st.active.rebuild(&st.lists, n, damping);
+            if st.active_of != st.verlet.rebuilds {
+                st.active.rebuild(&st.verlet.cand, n, damping);
+                st.active_of = st.verlet.rebuilds;
+            } else {
+                st.active.refresh_damping(damping);
+            }
         }
+        let ph = &mut self.stats.phases;
+        let total = t0.elapsed().as_secs_f64();
+        ph.step_start_s += total;
+        ph.lists_s += total - (ph.build_s + ph.query_s - before);
         Ok(true)
     }
 
@@ -183,31 +229,8 @@ impl SelfCollisionData {
         self.cloth_of[i] == self.cloth_of[j] && dist2(&self.rest, i, j) <= skip * skip
     }
 
-    /// Measures the penetration of the state the lists were just built from (once per step
-    /// count `steps`, skipping the initial state). Kept out of the timed collision stage.
-    pub(crate) fn record_start_state(&mut self, x: [&[f32]; 3], n: usize, steps: u64, parallel: bool) {
-        if steps > 0 && self.last_measured != Some(steps) {
-            let pct = self.penetration_pct(x, n, parallel);
-            self.stats.record(pct);
-            self.last_measured = Some(steps);
-        }
-    }
-
-    /// Measures (and records, once per step count) the penetration of the state `x`.
-    pub(crate) fn measure(&mut self, x: [&[f32]; 3], n: usize, steps: u64, parallel: bool) -> Result<f64> {
-        if self.last_measured == Some(steps) {
-            return Ok(self.stats.last_pct);
-        }
-        if !self.build_lists(x, n)? {
-            return Ok(0.0);
-        }
-        let pct = self.penetration_pct(x, n, parallel);
-        self.stats.record(pct);
-        self.last_measured = Some(steps);
-        Ok(pct)
-    }
-
-    /// Runs the broadphase on `x` with the query radius `q = 3 d`, keeping each pair once
+    /// Copies the step's start positions and runs the broadphase on `x` with the reach
+    /// `q + skin` (`q = 3 d`) unless the candidate lists still hold, keeping each pair once
     /// (`(i, j)` in the list of `i`, `j > i`) and dropping rest neighbours; `false` when off.
     fn build_lists(&mut self, x: [&[f32]; 3], n: usize) -> Result<bool> {
         let Some(a) = self.active() else { return Ok(false) };
@@ -215,31 +238,61 @@ impl SelfCollisionData {
         let mut st = self.state.take().unwrap_or_else(|| State {
             hash: SpatialHash::new(n),
             tree: None,
-            lists: Neighbours::new(),
+            structure_fresh: false,
+            verlet: VerletLists::default(),
+            near: NearList::default(),
+            active_of: u64::MAX,
+            start: Default::default(),
+            lists: OnceLock::new(),
             probe: Neighbours::new(),
             ready: false,
             active: ActiveSet::default(),
         });
         let q = QUERY_FACTOR * a.d;
         st.ready = false;
-        // Each pair once (`j > i`), rest neighbours dropped.
-        let keep = |i: usize, j: u32| j as usize > i && !self.rest_skipped(i, j as usize, a.d);
-        let done = match broadphase {
-            SelfBroadphase::Hash => st
-                .hash
-                .build(x[0], x[1], x[2], n, q * CELL_FACTOR)
-                .and_then(|_| st.hash.query_filtered(x[0], x[1], x[2], n, q, &keep, &mut st.lists)),
-            SelfBroadphase::AabbTree => {
-                let t = match st.tree.take() {
-                    Some(mut t) if t.len() == n => t.refit(x[0], x[1], x[2], n).map(|_| t),
-                    _ => ParticleTree::build(x[0], x[1], x[2], n, TreeShape::LeafSize(TREE_LEAF)),
-                };
-                t.and_then(|t| {
-                    let r = t.query_all(x[0], x[1], x[2], n, q, &mut st.lists);
-                    st.tree = Some(t);
-                    r
-                })
-                .map(|_| st.lists.retain(keep))
+        st.lists = OnceLock::new();
+        for (s, src) in st.start.iter_mut().zip(x) {
+            s.clear();
+            s.extend_from_slice(&src[..n.min(src.len())]);
+        }
+        let done = match st.verlet.plan(x, n, a.d, broadphase, self.fresh_every_step) {
+            None => {
+                st.structure_fresh = false;
+                Ok(())
+            }
+            Some(skin) => {
+                let reach = q + skin;
+                // Each pair once (`j > i`), rest neighbours dropped.
+                let keep = |i: usize, j: u32| j as usize > i && !self.rest_skipped(i, j as usize, a.d);
+                let t0 = Instant::now();
+                let built = self.build_structure(&mut st, x, n, reach, broadphase);
+                let t1 = Instant::now();
+                let r = built.and_then(|_| match (&st.tree, broadphase) {
+                    (Some(t), SelfBroadphase::AabbTree) => t
+                        .query_all(x[0], x[1], x[2], n, reach, &mut st.verlet.cand)
+                        .map(|_| st.verlet.cand.retain(keep)),
+                    _ => st.hash.query_upper_filtered(
+                        x[0],
+                        x[1],
+                        x[2],
+                        n,
+                        reach,
+                        &|i, j| !self.rest_skipped(i, j as usize, a.d),
+                        &mut st.verlet.cand,
+                    ),
+                });
+                let ph = &mut self.stats.phases;
+                ph.build_s += t1.duration_since(t0).as_secs_f64();
+                ph.query_s += t1.elapsed().as_secs_f64();
+                match r {
+                    Ok(()) => {
+                        st.verlet.built(x, n, a.d, broadphase, skin);
+                        st.near.invalidate();
+                        self.stats.phases.rebuilds += 1;
+                    }
+                    Err(_) => st.verlet.invalidate(),
+                }
+                r
             }
         };
         st.ready = done.is_ok();
@@ -247,45 +300,21 @@ impl SelfCollisionData {
         done.map(|_| true)
     }
 
-    /// Fills the metric lists (non-neighbours within the penetration limit) from the
-    /// broadphase of the same positions `x`.
-    fn probe_lists(&mut self, x: [&[f32]; 3], n: usize) -> Result<()> {
-        let d = self.distance();
-        let lim = d * (1.0 - PENETRATION_TOLERANCE);
-        let far2 = (1.5 * d) * (1.5 * d);
-        let Some(mut st) = self.state.take() else { return Ok(()) };
-        let keep = |i: usize, j: u32| self.cloth_of[i] != self.cloth_of[j as usize] || dist2(&self.rest, i, j as usize) > far2;
-        let r = match &st.tree {
-            Some(t) if self.config.as_ref().map(|c| c.broadphase) == Some(SelfBroadphase::AabbTree) => {
-                t.query_all(x[0], x[1], x[2], n, lim, &mut st.probe).map(|_| st.probe.retain(keep))
+    /// Builds the hash (cell `reach`) or refits the tree on `x`.
+    fn build_structure(&self, st: &mut State, x: [&[f32]; 3], n: usize, reach: f32, broadphase: SelfBroadphase) -> Result<()> {
+        st.structure_fresh = false;
+        match broadphase {
+            SelfBroadphase::Hash => st.hash.build(x[0], x[1], x[2], n, reach * CELL_FACTOR)?,
+            SelfBroadphase::AabbTree => {
+                let t = match st.tree.take() {
+                    Some(mut t) if t.len() == n => t.refit(x[0], x[1], x[2], n).map(|_| t),
+                    _ => ParticleTree::build(x[0], x[1], x[2], n, TreeShape::LeafSize(TREE_LEAF)),
+                }?;
+                st.tree = Some(t);
             }
-            _ => st.hash.query_filtered(x[0], x[1], x[2], n, lim, &keep, &mut st.probe),
-        };
-        self.state = Some(st);
-        r
-    }
-
-    /// Percentage of particles in penetration in the state the lists were built from.
-    fn penetration_pct(&mut self, x: [&[f32]; 3], n: usize, parallel: bool) -> f64 {
-        if self.probe_lists(x, n).is_err() {
-            return 0.0;
         }
-        let Some(st) = self.state.as_ref().filter(|s| s.ready) else {
-            return 0.0;
-        };
-        let d = self.distance();
-        let lim = d * (1.0 - PENETRATION_TOLERANCE);
-        let hit = |i: usize| -> bool { st.probe.of(i).iter().any(|&j| dist2(&x, i, j as usize) < lim * lim) };
-        let count = if parallel {
-            (0..n).into_par_iter().filter(|&i| hit(i)).count()
-        } else {
-            (0..n).filter(|&i| hit(i)).count()
-        };
-        if n == 0 {
-            0.0
-        } else {
-            100.0 * count as f64 / n as f64
-        }
+        st.structure_fresh = true;
+        Ok(())
     }
 
     /// Copies the predicted positions (the VcCPBD box centres) of the active blocks after
@@ -296,80 +325,54 @@ impl SelfCollisionData {
         }
     }
 
-    /// The pair pass: fills the contact sums of the active blocks from the predicted positions
-    /// `p`, start positions `x` and inverse masses `w` (see the module docs). Parallel over
-    /// fixed chunks when `parallel`; the serial loop is its twin.
+    /// The pair pass: updates the near list, then fills the contact sums of the active blocks
+    /// from the predicted positions `p`, start positions `x` and inverse masses `w` (see the
+    /// module docs). Parallel over fixed chunks when `parallel`; the serial loop is its twin.
     pub(crate) fn pair_pass(&mut self, x: [&[f32]; 3], p: [&[f32]; 3], w: &[f32], n: usize, parallel: bool, simd: bool) {
+        let t0 = Instant::now();
         let Some(a) = self.active() else { return };
         let Some(st) = self.state.as_mut().filter(|s| s.ready) else {
             return;
         };
+        st.near.update(&st.verlet.cand, p, n, n, a.d, simd);
+        let q = QUERY_FACTOR * a.d;
         let ctx = PairCtx {
             x,
             p,
             w,
             rest: [&self.rest[0], &self.rest[1], &self.rest[2]],
             cloth_of: &self.cloth_of,
-            lists: &st.lists,
+            start: [&st.start[0], &st.start[1], &st.start[2]],
+            q2: q * q,
             d: a.d,
             movement: a.response == Response::MovementSpeed,
         };
-        st.active.pair_pass(&ctx, n, parallel, simd);
+        st.active.pair_pass(&ctx, &st.near.pairs, parallel, simd);
+        self.stats.phases.pairs_s += t0.elapsed().as_secs_f64();
     }
 
     /// The velocity-correction kernel on the active blocks of the predicted positions `p`.
-    pub(crate) fn apply(&self, x: [&[f32]; 3], w: &[f32], p: [&mut [f32]; 3], ap: ApplyParams, parallel: bool, simd: bool) {
+    pub(crate) fn apply(&mut self, x: [&[f32]; 3], w: &[f32], p: [&mut [f32]; 3], ap: ApplyParams, parallel: bool, simd: bool) {
+        let t0 = Instant::now();
         if let Some(st) = self.state.as_ref().filter(|s| s.ready) {
             st.active.apply(x, w, p, ap, parallel, simd);
         }
+        self.stats.phases.correction_s += t0.elapsed().as_secs_f64();
     }
 
-    /// Number of active blocks (groups of eight particles the substeps work on) this step.
+    /// Number of active blocks (groups of eight particles the substeps work on): those holding
+    /// a particle with a partner in the candidate lists (a superset of the step's lists).
     pub fn active_blocks(&self) -> usize {
         self.state.as_ref().filter(|s| s.ready).map_or(0, |s| s.active.len())
     }
 
-    /// The pair lists of the current step (empty before the first step with self-collision).
-    pub fn lists(&self) -> Option<&Neighbours> {
-        self.state.as_ref().filter(|s| s.ready).map(|s| &s.lists)
+    /// Blocks the last pair pass found a contact in.
+    pub fn touched_blocks(&self) -> usize {
+        self.state.as_ref().filter(|s| s.ready).map_or(0, |s| s.active.touched())
     }
 }
 
-/// Mean velocity of the free particles (`w > 0`) among the first `n`: f64 partial sums over
-/// fixed chunks, added in chunk order, so parallel and serial give the same bits.
-pub(crate) fn mean_velocity(v: [&[f32]; 3], w: &[f32], n: usize, parallel: bool) -> [f32; 3] {
-    const C: usize = 4096;
-    let part = |k: usize| {
-        let mut s = [0.0f64; 4];
-        for i in k * C..((k + 1) * C).min(n) {
-            if w[i] > 0.0 {
-                s[0] += v[0][i] as f64;
-                s[1] += v[1][i] as f64;
-                s[2] += v[2][i] as f64;
-                s[3] += 1.0;
-            }
-        }
-        s
-    };
-    let chunks = n.div_ceil(C);
-    let parts: Vec<[f64; 4]> = if parallel {
-        (0..chunks).into_par_iter().map(part).collect()
-    } else {
-        (0..chunks).map(part).collect()
-    };
-    let mut t = [0.0f64; 4];
-    for p in parts {
-        for a in 0..4 {
-            t[a] += p[a];
-        }
-    }
-    if t[3] > 0.0 {
-        [(t[0] / t[3]) as f32, (t[1] / t[3]) as f32, (t[2] / t[3]) as f32]
-    } else {
-        [0.0; 3]
-    }
-}
-
+#[inline(always)]
 fn dist2(a: &[impl AsRef<[f32]>; 3], i: usize, j: usize) -> f32 {
     let d = |k: usize| a[k].as_ref()[i] - a[k].as_ref()[j];
     let (dx, dy, dz) = (d(0), d(1), d(2));
@@ -386,6 +389,9 @@ pub(crate) fn validate(c: &SelfCollision) -> Result<()> {
     }
     Ok(())
 }
+
+#[path = "self_metric.rs"]
+mod metric;
 
 #[cfg(test)]
 #[path = "self_active_tests.rs"]

@@ -94,8 +94,30 @@ pub struct SelfCollisionStats {
     pub time_s: f64,
     /// Steps that ran self-collision.
     pub steps: u64,
+    /// Where the time went.
+    pub phases: SelfCollisionPhases,
     #[serde(skip)]
     sum_pct: f64,
+}
+
+/// The self-collision time split by phase, s (summed over the steps; the speed clamp is the
+/// rest of [`SelfCollisionStats::time_s`]).
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct SelfCollisionPhases {
+    /// Hash build or tree refit (steps that rebuild the candidate lists).
+    pub build_s: f64,
+    /// Broadphase query for the candidate lists.
+    pub query_s: f64,
+    /// The rest of the step start: the reuse check, the start positions, the active blocks.
+    pub lists_s: f64,
+    /// Step starts in all (`build_s + query_s + lists_s` plus the copy of the start positions).
+    pub step_start_s: f64,
+    /// Pair passes of the substeps (near list and contact sums).
+    pub pairs_s: f64,
+    /// Velocity corrections of the substeps.
+    pub correction_s: f64,
+    /// Steps that rebuilt the candidate lists (ran the broadphase).
+    pub rebuilds: u64,
 }
 
 impl SelfCollisionStats {

@@ -1,6 +1,8 @@
 //! The self-collision pair pass: the contact sums of one particle over its pair list (the
 //! method is described in [`super::self_collision`]).
 
+use super::neighbours::within;
+#[cfg(test)]
 use super::neighbours::Neighbours;
 use crate::lanes::{F32s, Vec3x8, LANES};
 
@@ -11,7 +13,10 @@ pub(crate) struct PairCtx<'a> {
     pub(crate) w: &'a [f32],
     pub(crate) rest: [&'a [f32]; 3],
     pub(crate) cloth_of: &'a [u32],
-    pub(crate) lists: &'a Neighbours,
+    /// Positions at the start of the step (the lists' positions).
+    pub(crate) start: [&'a [f32]; 3],
+    /// Squared query radius: a pair is in the step's lists when within it at the start.
+    pub(crate) q2: f32,
     pub(crate) d: f32,
     pub(crate) movement: bool,
 }
@@ -20,40 +25,50 @@ pub(crate) struct PairCtx<'a> {
 const COINCIDENT: [f32; 3] = [0.267_261_24, 0.534_522_5, 0.801_783_7];
 
 impl PairCtx<'_> {
-    /// Appends to `out` the pairs `(i, j)`, `j > i` in `i`'s list, that may be in contact:
-    /// eight partners at a time (`f32x8` on gathered predicted positions) when `simd`, else one
-    /// by one. A pair passes when closer than `d` with a 1e-4 margin, so the exact test of
-    /// [`PairCtx::contact`] makes every decision and both paths lead to the same sums.
-    pub(crate) fn candidates(&self, i: usize, simd: bool, out: &mut Vec<(u32, u32)>) {
-        let list = self.lists.of(i);
-        let ids = &list[list.partition_point(|&j| j as usize <= i)..];
-        let pi = [self.p[0][i], self.p[1][i], self.p[2][i]];
+    /// Appends to `out` the near pairs `(i, j)` that may be in contact: closer than `d` (with
+    /// a 1e-4 margin, so the exact test of [`PairCtx::contact`] makes every decision and both
+    /// paths lead to the same sums) and in the lists of the step (within `q` at its start,
+    /// the broadphase's predicate). Eight pairs at a time (`f32x8` on gathered predicted
+    /// positions) when `simd`, else one by one.
+    pub(crate) fn near_candidates(&self, pairs: &[(u32, u32)], simd: bool, out: &mut Vec<(u32, u32)>) {
         let lim = self.d * self.d * 1.0001;
+        let s = self.start;
+        let listed = |i: usize, j: usize| within(s[0][i], s[1][i], s[2][i], s[0][j], s[1][j], s[2][j], self.q2);
         let mut k = 0;
         if simd {
-            let pv = Vec3x8::splat(pi);
             let limv = F32s::splat(lim);
-            while k + LANES <= ids.len() {
-                let g = |a: &[f32]| F32s::from(std::array::from_fn::<f32, LANES, _>(|l| a[ids[k + l] as usize]));
-                let v = pv
-                    - Vec3x8 {
-                        x: g(self.p[0]),
-                        y: g(self.p[1]),
-                        z: g(self.p[2]),
-                    };
+            while k + LANES <= pairs.len() {
+                let g = |a: &[f32], side: usize| {
+                    F32s::from(std::array::from_fn::<f32, LANES, _>(|l| {
+                        let (i, j) = pairs[k + l];
+                        a[if side == 0 { i } else { j } as usize]
+                    }))
+                };
+                let v = Vec3x8 {
+                    x: g(self.p[0], 0) - g(self.p[0], 1),
+                    y: g(self.p[1], 0) - g(self.p[1], 1),
+                    z: g(self.p[2], 0) - g(self.p[2], 1),
+                };
                 let mut bits = v.length_sq().simd_lt(limv).to_bitmask();
                 while bits != 0 {
-                    out.push((i as u32, ids[k + bits.trailing_zeros() as usize]));
+                    let (i, j) = pairs[k + bits.trailing_zeros() as usize];
                     bits &= bits - 1;
+                    if listed(i as usize, j as usize) {
+                        out.push((i, j));
+                    }
                 }
                 k += LANES;
             }
         }
-        for &j in &ids[k..] {
-            let j = j as usize;
-            let v = [pi[0] - self.p[0][j], pi[1] - self.p[1][j], pi[2] - self.p[2][j]];
-            if v[0] * v[0] + v[1] * v[1] + v[2] * v[2] < lim {
-                out.push((i as u32, j as u32));
+        for &(i, j) in &pairs[k..] {
+            let (iu, ju) = (i as usize, j as usize);
+            let v = [
+                self.p[0][iu] - self.p[0][ju],
+                self.p[1][iu] - self.p[1][ju],
+                self.p[2][iu] - self.p[2][ju],
+            ];
+            if v[0] * v[0] + v[1] * v[1] + v[2] * v[2] < lim && listed(iu, ju) {
+                out.push((i, j));
             }
         }
     }
@@ -86,10 +101,10 @@ impl PairCtx<'_> {
     /// `[c(3), f(3), n(3), gap, count]` of particle `i` over its whole list, ascending: the
     /// per-particle form of the pair pass (the reference the tests hold the pair form to).
     #[cfg(test)]
-    pub(crate) fn sums(&self, i: usize) -> [f32; 11] {
+    pub(crate) fn sums(&self, lists: &Neighbours, i: usize) -> [f32; 11] {
         let mut out = [0.0f32; 11];
         let mut approaching = 0.0f32;
-        for &j in self.lists.of(i) {
+        for &j in lists.of(i) {
             self.add_contact(i, j as usize, &mut out, &mut approaching);
         }
         Self::finish(&mut out, approaching);

@@ -14,10 +14,16 @@
 //! Threads: the table runs on one thread by default (`--threads 2` or `0` for more). The
 //! paper's program was single-threaded, and on the shared two-core machine this was measured
 //! on, two threads did not lower the collision CPU time and changed the wall time by less than
-//! the run-to-run noise (150 steps, 100x100: 7.5-9.7 ms collision CPU a step on one thread,
-//! 7.9-9.9 ms on two): after the compact pair lists most of a substep's work is a few
-//! thousand pairs, too little to pay for a parallel join on a busy machine. The results are
+//! the run-to-run noise (before the list reuse, 150 steps, 100x100: 7.5-9.7 ms collision CPU
+//! a step on one thread, 7.9-9.9 ms on two). With the reuse (candidate lists kept across
+//! steps, near lists across substeps) a re-check on a loaded machine (load 5-8) gave 1.8-2.9
+//! ms collision wall a step on two threads against 2.5-5.2 on one, within the noise of that
+//! load; one thread stays the default until an idle machine says otherwise. The results are
 //! the same bits on any thread count.
+//!
+//! A second table splits the collision time by phase (hash build, query, the rest of the step
+//! start, substep pair passes, substep corrections, the speed clamp) and gives the number of
+//! steps that ran the broadphase (the others reused the candidate lists).
 //!
 //! Substeps: 10 by default (`--substeps`). With 5 the fold still runs but the cloth does not
 //! converge (the largest strain went from 1.05-1.5 to 3.9-5.5, average collision from 0.000%
@@ -75,6 +81,12 @@ struct Row {
     cpu_collision_ms: Option<f64>,
     /// Largest constraint strain `|l - l0| / l0` at the end of the row.
     max_strain: f64,
+    /// Collision wall time a step by phase, ms: hash build (or tree refit), broadphase
+    /// query, rest of the step start (reuse check, active blocks), substep pair passes,
+    /// substep corrections; the speed clamp is the rest of `collision_ms`.
+    phase_ms: [f64; 5],
+    /// Steps that ran the broadphase (the others reused the candidate lists).
+    rebuilds: u64,
 }
 
 /// CPU time (user + system) of this process so far, s, from `/proc/self/stat` (100 ticks a
@@ -195,6 +207,12 @@ fn measure(size: u32, fi: usize, ri: usize, broadphase: SelfBroadphase, cfg: Run
         cpu_step_ms: cpu,
         cpu_collision_ms: cpu.map(|c| c * share),
         max_strain: w.metrics().max_strain,
+        phase_ms: {
+            let p = &st.phases;
+            let list_rest = p.step_start_s - p.build_s - p.query_s;
+            [p.build_s, p.query_s, list_rest, p.pairs_s, p.correction_s].map(|t| t * 1e3 / steps.max(1) as f64)
+        },
+        rebuilds: st.phases.rebuilds,
     })
 }
 
@@ -265,6 +283,29 @@ pub fn run(args: VccpbdArgs) -> weft::Result<ExitCode> {
             r.paper_ms / r.collision_ms.max(1e-9),
             r.paper_ms / r.cpu_collision_ms.unwrap_or(f64::NAN).max(1e-9),
             r.max_strain
+        );
+    }
+    println!();
+    println!("collision wall ms a step by phase (clamp = the rest), broadphase runs out of {steps} steps");
+    println!(
+        "{:>9} {:>9} {:>14} {:>9} {:>7} {:>7} {:>7} {:>7} {:>7} {:>7} {:>8}",
+        "particles", "fabric", "response", "broad", "build", "query", "start", "pairs", "correct", "clamp", "rebuilds"
+    );
+    for r in &rows {
+        let p = r.phase_ms;
+        println!(
+            "{:>9} {:>9} {:>14} {:>9} {:>7.3} {:>7.3} {:>7.3} {:>7.3} {:>7.3} {:>7.3} {:>8}",
+            r.particles,
+            r.fabric,
+            r.response,
+            r.broadphase,
+            p[0],
+            p[1],
+            p[2],
+            p[3],
+            p[4],
+            r.collision_ms - p.iter().sum::<f64>(),
+            r.rebuilds
         );
     }
     println!();

@@ -1,0 +1,251 @@
+//! The query of the spatial hash (`queryAll`, SEEDS section C): for each particle, its
+//! neighbours within `max_dist`, read row by row from the cells of the build (the method is
+//! in [`super`]).
+
+use super::{SpatialHash, NO_BUCKET};
+use crate::collide::neighbours::{
+    check_max_dist, check_positions, retain_tail, search_radius, sort_dedup_tail, within, Candidates, Neighbours,
+};
+use crate::{Result, WeftError};
+use rayon::prelude::*;
+
+impl SpatialHash {
+    /// Whether particle `i` has the position it had at the last build (bitwise; a non-finite
+    /// particle only has to stay non-finite).
+    #[inline]
+    fn unchanged(&self, x: &[f32], y: &[f32], z: &[f32], i: usize) -> bool {
+        match self.slot_of[i] {
+            NO_BUCKET => !(x[i].is_finite() && y[i].is_finite() && z[i].is_finite()),
+            k => {
+                let k = k as usize;
+                x[i].to_bits() == self.sx[k].to_bits() && y[i].to_bits() == self.sy[k].to_bits() && z[i].to_bits() == self.sz[k].to_bits()
+            }
+        }
+    }
+
+    /// Checks query inputs against the build; returns `max_dist²`. `same` is whether the
+    /// positions are those of the build (computed by the caller, in parallel or not).
+    fn check_query(&self, x: &[f32], y: &[f32], z: &[f32], n: usize, max_dist: f32, same: impl FnOnce() -> bool) -> Result<f32> {
+        check_positions(x, y, z, n)?;
+        if n != self.n {
+            return Err(WeftError::param(
+                "n",
+                n,
+                format!("must equal the particle count of the last build ({})", self.n),
+            ));
+        }
+        let md2 = check_max_dist(max_dist)?;
+        if max_dist > self.spacing {
+            return Err(WeftError::param(
+                "max_dist",
+                max_dist,
+                format!("must not exceed the hash spacing ({})", self.spacing),
+            ));
+        }
+        if !same() {
+            return Err(WeftError::param(
+                "x, y, z",
+                "moved",
+                "must be the positions given to the last build; build the hash again",
+            ));
+        }
+        Ok(md2)
+    }
+
+    /// For every particle, its neighbours within `max_dist` (the shared predicate), sorted,
+    /// into `out`; parallel over particles, no allocation once `out` is warm.
+    ///
+    /// `x, y, z, n` must be the positions given to the last [`SpatialHash::build`]: the cells,
+    /// and a cell-ordered copy of the positions that the candidates are read from, come from
+    /// the build. This is checked (bitwise, one pass). Errors if the positions differ from the
+    /// build, an array is short, or `max_dist` is negative, non-finite or above `spacing`.
+    pub fn query_all(&self, x: &[f32], y: &[f32], z: &[f32], n: usize, max_dist: f32, out: &mut Neighbours) -> Result<()> {
+        self.query_filtered(x, y, z, n, max_dist, &|_, _| true, out)
+    }
+
+    /// Serial, scalar twin of [`SpatialHash::query_all`] (no threads, no lanes); produces
+    /// identical lists.
+    pub fn query_all_serial(&self, x: &[f32], y: &[f32], z: &[f32], n: usize, max_dist: f32, out: &mut Neighbours) -> Result<()> {
+        self.query_filtered_serial(x, y, z, n, max_dist, &|_, _| true, out)
+    }
+
+    /// [`SpatialHash::query_all`] keeping only the neighbours `j` of `i` with `keep(i, j)`:
+    /// the lists equal the unfiltered ones with the other entries removed. The filter runs on
+    /// each particle's candidates before they are sorted, so a filter that drops most pairs
+    /// (self-collision drops the cloth's own rest neighbours) also saves most of the sorting.
+    #[allow(clippy::too_many_arguments)]
+    pub fn query_filtered<K>(&self, x: &[f32], y: &[f32], z: &[f32], n: usize, max_dist: f32, keep: &K, out: &mut Neighbours) -> Result<()>
+    where
+        K: Fn(usize, u32) -> bool + Sync,
+    {
+        let same = || (0..n).into_par_iter().all(|i| self.unchanged(x, y, z, i));
+        let md2 = self.check_query(x, y, z, n, max_dist, same)?;
+        let r = search_radius(max_dist);
+        out.fill_parallel(n, |i, buf| self.scan::<true, false, K>(x, y, z, n, i, md2, r, keep, buf))
+    }
+
+    /// Serial, scalar twin of [`SpatialHash::query_filtered`]; produces identical lists.
+    #[allow(clippy::too_many_arguments)]
+    pub fn query_filtered_serial<K>(
+        &self,
+        x: &[f32],
+        y: &[f32],
+        z: &[f32],
+        n: usize,
+        max_dist: f32,
+        keep: &K,
+        out: &mut Neighbours,
+    ) -> Result<()>
+    where
+        K: Fn(usize, u32) -> bool,
+    {
+        let same = || (0..n).all(|i| self.unchanged(x, y, z, i));
+        let md2 = self.check_query(x, y, z, n, max_dist, same)?;
+        let r = search_radius(max_dist);
+        out.fill_serial(n, |i, buf| self.scan::<false, false, K>(x, y, z, n, i, md2, r, keep, buf))
+    }
+
+    /// [`SpatialHash::query_filtered`] listing each pair once, in the list of its smaller id
+    /// (`j > i` is tested on the candidates before `keep` and before they are stored).
+    /// Equal to `query_filtered` with `keep(i, j) && j > i`; parallel like it.
+    #[allow(clippy::too_many_arguments)]
+    pub fn query_upper_filtered<K>(
+        &self,
+        x: &[f32],
+        y: &[f32],
+        z: &[f32],
+        n: usize,
+        max_dist: f32,
+        keep: &K,
+        out: &mut Neighbours,
+    ) -> Result<()>
+    where
+        K: Fn(usize, u32) -> bool + Sync,
+    {
+        let same = || (0..n).into_par_iter().all(|i| self.unchanged(x, y, z, i));
+        let md2 = self.check_query(x, y, z, n, max_dist, same)?;
+        let r = search_radius(max_dist);
+        out.fill_parallel(n, |i, buf| self.scan::<true, true, K>(x, y, z, n, i, md2, r, keep, buf))
+    }
+
+    /// Serial, scalar twin of [`SpatialHash::query_upper_filtered`]; produces identical lists.
+    #[allow(clippy::too_many_arguments)]
+    pub fn query_upper_filtered_serial<K>(
+        &self,
+        x: &[f32],
+        y: &[f32],
+        z: &[f32],
+        n: usize,
+        max_dist: f32,
+        keep: &K,
+        out: &mut Neighbours,
+    ) -> Result<()>
+    where
+        K: Fn(usize, u32) -> bool,
+    {
+        let same = || (0..n).all(|i| self.unchanged(x, y, z, i));
+        let md2 = self.check_query(x, y, z, n, max_dist, same)?;
+        let r = search_radius(max_dist);
+        out.fill_serial(n, |i, buf| self.scan::<false, true, K>(x, y, z, n, i, md2, r, keep, buf))
+    }
+
+    /// Appends the sorted neighbours `j` of particle `i` with `keep(i, j)` to `buf`.
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    fn scan<const SIMD: bool, const UPPER: bool, K: Fn(usize, u32) -> bool>(
+        &self,
+        x: &[f32],
+        y: &[f32],
+        z: &[f32],
+        n: usize,
+        i: usize,
+        md2: f32,
+        r: f32,
+        keep: &K,
+        buf: &mut Vec<u32>,
+    ) {
+        let (xi, yi, zi) = (x[i], y[i], z[i]);
+        if !(xi.is_finite() && yi.is_finite() && zi.is_finite()) {
+            return;
+        }
+        // Clamping to ±f32::MAX keeps the range finite; finite neighbours lie inside anyway.
+        let lo = |v: f32| self.coord((v - r).max(-f32::MAX));
+        let hi = |v: f32| self.coord((v + r).min(f32::MAX));
+        let (x0, x1, y0, y1, z0, z1) = (lo(xi), hi(xi), lo(yi), hi(yi), lo(zi), hi(zi));
+        let start = buf.len();
+        let wide = |a: i32, b: i32| i64::from(b) - i64::from(a) > 3;
+        if wide(x0, x1) || wide(y0, y1) || wide(z0, z1) {
+            for j in 0..n {
+                if (if UPPER { j > i } else { j != i }) && within(xi, yi, zi, x[j], y[j], z[j], md2) && keep(i, j as u32) {
+                    buf.push(j as u32);
+                }
+            }
+            return;
+        }
+        let iu = i as u32;
+        let ts = self.table_size;
+        let p = [xi, yi, zi];
+        // Buckets b0 ..= b0 + w hold one row of cells; they may wrap past the table's end.
+        let cells = (x1 as i64 - x0 as i64) as usize + 1;
+        for cz in z0..=z1 {
+            for cy in y0..=y1 {
+                let b0 = self.bucket(x0, cy, cz);
+                let b1 = b0 + cells;
+                if b1 <= ts {
+                    self.scan_buckets::<SIMD, UPPER>(b0, b1, iu, p, md2, buf);
+                } else {
+                    self.scan_buckets::<SIMD, UPPER>(b0, ts, iu, p, md2, buf);
+                    self.scan_buckets::<SIMD, UPPER>(0, b1 - ts, iu, p, md2, buf);
+                }
+            }
+        }
+        retain_tail(buf, start, |j| keep(i, j));
+        sort_dedup_tail(buf, start);
+    }
+
+    /// Tests the particles of buckets `b0..b1` (one contiguous range) against `p`.
+    #[inline(always)]
+    fn scan_buckets<const SIMD: bool, const UPPER: bool>(&self, b0: usize, b1: usize, iu: u32, p: [f32; 3], md2: f32, buf: &mut Vec<u32>) {
+        let range = self.cell_start[b0] as usize..self.cell_start[b1] as usize;
+        let c = Candidates {
+            above: UPPER,
+            ids: &self.cell_entries,
+            x: &self.sx,
+            y: &self.sy,
+            z: &self.sz,
+        };
+        c.scan::<SIMD>(range, iu, p, md2, buf);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::test_rng::signed;
+
+    #[test]
+    fn upper_query_equals_the_filtered_query_and_its_twin() {
+        let mut rng = signed(5);
+        let n = 700;
+        let p: [Vec<f32>; 3] = std::array::from_fn(|_| (0..n).map(|_| 0.3 * rng()).collect());
+        let mut h = SpatialHash::new(n);
+        h.build(&p[0], &p[1], &p[2], n, 0.05).unwrap();
+        let keep = |i: usize, j: u32| !(i + j as usize).is_multiple_of(3);
+        let mut want = Neighbours::new();
+        h.query_filtered(&p[0], &p[1], &p[2], n, 0.05, &|i, j| keep(i, j) && j as usize > i, &mut want)
+            .unwrap();
+        assert!(want.total() > 100);
+        let (mut a, mut b) = (Neighbours::new(), Neighbours::new());
+        h.query_upper_filtered(&p[0], &p[1], &p[2], n, 0.05, &keep, &mut a).unwrap();
+        h.query_upper_filtered_serial(&p[0], &p[1], &p[2], n, 0.05, &keep, &mut b).unwrap();
+        assert_eq!(a, want);
+        assert_eq!(b, want);
+        // A spacing far below the radius's rounding margin takes the all-pairs path.
+        let tiny = [vec![0.0f32; 5], vec![0.0; 5], vec![0.0; 5]];
+        h.build(&tiny[0], &tiny[1], &tiny[2], 5, 1e-30).unwrap();
+        h.query_upper_filtered_serial(&tiny[0], &tiny[1], &tiny[2], 5, 1e-30, &|_, _| true, &mut b)
+            .unwrap();
+        assert_eq!(b.pairs().count(), 10);
+        assert!((0..5).all(|i| b.of(i).iter().all(|&j| j as usize > i)));
+    }
+}

@@ -1,0 +1,63 @@
+//! Tests of the neighbour lists (CSR form, fills, helpers).
+
+use super::*;
+
+#[test]
+fn brute_force_small_case_and_accessors() {
+    // 0 and 1 at distance 1, 2 coincides with 0, 3 is far, 4 is NaN.
+    let x = [0.0, 1.0, 0.0, 10.0, f32::NAN];
+    let y = [0.0; 5];
+    let z = [0.0; 5];
+    let mut nb = Neighbours::new();
+    nb.fill_brute_force(&x, &y, &z, 5, 1.0).unwrap();
+    assert_eq!(nb.len(), 5);
+    assert_eq!(nb.of(0), &[1, 2]);
+    assert_eq!(nb.of(1), &[0, 2]);
+    assert_eq!(nb.of(2), &[0, 1]);
+    assert!(nb.of(3).is_empty() && nb.of(4).is_empty());
+    assert_eq!(nb.get(5), None);
+    assert_eq!(nb.pairs().collect::<Vec<_>>(), vec![(0, 1), (0, 2), (1, 2)]);
+    assert_eq!(nb.total(), 6);
+    nb.clear();
+    assert!(nb.is_empty() && nb.first == vec![0] && nb.ids.is_empty());
+}
+
+#[test]
+fn sort_dedup_tail_leaves_the_head_alone() {
+    let mut v = vec![9, 1, 5, 3, 5, 1, 5];
+    sort_dedup_tail(&mut v, 2);
+    assert_eq!(v, vec![9, 1, 1, 3, 5]);
+}
+
+#[test]
+fn bad_inputs_are_errors() {
+    let mut nb = Neighbours::new();
+    let a = [0.0f32; 3];
+    assert!(nb.fill_brute_force(&a, &a, &a, 4, 1.0).is_err());
+    assert!(nb.fill_brute_force(&a, &a, &a, 3, -1.0).is_err());
+    assert!(nb.fill_brute_force(&a, &a, &a, 3, f32::NAN).is_err());
+    assert!(nb.fill_brute_force(&a, &a, &a, 3, 0.0).is_ok());
+    // Coincident points are neighbours even at max_dist 0.
+    assert_eq!(nb.total(), 6);
+}
+
+#[test]
+fn parallel_fill_equals_serial_fill() {
+    let n = 3 * CHUNK + 17;
+    let f = |i: usize, buf: &mut Vec<u32>| {
+        for j in (0..(i % 7)).map(|k| ((i * 31 + k * 7) % n) as u32) {
+            buf.push(j);
+        }
+    };
+    let mut a = Neighbours::new();
+    let mut b = Neighbours::new();
+    a.fill_parallel(n, f).unwrap();
+    b.fill_serial(n, f).unwrap();
+    assert_eq!(a, b);
+    // Refill with fewer particles reuses the buffers.
+    let cap = a.ids.capacity();
+    a.fill_parallel(10, f).unwrap();
+    b.fill_serial(10, f).unwrap();
+    assert_eq!(a, b);
+    assert_eq!(a.ids.capacity(), cap);
+}

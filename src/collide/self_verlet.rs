@@ -1,0 +1,242 @@
+//! Reuse of the self-collision candidate pairs across steps (Verlet lists with a skin) and
+//! across substeps (a near list), both exact: the contacts are those of a fresh broadphase
+//! every step (the method is described in [`super::self_collision`]).
+//!
+//! # Candidate lists across steps (Verlet, skin `s`)
+//! The broadphase finds the pairs within `q + s` of the positions `x⁰` of its build, rest
+//! neighbours dropped, each pair once. While every particle stays within `0.49 s` of `x⁰`
+//! (`|x_i - x⁰_i| <= 0.49 s`), a pair within `q` now was within `q + 0.98 s < q + s` at the
+//! build (triangle inequality), so it is in the candidate lists: filtering them with the same
+//! predicate `|x_i - x_j| <= q` gives exactly the lists a fresh query would. The 2% margin is
+//! far above the `f32` rounding of the distances (a few ulps, relative). A particle past the
+//! bound (or non-finite) triggers a rebuild. The skin is chosen at each build from how fast
+//! the cloth moved since the last one: `SKIN_FACTOR d` when the largest displacement a step
+//! was at most `SLOW_FACTOR d` (a slow, folded cloth: the lists then last several steps),
+//! otherwise zero (a falling cloth: a larger reach would cost more than it saves; with a zero
+//! skin the lists are reused only if no particle moved at all).
+//!
+//! # Near list across substeps
+//! A contact needs `|p_i - p_j| < d` for the predicted positions `p`. The near list holds the
+//! candidate pairs within `d + s₂` of the positions `y` of its build (a substep's `p`); while
+//! every particle of the active blocks stays within `0.49 s₂` of `y`, a pair in contact is in
+//! it. The substeps test only the near pairs, and a pair also has to be within `q` at the
+//! step's start (in the lists of the step), exactly as the fresh path requires.
+
+use super::neighbours::Neighbours;
+use super::self_config::SelfBroadphase;
+use crate::lanes::{load, F32s, LANES};
+
+/// Skin of the candidate lists over the collision distance, when the cloth moves slowly.
+pub const SKIN_FACTOR: f32 = 1.0;
+
+/// Largest displacement a step (over the collision distance) for which the skin is used.
+pub const SLOW_FACTOR: f32 = 0.25;
+
+/// Share of half the skin a particle may move before the lists are rebuilt.
+const SAFE: f32 = 0.98;
+
+/// Largest squared distance between `a_i` and `b_i`, `i < n`, or infinity when one is NaN:
+/// eight particles at a time when `simd`, else one by one (the twin; same value).
+pub(crate) fn max_disp2(a: [&[f32]; 3], b: [&[f32]; 3], n: usize, simd: bool) -> f32 {
+    let mut m = 0.0f32;
+    let mut nan = false;
+    let mut i = 0;
+    if simd {
+        let mut mv = F32s::splat(0.0);
+        let mut bad = F32s::splat(0.0);
+        while i + LANES <= n {
+            let d = [0, 1, 2].map(|k| load(a[k], i) - load(b[k], i));
+            let d2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+            bad |= d2.is_nan();
+            mv = mv.max(d2);
+            i += LANES;
+        }
+        nan = bad.any();
+        m = mv.to_array().into_iter().fold(0.0, f32::max);
+    }
+    for i in i..n {
+        let d = [0, 1, 2].map(|k| a[k][i] - b[k][i]);
+        let d2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+        nan |= d2.is_nan();
+        m = m.max(d2);
+    }
+    if nan {
+        f32::INFINITY
+    } else {
+        m
+    }
+}
+
+/// What the candidate lists were built for: particle count, collision distance bits and
+/// broadphase.
+type Key = (usize, u32, SelfBroadphase);
+
+/// The candidate lists of the last build and what is needed to decide whether they still hold.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct VerletLists {
+    /// Pairs within `q + skin` at the build, rest neighbours dropped, each once (`j > i`).
+    pub(crate) cand: Neighbours,
+    snap: [Vec<f32>; 3],
+    skin: f32,
+    key: Option<Key>,
+    steps_since: u32,
+    /// Builds so far.
+    pub(crate) rebuilds: u64,
+}
+
+impl VerletLists {
+    /// `None` when the lists of the last build still hold for `x` (see the module docs),
+    /// else `Some(skin)` for the rebuild. `fresh` forces a rebuild with no skin.
+    pub(crate) fn plan(&mut self, x: [&[f32]; 3], n: usize, d: f32, bp: SelfBroadphase, fresh: bool) -> Option<f32> {
+        if fresh || self.key != Some((n, d.to_bits(), bp)) {
+            return Some(0.0);
+        }
+        let snap = [&self.snap[0][..], &self.snap[1][..], &self.snap[2][..]];
+        let m2 = max_disp2(x, snap, n, true);
+        let lim = 0.5 * SAFE * self.skin;
+        self.steps_since += 1;
+        if m2 <= lim * lim {
+            return None;
+        }
+        let rate = m2.sqrt() / self.steps_since as f32;
+        Some(if rate <= SLOW_FACTOR * d { SKIN_FACTOR * d } else { 0.0 })
+    }
+
+    /// Records a successful build from `x` with `skin`.
+    pub(crate) fn built(&mut self, x: [&[f32]; 3], n: usize, d: f32, bp: SelfBroadphase, skin: f32) {
+        for (s, src) in self.snap.iter_mut().zip(x) {
+            s.clear();
+            s.extend_from_slice(&src[..n]);
+        }
+        self.skin = skin;
+        self.key = Some((n, d.to_bits(), bp));
+        self.steps_since = 0;
+        self.rebuilds += 1;
+    }
+
+    /// Forgets the lists (a failed build): the next step rebuilds.
+    pub(crate) fn invalidate(&mut self) {
+        self.key = None;
+    }
+}
+
+/// Near pairs of the candidate lists for the substeps (see the module docs).
+#[derive(Clone, Debug, Default)]
+pub(crate) struct NearList {
+    /// Pairs `(i, j)`, `i < j`, ordered by `i` then `j`.
+    pub(crate) pairs: Vec<(u32, u32)>,
+    /// Positions of the build (particle arrays, padded like them).
+    at: [Vec<f32>; 3],
+    skin: f32,
+    valid: bool,
+    subs_since: u32,
+    /// Builds so far.
+    pub(crate) rebuilds: u64,
+}
+
+impl NearList {
+    /// Forgets the list (new candidate lists).
+    pub(crate) fn invalidate(&mut self) {
+        self.valid = false;
+    }
+
+    /// Makes the list hold for the predicted positions `p` (`len` entries checked: the
+    /// particles of the active blocks are among them): kept if no particle moved more than
+    /// `0.49 s₂` since the build, else rebuilt from `cand` with a new skin.
+    pub(crate) fn update(&mut self, cand: &Neighbours, p: [&[f32]; 3], len: usize, n: usize, d: f32, simd: bool) {
+        let len = len.min(p[0].len());
+        if self.valid && self.at[0].len() >= len {
+            let at = [&self.at[0][..], &self.at[1][..], &self.at[2][..]];
+            let m2 = max_disp2(p, at, len, simd);
+            let lim = 0.5 * SAFE * self.skin;
+            self.subs_since += 1;
+            if m2 <= lim * lim {
+                return;
+            }
+            // Aim at about 20 substeps between builds, within [d / 8, d].
+            let rate = if m2.is_finite() { m2.sqrt() / self.subs_since as f32 } else { d };
+            self.skin = (20.0 * rate).clamp(0.125 * d, d);
+        } else if !self.valid {
+            self.skin = 0.25 * d;
+        }
+        for (a, src) in self.at.iter_mut().zip(p) {
+            a.clear();
+            a.extend_from_slice(&src[..len]);
+        }
+        let r = d + self.skin;
+        let r2 = r * r;
+        self.pairs.clear();
+        for i in 0..n.min(cand.len()) {
+            let pi = [p[0][i], p[1][i], p[2][i]];
+            for &j in cand.of(i) {
+                let j = j as usize;
+                let v = [pi[0] - p[0][j], pi[1] - p[1][j], pi[2] - p[2][j]];
+                let d2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+                // NaN passes: the exact test rejects it later, as the fresh path does.
+                if d2 < r2 || d2.is_nan() {
+                    self.pairs.push((i as u32, j as u32));
+                }
+            }
+        }
+        self.valid = true;
+        self.subs_since = 0;
+        self.rebuilds += 1;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::test_rng::signed;
+
+    #[test]
+    fn max_disp2_simd_equals_scalar_and_flags_nan() {
+        let mut rng = signed(11);
+        for n in [0usize, 5, 8, 37] {
+            let a: [Vec<f32>; 3] = std::array::from_fn(|_| (0..n).map(|_| rng()).collect());
+            let b: [Vec<f32>; 3] = std::array::from_fn(|_| (0..n).map(|_| rng()).collect());
+            let (ra, rb) = ([&a[0][..], &a[1][..], &a[2][..]], [&b[0][..], &b[1][..], &b[2][..]]);
+            let s = max_disp2(ra, rb, n, false);
+            assert_eq!(s.to_bits(), max_disp2(ra, rb, n, true).to_bits());
+            let want = (0..n)
+                .map(|i| (0..3).map(|k| (a[k][i] - b[k][i]) * (a[k][i] - b[k][i])).fold(0.0, |x, y| x + y))
+                .fold(0.0f32, f32::max);
+            assert!((s - want).abs() <= 1e-6 * want.max(1.0), "{s} {want}");
+        }
+        let mut a = [vec![0.0f32; 20], vec![0.0; 20], vec![0.0; 20]];
+        let b = a.clone();
+        a[1][13] = f32::NAN;
+        for simd in [false, true] {
+            let r = max_disp2([&a[0], &a[1], &a[2]], [&b[0], &b[1], &b[2]], 20, simd);
+            assert_eq!(r, f32::INFINITY);
+        }
+    }
+
+    #[test]
+    fn plan_reuses_within_the_skin_and_rebuilds_past_it() {
+        let n = 4;
+        let x = [vec![0.0f32, 1.0, 2.0, 3.0], vec![0.0; 4], vec![0.0; 4]];
+        let r = [&x[0][..], &x[1][..], &x[2][..]];
+        let mut v = VerletLists::default();
+        let bp = SelfBroadphase::Hash;
+        assert_eq!(v.plan(r, n, 0.1, bp, false), Some(0.0), "nothing built yet");
+        v.built(r, n, 0.1, bp, 0.1);
+        assert_eq!(v.plan(r, n, 0.1, bp, false), None);
+        assert_eq!(v.plan(r, n, 0.1, bp, true), Some(0.0), "forced");
+        assert_eq!(v.plan(r, n, 0.2, bp, false), Some(0.0), "other distance");
+        let mut y = x.clone();
+        y[2][3] = 0.048;
+        assert_eq!(v.plan([&y[0], &y[1], &y[2]], n, 0.1, bp, false), None);
+        y[2][3] = 0.05;
+        // Past 0.49 skin after three steps: 0.0167 a step is below SLOW_FACTOR d, skin d.
+        assert_eq!(v.plan([&y[0], &y[1], &y[2]], n, 0.1, bp, false), Some(0.1));
+        y[2][3] = 0.5;
+        assert_eq!(v.plan([&y[0], &y[1], &y[2]], n, 0.1, bp, false), Some(0.0), "fast: no skin");
+        v.built(r, n, 0.1, bp, 0.0);
+        assert_eq!(v.plan(r, n, 0.1, bp, false), None, "unmoved: reused even with no skin");
+        y[2][3] = 1e-3;
+        assert_eq!(v.plan([&y[0], &y[1], &y[2]], n, 0.1, bp, false), Some(0.1), "slow: skin d");
+        y[0][0] = f32::NAN;
+        assert_eq!(v.plan([&y[0], &y[1], &y[2]], n, 0.1, bp, false), Some(0.0), "non-finite");
+    }
+}
