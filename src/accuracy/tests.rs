@@ -241,4 +241,3 @@ fn bounded_blow_ups_are_flagged_and_stiff_implicit_runs_are_not() {
     assert_eq!(o.status, "ok", "{o:?}");
     assert!(o.kinetic_ratio.unwrap() < 10.0, "{o:?}");
 }
-
