@@ -44,13 +44,15 @@
 //! Tethers are position limits with no force counterpart, so [`prepare_scene`] switches them off
 //! and every method integrates the same equations.
 
+pub mod energy;
 pub mod reference;
 pub mod run;
 
+pub use energy::{energy_budget, kinetic_energy, model_energy};
 pub use reference::{fnv1a, MakeWorld, Reference, ReferenceKind, F32_REFERENCE_ITERATIONS};
 pub use run::{
-    default_grid, energy_budget, grid_for, kinetic_energy, model_energy, obstacle_penetration, reference_drift, run_grid, run_setting,
-    Outcome, Precision, Report, Setting, PENETRATION_COUNT_DEPTH,
+    default_grid, grid_for, obstacle_penetration, reference_drift, run_grid, run_setting, Outcome, Precision, Report, Setting,
+    PENETRATION_COUNT_DEPTH,
 };
 
 use crate::scene::{Scene, TetherSetting};
