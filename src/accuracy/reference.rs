@@ -15,15 +15,16 @@
 //! sides integrate the same equations; constraints of zero compliance are rigid in the
 //! reference and stiff springs in the force methods (see [`crate::integrate::mass_spring`]).
 //!
-//! **Scenes with obstacles or self-collision.** The f64 step has neither, so for these scenes
-//! ([`ReferenceKind::F32World`]) the reference is the world's own f32 XPBD step with `R`
-//! substeps and [`F32_REFERENCE_ITERATIONS`] iterations, and `R/2` for the self-error. f32 caps
-//! `R`: a particle starting from rest moves `h² g` in its first substep, and once that falls
-//! below half an ulp of its coordinate (6e-8 m at 1 m, reached near 150 substeps of 1/60 s) the
-//! prediction rounds back to `x` and the particle never starts moving. `weft accuracy` therefore
-//! defaults to `R = 64` for these scenes, and the reference is only as good as its self-error
-//! says — on contact-rich scenes that is millimetres to centimetres, not the f64 reference's
-//! micrometres.
+//! **Scenes with obstacles or self-collision.** The f64 step has analytic obstacles (plane,
+//! sphere, capsule, box, moving or not) and cloth self-collision ([`crate::reference`]), so
+//! these scenes get the f64 reference too. Only what it lacks — triangle-mesh obstacles,
+//! self-collision of strands — falls back to [`ReferenceKind::F32World`]: the world's own f32
+//! XPBD step with `R` substeps and [`F32_REFERENCE_ITERATIONS`] iterations, and `R/2` for the
+//! self-error. f32 caps `R`: a particle starting from rest moves `h² g` in its first substep,
+//! and once that falls below half an ulp of its coordinate (6e-8 m at 1 m, reached near 150
+//! substeps of 1/60 s) the prediction rounds back to `x` and the particle never starts moving.
+//! `weft accuracy` therefore defaults to `R = 64` for these scenes, and such a reference is only
+//! as good as its self-error says (on the drape and fold it was 2–3e-2 m).
 //!
 //! Cache file (`reference-<hash>.bin`, little endian): `b"WEFTREF1"`, the u64 key, u32 steps,
 //! u32 particles, f64 self-error, then `steps + 1` frames of `3 n` f64 positions and one frame
@@ -44,7 +45,8 @@ pub enum ReferenceKind {
     /// The scalar f64 XPBD step of [`crate::reference`], 1 iteration per substep.
     F64Xpbd,
     /// The world's f32 XPBD step with [`F32_REFERENCE_ITERATIONS`] iterations per substep
-    /// (scenes with obstacles or self-collision, which the f64 step does not have).
+    /// (scenes with a feature the f64 step lacks: triangle-mesh obstacles, self-collision of
+    /// strands; [`ReferenceWorld::missing_feature`]).
     F32World,
 }
 
@@ -52,13 +54,12 @@ pub enum ReferenceKind {
 pub const F32_REFERENCE_ITERATIONS: u32 = 32;
 
 impl ReferenceKind {
-    /// The kind a world needs: [`F32World`](ReferenceKind::F32World) when it has obstacles or
-    /// self-collision, else [`F64Xpbd`](ReferenceKind::F64Xpbd).
+    /// The kind a world needs: [`F64Xpbd`](ReferenceKind::F64Xpbd) when the f64 step
+    /// represents all of it, else [`F32World`](ReferenceKind::F32World).
     pub fn for_world(world: &World) -> ReferenceKind {
-        if world.obstacles().is_empty() && world.self_collision().is_none() {
-            ReferenceKind::F64Xpbd
-        } else {
-            ReferenceKind::F32World
+        match ReferenceWorld::from_world(world).missing_feature() {
+            None => ReferenceKind::F64Xpbd,
+            Some(_) => ReferenceKind::F32World,
         }
     }
 
@@ -66,7 +67,9 @@ impl ReferenceKind {
     pub fn describe(self) -> String {
         match self {
             ReferenceKind::F64Xpbd => "f64 scalar XPBD, 1 iteration".into(),
-            ReferenceKind::F32World => format!("f32 world XPBD with collisions, {F32_REFERENCE_ITERATIONS} iterations"),
+            ReferenceKind::F32World => {
+                format!("f32 world XPBD, {F32_REFERENCE_ITERATIONS} iterations (the f64 step lacks a feature of the scene)")
+            }
         }
     }
 }
@@ -201,7 +204,7 @@ impl Reference {
         let world = make()?;
         let kind = ReferenceKind::for_world(&world);
         let key = fnv1a(
-            format!("{key_text}\n--reference v1 steps={steps} substeps={substeps} extrapolate={extrapolate} kind={kind:?}").as_bytes(),
+            format!("{key_text}\n--reference v2 steps={steps} substeps={substeps} extrapolate={extrapolate} kind={kind:?}").as_bytes(),
         );
         let path = Self::path(dir, key);
         if let Ok(bytes) = std::fs::read(&path) {

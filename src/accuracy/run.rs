@@ -2,8 +2,9 @@
 
 use std::time::Instant;
 
+use crate::accuracy::energy::{energy_budget, kinetic_energy, model_energy};
 use crate::accuracy::reference::{MakeWorld, Reference, ReferenceKind};
-use crate::accuracy::{pareto, DIVERGED_RMS};
+use crate::accuracy::{pareto, BLOWUP_FACTOR, DIVERGED_RMS};
 use crate::collide::self_config::{Response, SelfBroadphase};
 use crate::error::{Result, WeftError};
 use crate::params::{Backend, Method, SolverParams};
@@ -52,7 +53,9 @@ pub struct Outcome {
     pub response: Option<&'static str>,
     /// Self-collision broadphase that ran (`None`: no self-collision).
     pub broadphase: Option<&'static str>,
-    /// `"ok"` or `"diverged"`.
+    /// `"ok"`, `"diverged"` (non-finite, or RMS error past [`DIVERGED_RMS`]) or
+    /// `"diverged-bounded"` (finite, but its kinetic energy passed [`BLOWUP_FACTOR`] times the
+    /// reference's energy budget; see the module docs).
     pub status: &'static str,
     /// Wall time per step, ms (until divergence for diverged runs).
     pub ms_per_step: f64,
@@ -71,6 +74,9 @@ pub struct Outcome {
     /// Mean over the steps of the percentage of particles in self-penetration (the VcCPBD
     /// paper's "average collision"; `None` without self-collision).
     pub self_penetration_pct: Option<f64>,
+    /// The run's largest kinetic energy after any step over the reference's energy budget
+    /// ([`energy_budget`](crate::accuracy::energy_budget)); `None` when it went non-finite.
+    pub kinetic_ratio: Option<f64>,
     /// On the Pareto front of (ms_per_step, rms_error).
     pub pareto: bool,
 }
@@ -97,14 +103,15 @@ pub struct Report {
 /// Depth past which a particle counts in [`Outcome::penetration_count`], m.
 pub const PENETRATION_COUNT_DEPTH: f64 = 1e-4;
 
-/// The grid for `world`: [`default_grid`] without obstacles or self-collision. With them, the
-/// f64 rows go (the f64 step has no collisions); with self-collision, XPBD at 4 and 16
+/// The grid for `world`: [`default_grid`], without the f64 rows when the f64 step lacks a
+/// feature of the scene ([`ReferenceKind::F32World`]); with self-collision, XPBD at 4 and 16
 /// substeps also runs every other response × broadphase (the plain rows use the scene's).
 pub fn grid_for(world: &World) -> Vec<Setting> {
-    if ReferenceKind::for_world(world) == ReferenceKind::F64Xpbd {
-        return default_grid();
-    }
-    let mut g: Vec<Setting> = default_grid().into_iter().filter(|s| s.precision == Precision::F32).collect();
+    let f64_ok = ReferenceKind::for_world(world) == ReferenceKind::F64Xpbd;
+    let mut g: Vec<Setting> = default_grid()
+        .into_iter()
+        .filter(|s| f64_ok || s.precision == Precision::F32)
+        .collect();
     if let Some(sc) = world.self_collision() {
         for substeps in [4, 16] {
             for response in [Response::Pbd, Response::MovementSpeed, Response::Vccpbd] {
@@ -181,35 +188,11 @@ pub fn default_grid() -> Vec<Setting> {
     g
 }
 
-/// Kinetic + gravitational + spring energy of `world`'s model at state `(x, v)`, J.
-pub fn model_energy(world: &World, x: &[[f64; 3]], v: &[[f64; 3]]) -> f64 {
-    let p = world.particles();
-    let g = world.effects().gravity.map(|g| g.map(f64::from)).unwrap_or([0.0; 3]);
-    let mut e = 0.0;
-    for i in 0..x.len() {
-        if p.w[i] > 0.0 {
-            let m = 1.0 / p.w[i] as f64;
-            e += 0.5 * m * (v[i][0] * v[i][0] + v[i][1] * v[i][1] + v[i][2] * v[i][2]);
-            e -= m * (g[0] * x[i][0] + g[1] * x[i][1] + g[2] * x[i][2]);
-        }
-    }
-    let stiffness = world.params().stiffness;
-    for col in &world.distance_set().colours {
-        for k in 0..col.real {
-            let (a, b) = (col.a[k] as usize, col.b[k] as usize);
-            let l = dist(x[a], x[b]);
-            let ks = crate::integrate::springs::spring_stiffness(col.compliance[k], stiffness) as f64;
-            e += 0.5 * ks * (l - col.rest[k] as f64).powi(2);
-        }
-    }
-    e
-}
-
-fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
+pub(super) fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
     ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
 }
 
-fn state64(w: &World) -> (Vec<[f64; 3]>, Vec<[f64; 3]>) {
+pub(super) fn state64(w: &World) -> (Vec<[f64; 3]>, Vec<[f64; 3]>) {
     let p = w.particles();
     let n = w.particle_count();
     (
@@ -258,7 +241,11 @@ pub fn run_setting(make: MakeWorld<'_>, reference: &Reference, setting: Setting,
     let mut f64_world = match setting.precision {
         Precision::F32 => None,
         Precision::F64 if ReferenceKind::for_world(&w) == ReferenceKind::F32World => {
-            return Err(WeftError::param("precision", "f64", "has no obstacles or self-collision"))
+            return Err(WeftError::param(
+                "precision",
+                "f64",
+                "lacks a feature of this scene (mesh obstacles or strand self-collision)",
+            ))
         }
         Precision::F64 if setting.method == Method::Xpbd => Some(ReferenceWorld::from_world(&w)),
         Precision::F64 => return Err(WeftError::param("precision", "f64", "is available for the xpbd method only")),
@@ -267,6 +254,8 @@ pub fn run_setting(make: MakeWorld<'_>, reference: &Reference, setting: Setting,
     let mut done = 0usize;
     let (mut depth, mut self_pct) = (0.0f64, 0.0f64);
     let mut diverged = false;
+    let budget = energy_budget(&w, reference);
+    let mut peak_kinetic = kinetic_energy(&w, &v0);
     let mut last = (x0, v0);
     for k in 0..steps {
         let t0 = Instant::now();
@@ -297,16 +286,31 @@ pub fn run_setting(make: MakeWorld<'_>, reference: &Reference, setting: Setting,
             max_err = max_err.max(d);
         }
         strain = strain.max(max_strain(&w, &last.0));
-        if f64_world.is_none() {
-            depth = depth.max(obstacle_penetration(&w).0);
-            if selfcol.is_some() {
-                self_pct += w.measure_self_collision()?;
+        peak_kinetic = peak_kinetic.max(kinetic_energy(&w, &last.1));
+        match &f64_world {
+            None => {
+                depth = depth.max(obstacle_penetration(&w).0);
+                if selfcol.is_some() {
+                    self_pct += w.measure_self_collision()?;
+                }
+            }
+            Some(r) => {
+                depth = depth.max(r.obstacle_penetration(PENETRATION_COUNT_DEPTH).0);
+                self_pct += r.self_penetration_pct().unwrap_or(0.0);
             }
         }
     }
     let n = w.particle_count().max(1);
     let rms = (sum2 / (n * done.max(1)) as f64).sqrt();
     diverged |= rms.is_nan() || rms >= DIVERGED_RMS;
+    let kinetic_ratio = (!diverged && peak_kinetic.is_finite()).then_some(peak_kinetic / budget);
+    let bounded = kinetic_ratio.is_some_and(|k| k > BLOWUP_FACTOR);
+    let status = match (diverged, bounded) {
+        (true, _) => "diverged",
+        (false, true) => "diverged-bounded",
+        _ => "ok",
+    };
+    diverged |= bounded;
     let some = |v: f64| (!diverged).then_some(v);
     Ok(Outcome {
         method: setting.method.name(),
@@ -315,15 +319,19 @@ pub fn run_setting(make: MakeWorld<'_>, reference: &Reference, setting: Setting,
         precision: setting.precision,
         response: selfcol.map(|s| s.0),
         broadphase: selfcol.map(|s| s.1),
-        status: if diverged { "diverged" } else { "ok" },
+        status,
         ms_per_step: 1e3 * seconds / done.max(1) as f64,
         rms_error: some(rms),
         max_error: some(max_err),
         max_strain: some(strain),
         energy_drift: some(model_energy(&w, &last.0, &last.1) - e0),
         max_penetration: some(depth),
-        penetration_count: (!diverged).then(|| if f64_world.is_some() { 0 } else { obstacle_penetration(&w).1 }),
+        penetration_count: (!diverged).then(|| match &f64_world {
+            Some(r) => r.obstacle_penetration(PENETRATION_COUNT_DEPTH).1,
+            None => obstacle_penetration(&w).1,
+        }),
         self_penetration_pct: selfcol.and(some(self_pct / done.max(1) as f64)),
+        kinetic_ratio,
         pareto: false,
     })
 }

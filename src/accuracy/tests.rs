@@ -137,24 +137,39 @@ fn scene_keys_solver_method_and_stiffness() {
 }
 
 #[test]
-fn scenes_with_collisions_get_an_f32_reference_the_response_grid_and_penetration_measures() {
+fn scenes_with_analytic_collisions_get_the_f64_reference_the_response_grid_and_penetration_measures() {
     let text = format!(
         "{SCENE}\n[effects.self_collision]\nresponse = \"vccpbd\"\n\n[[obstacle]]\nkind = \"sphere\"\ncenter = [0.125, 0.85, 0.2]\nradius = 0.1\n"
     );
     let s = prepare_scene(&Scene::parse(&text, "test").unwrap());
     let make = || s.world();
     let w = make().unwrap();
-    assert_eq!(ReferenceKind::for_world(&w), ReferenceKind::F32World);
+    assert_eq!(ReferenceKind::for_world(&w), ReferenceKind::F64Xpbd);
     let grid = grid_for(&w);
-    assert!(
-        grid.iter().all(|g| g.precision == Precision::F32),
-        "no f64 rows: the f64 step has no collisions"
+    assert_eq!(
+        grid.iter().filter(|g| g.precision == Precision::F64).count(),
+        4,
+        "f64 rows with collisions"
     );
     let variants = grid.iter().filter(|g| g.response.is_some()).count();
     assert_eq!(variants, 2 * (3 * 2 - 1), "every other response x broadphase at 4 and 16 substeps");
+    let mut pbd = setting(Method::Xpbd, 4);
+    pbd.response = Some(crate::collide::self_config::Response::Pbd);
+    let r = Reference::compute(&make, 2, 16, false).unwrap();
+    assert_eq!(r.kind, ReferenceKind::F64Xpbd);
+    let o = run_setting(&make, &r, pbd, 2).unwrap();
+    assert_eq!(o.response, Some("pbd"));
+    assert!(o.self_penetration_pct.is_some(), "{o:?}");
+    // The measures, on the ball alone (with this cloth's 1 mm collision distance the
+    // self-collision clamp dominates the motion and does not converge in the substep; see
+    // docs/accuracy.md).
+    let s = prepare_scene(&Scene::parse(&text.replace("[effects.self_collision]\nresponse = \"vccpbd\"\n", ""), "test").unwrap());
+    let make = || s.world();
+    assert!(make().unwrap().self_collision().is_none());
     let steps = 25;
-    let r = Reference::compute(&make, steps, 16, false).unwrap();
-    assert_eq!(r.kind, ReferenceKind::F32World);
+    let r = Reference::compute(&make, steps, 256, false).unwrap();
+    assert_eq!(r.kind, ReferenceKind::F64Xpbd);
+    assert!(r.self_error < 2e-3, "f64 reference self error {}", r.self_error);
     for (method, substeps) in [
         (Method::Xpbd, 4),
         (Method::SymplecticEuler, 64),
@@ -166,15 +181,63 @@ fn scenes_with_collisions_get_an_f32_reference_the_response_grid_and_penetration
         let depth = o.max_penetration.unwrap();
         assert!(depth <= PENETRATION_COUNT_DEPTH, "{}: penetration {depth} m", method.name());
         assert_eq!(o.penetration_count, Some(0));
-        assert!(o.self_penetration_pct.is_some() && o.response == Some("vccpbd"), "{o:?}");
         // The sheet reaches the ball: its error against a reference that rests on the ball is
-        // far below the 0.25 m it would fall through it in this time.
-        assert!(o.rms_error.unwrap() < 0.05, "{}: {o:?}", method.name());
+        // well below the 0.25 m it would fall through it in this time (leapfrog at 64
+        // substeps: 6e-2 m, the others below 5e-2 m).
+        assert!(o.rms_error.unwrap() < 0.08, "{}: {o:?}", method.name());
     }
-    let mut pbd = setting(Method::Xpbd, 4);
-    pbd.response = Some(crate::collide::self_config::Response::Pbd);
-    assert_eq!(run_setting(&make, &r, pbd, 2).unwrap().response, Some("pbd"));
+    let mut f64_row = setting(Method::Xpbd, 16);
+    f64_row.precision = Precision::F64;
+    let o = run_setting(&make, &r, f64_row, steps).unwrap();
+    assert_eq!(o.status, "ok");
+    assert!(
+        o.max_penetration.unwrap() <= PENETRATION_COUNT_DEPTH && o.penetration_count == Some(0),
+        "{o:?}"
+    );
+    assert!(o.rms_error.unwrap() < 0.05, "{o:?}");
+}
+
+#[test]
+fn scenes_with_mesh_obstacles_keep_the_f32_reference_and_no_f64_rows() {
+    let text = format!("{SCENE}\n[[obstacle]]\nkind = \"mesh\"\ndress_form = 400\nscale = 0.3\nbroadphase = \"bvh\"\n");
+    let s = prepare_scene(&Scene::parse(&text, "test").unwrap());
+    let make = || s.world();
+    let w = make().unwrap();
+    assert_eq!(ReferenceKind::for_world(&w), ReferenceKind::F32World);
+    assert!(grid_for(&w).iter().all(|g| g.precision == Precision::F32));
+    let r = Reference::compute(&make, 2, 4, false).unwrap();
+    assert_eq!(r.kind, ReferenceKind::F32World);
     let mut f64_row = setting(Method::Xpbd, 4);
     f64_row.precision = Precision::F64;
     assert!(run_setting(&make, &r, f64_row, 2).is_err());
+}
+
+#[test]
+fn bounded_blow_ups_are_flagged_and_stiff_implicit_runs_are_not() {
+    // Stiff cotton-like stretch (k = 1e8 N/m) hanging from a line, with self-collision: explicit
+    // Euler at 2048 substeps is unstable, but the self-collision clamp keeps its positions
+    // finite while its velocities grow.
+    let text = format!("{SCENE}\n[effects.self_collision]\nresponse = \"vccpbd\"\n")
+        .replace("stretch_compliance = 1e-2", "stretch_compliance = 1e-8")
+        .replace("pins = [\"first-row-corners\"]", "pins = [{ row = 2 }]");
+    let s = prepare_scene(&Scene::parse(&text, "test").unwrap());
+    let make = || s.world();
+    let steps = 30;
+    let r = Reference::compute(&make, steps, 256, false).unwrap();
+    let blown = run_setting(&make, &r, setting(Method::SymplecticEuler, 2048), steps).unwrap();
+    assert_eq!(blown.status, "diverged-bounded", "{blown:?}");
+    assert!(blown.kinetic_ratio.unwrap() > 1e3 * BLOWUP_FACTOR, "{blown:?}");
+    assert!(blown.rms_error.is_none() && blown.energy_drift.is_none() && !blown.pareto);
+    let json = serde_json::to_string(&blown).unwrap();
+    assert!(!json.contains("NaN") && json.contains("\"diverged-bounded\""), "{json}");
+    // Implicit Euler on the same stiff cloth: large spring energy, small motion: not flagged.
+    for substeps in [1, 4] {
+        let o = run_setting(&make, &r, setting(Method::ImplicitEuler, substeps), steps).unwrap();
+        assert_eq!(o.status, "ok", "{o:?}");
+        assert!(o.kinetic_ratio.unwrap() < 1.0, "{o:?}");
+    }
+    // Nor is single-substep XPBD, which stretches the cloth by 29 % but stays stable.
+    let o = run_setting(&make, &r, setting(Method::Xpbd, 1), steps).unwrap();
+    assert_eq!(o.status, "ok", "{o:?}");
+    assert!(o.kinetic_ratio.unwrap() < 10.0, "{o:?}");
 }

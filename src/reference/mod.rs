@@ -1,15 +1,38 @@
 //! The scalar reference step: plain loops, `f64`, no SIMD, no threads.
 //!
-//! It follows the same stages as [`World::step`](crate::World::step) — wind, predict, colour by
-//! colour constraint sweeps, tethers, scalp collision of strands, update, damping — on a copy of a world's state and
-//! topology, so the fast kernels can be held to it with a stated tolerance. It is deliberately
-//! naive: a second, independent reading of the method, not a copy of the kernels.
+//! It follows the same stages as [`World::step`](crate::World::step) on a copy of a world's
+//! state and topology, so the fast kernels can be held to it with a stated tolerance. It is
+//! deliberately naive: a second, independent reading of the method, not a copy of the kernels.
+//!
+//! ```text
+//! step(dt):
+//!   self-collision pair lists from x (brute-force grid)             [self_collision]
+//!   for each substep h = dt / substeps:
+//!     wind, predict: v += h g + h w f, drag; p = x + h v
+//!     analytic obstacles: contact of x -> p, back along the path     [obstacles]
+//!     self-collision speed clamp                                     [self_collision]
+//!     iterations: distance constraints by colour (XPBD, Macklin et al. 2016 eq. 18),
+//!                 tethers, obstacle projection, scalp
+//!     self-collision pair pass and response                          [self_collision]
+//!     update: v = (p - x) / h, damping; x = p
+//!     obstacle velocity pass: normal part, Coulomb friction          [obstacles]
+//! ```
+//!
+//! Triangle-mesh obstacles are not represented: [`ReferenceWorld::missing_feature`] says so,
+//! and the accuracy report keeps the f32 world as the reference for such scenes.
 
 // Plain index loops are the point of this module: it is the naive reading of the method.
 #![allow(clippy::needless_range_loop)]
 
+mod obstacles;
+mod self_collision;
+#[cfg(test)]
+mod tests;
+
 use crate::effects::Effects;
 use crate::world::World;
+use obstacles::{Contact, Obstacle64};
+use self_collision::SelfCollision64;
 
 /// One constraint of the reference (global indices).
 #[derive(Clone, Copy, Debug)]
@@ -35,16 +58,43 @@ pub struct ReferenceWorld {
     strand_area: Vec<f64>,
     scalps: Vec<(usize, usize, [f64; 3], [f64; 3])>,
     effects: Effects,
+    obstacles: Vec<Obstacle64>,
+    /// Obstacle thickness per particle (cloth thickness, half a strand's diameter).
+    th: Vec<f64>,
+    selfcol: Option<SelfCollision64>,
+    missing: Option<&'static str>,
     substeps: u32,
     iterations: u32,
     time: f64,
 }
 
 impl ReferenceWorld {
-    /// Copies the state and topology of `world` (constraints in the world's colour order).
+    /// Copies the state and topology of `world` (constraints in the world's colour order),
+    /// its analytic obstacles and its self-collision. Self-collision takes the cloths' rest
+    /// shapes from the positions now, so copy a world before its first step. Features it cannot
+    /// represent are left out and named by [`missing_feature`](Self::missing_feature).
     pub fn from_world(world: &World) -> Self {
         let p = world.particles();
         let n = p.count();
+        let obstacles: Vec<Option<Obstacle64>> = world
+            .obstacles()
+            .iter()
+            .map(|o| Obstacle64::from_obstacle(o, world.friction()))
+            .collect();
+        let mut missing = obstacles.iter().any(Option::is_none).then_some("triangle-mesh obstacles");
+        let selfcol = SelfCollision64::from_world(world).unwrap_or_else(|e| {
+            missing = missing.or(Some(e));
+            None
+        });
+        let mut th = vec![0.0; n];
+        for c in &world.cloths {
+            let r = c.first as usize..(c.first + c.rows * c.cols) as usize;
+            th[r.start.min(n)..r.end.min(n)].fill(c.thickness as f64);
+        }
+        for g in &world.strands {
+            let r = g.first as usize..(g.first + g.count * g.points) as usize;
+            th[r.start.min(n)..r.end.min(n)].fill(0.5 * g.thickness as f64);
+        }
         let colours = world
             .distance
             .colours
@@ -80,88 +130,54 @@ impl ReferenceWorld {
                 .map(|r| (r.start, r.end, r.center.map(f64::from), r.radii.map(f64::from)))
                 .collect(),
             effects: world.effects().clone(),
+            obstacles: obstacles.into_iter().flatten().collect(),
+            th,
+            selfcol,
+            missing,
             substeps: world.params().substeps,
             iterations: world.params().iterations,
             time: world.time(),
         }
     }
 
+    /// What of the world this copy lacks (`None`: everything is represented): triangle-mesh
+    /// obstacles, or self-collision of particles outside cloths.
+    pub fn missing_feature(&self) -> Option<&'static str> {
+        self.missing
+    }
+
     /// Advances by `dt` seconds.
     pub fn step(&mut self, dt: f64) {
         let h = dt / self.substeps as f64;
         let n = self.x.len();
+        if let Some(sc) = &mut self.selfcol {
+            sc.begin_step(&self.x);
+        }
+        let mut contacts = vec![vec![Contact::default(); n]; self.obstacles.len()];
         for s in 0..self.substeps {
             let t = self.time + s as f64 * h;
-            let force = self.wind_forces(t);
-            let mut p = vec![[0.0f64; 3]; n];
-            for i in 0..n {
-                let w = self.w[i];
-                if let Some(g) = self.effects.gravity {
-                    if w > 0.0 {
-                        for k in 0..3 {
-                            self.v[i][k] += h * g[k] as f64;
-                        }
-                    }
-                }
-                if let Some(f) = &force {
-                    for k in 0..3 {
-                        self.v[i][k] += h * w * f[i][k];
-                    }
-                }
-                if let Some(c) = self.effects.drag {
-                    let kd = 1.0 / (1.0 + h * c as f64 * w);
-                    for k in 0..3 {
-                        self.v[i][k] *= kd;
-                    }
-                }
-                for k in 0..3 {
-                    p[i][k] = self.x[i][k] + h * self.v[i][k];
+            let mut p = self.predict(t, h);
+            let t_end = self.time + (s + 1) as f64 * h;
+            for (o, cs) in self.obstacles.iter().zip(contacts.iter_mut()) {
+                for i in 0..n {
+                    cs[i] = if self.w[i] > 0.0 {
+                        o.contact(self.x[i], p[i], self.v[i], self.th[i], t_end, h)
+                    } else {
+                        Contact::default()
+                    };
                 }
             }
-            let mut lambda: Vec<Vec<f64>> = self.colours.iter().map(|c| vec![0.0; c.len()]).collect();
-            for _ in 0..self.iterations {
-                for (col, lam) in self.colours.iter().zip(lambda.iter_mut()) {
-                    for (c, l) in col.iter().zip(lam.iter_mut()) {
-                        let d = sub(p[c.b], p[c.a]);
-                        let len = norm(d);
-                        let alpha = c.compliance / (h * h);
-                        let denom = self.w[c.a] + self.w[c.b] + alpha;
-                        if len <= crate::constraints::distance::MIN_LENGTH as f64 || denom <= 0.0 {
-                            continue;
-                        }
-                        let dl = (-(len - c.rest) - alpha * *l) / denom;
-                        for k in 0..3 {
-                            let nk = d[k] / len;
-                            p[c.a][k] -= self.w[c.a] * dl * nk;
-                            p[c.b][k] += self.w[c.b] * dl * nk;
-                        }
-                        *l += dl;
-                    }
+            for i in 0..n {
+                for (o, cs) in self.obstacles.iter().zip(&contacts) {
+                    o.resolve(&cs[i], self.x[i], &mut p[i], self.th[i], h);
                 }
-                for &(i, a, max_len) in &self.tethers {
-                    let d = sub(p[i], p[a]);
-                    let len = norm(d);
-                    if len > max_len {
-                        for k in 0..3 {
-                            p[i][k] = p[a][k] + d[k] * max_len / len;
-                        }
-                    }
-                }
-                // Scalp: strand points outside the inflated ellipsoid, along the scaled ray.
-                for &(start, end, c, r) in &self.scalps {
-                    for i in start..end {
-                        if self.w[i] <= 0.0 {
-                            continue;
-                        }
-                        let d = sub(p[i], c);
-                        let s = norm([d[0] / r[0], d[1] / r[1], d[2] / r[2]]);
-                        if s < 1e-6 {
-                            p[i] = [c[0], c[1] + r[1], c[2]];
-                        } else if s < 1.0 {
-                            p[i] = std::array::from_fn(|k| c[k] + d[k] / s);
-                        }
-                    }
-                }
+            }
+            if let Some(sc) = &mut self.selfcol {
+                sc.clamp(&self.x, &mut self.v, &mut p, &self.w, self.substeps, h);
+            }
+            self.sweeps(&mut p, &contacts, h);
+            if let Some(sc) = &self.selfcol {
+                sc.respond(&self.x, &mut p, &self.w, &self.damping, h);
             }
             for i in 0..n {
                 let kd = if self.damping.is_empty() {
@@ -173,9 +189,120 @@ impl ReferenceWorld {
                     self.v[i][k] = (p[i][k] - self.x[i][k]) / h * kd;
                     self.x[i][k] = p[i][k];
                 }
+                for (o, cs) in self.obstacles.iter().zip(&contacts) {
+                    o.velocity(&cs[i], self.x[i], &mut self.v[i], self.th[i]);
+                }
             }
         }
         self.time += dt;
+    }
+
+    /// Wind, gravity, drag: the velocities and predictions of the substep starting at `t`.
+    fn predict(&mut self, t: f64, h: f64) -> Vec<[f64; 3]> {
+        let force = self.wind_forces(t);
+        let mut p = vec![[0.0f64; 3]; self.x.len()];
+        for i in 0..self.x.len() {
+            let w = self.w[i];
+            if let Some(g) = self.effects.gravity {
+                if w > 0.0 {
+                    for k in 0..3 {
+                        self.v[i][k] += h * g[k] as f64;
+                    }
+                }
+            }
+            if let Some(f) = &force {
+                for k in 0..3 {
+                    self.v[i][k] += h * w * f[i][k];
+                }
+            }
+            if let Some(c) = self.effects.drag {
+                let kd = 1.0 / (1.0 + h * c as f64 * w);
+                for k in 0..3 {
+                    self.v[i][k] *= kd;
+                }
+            }
+            for k in 0..3 {
+                p[i][k] = self.x[i][k] + h * self.v[i][k];
+            }
+        }
+        p
+    }
+
+    /// The solver iterations: constraints by colour, tethers, obstacle projection, scalps.
+    fn sweeps(&self, p: &mut [[f64; 3]], contacts: &[Vec<Contact>], h: f64) {
+        let mut lambda: Vec<Vec<f64>> = self.colours.iter().map(|c| vec![0.0; c.len()]).collect();
+        for _ in 0..self.iterations {
+            for (col, lam) in self.colours.iter().zip(lambda.iter_mut()) {
+                for (c, l) in col.iter().zip(lam.iter_mut()) {
+                    let d = sub(p[c.b], p[c.a]);
+                    let len = norm(d);
+                    let alpha = c.compliance / (h * h);
+                    let denom = self.w[c.a] + self.w[c.b] + alpha;
+                    if len <= crate::constraints::distance::MIN_LENGTH as f64 || denom <= 0.0 {
+                        continue;
+                    }
+                    let dl = (-(len - c.rest) - alpha * *l) / denom;
+                    for k in 0..3 {
+                        let nk = d[k] / len;
+                        p[c.a][k] -= self.w[c.a] * dl * nk;
+                        p[c.b][k] += self.w[c.b] * dl * nk;
+                    }
+                    *l += dl;
+                }
+            }
+            for &(i, a, max_len) in &self.tethers {
+                let d = sub(p[i], p[a]);
+                let len = norm(d);
+                if len > max_len {
+                    for k in 0..3 {
+                        p[i][k] = p[a][k] + d[k] * max_len / len;
+                    }
+                }
+            }
+            for cs in contacts {
+                for (i, c) in cs.iter().enumerate() {
+                    Obstacle64::project(c, &mut p[i], self.th[i]);
+                }
+            }
+            // Scalp: strand points outside the inflated ellipsoid, along the scaled ray.
+            for &(start, end, c, r) in &self.scalps {
+                for i in start..end {
+                    if self.w[i] <= 0.0 {
+                        continue;
+                    }
+                    let d = sub(p[i], c);
+                    let s = norm([d[0] / r[0], d[1] / r[1], d[2] / r[2]]);
+                    if s < 1e-6 {
+                        p[i] = [c[0], c[1] + r[1], c[2]];
+                    } else if s < 1.0 {
+                        p[i] = std::array::from_fn(|k| c[k] + d[k] / s);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Deepest penetration into the analytic obstacles now, m (0 when none), and how many
+    /// particles sit deeper than `count_depth`.
+    pub fn obstacle_penetration(&self, count_depth: f64) -> (f64, u64) {
+        let (mut max, mut count) = (0.0f64, 0u64);
+        for x in &self.x {
+            let depth = self
+                .obstacles
+                .iter()
+                .map(|o| -o.signed_distance(*x, self.time))
+                .fold(0.0f64, f64::max);
+            max = max.max(depth);
+            count += (depth > count_depth) as u64;
+        }
+        (max, count)
+    }
+
+    /// Percentage of particles in self-penetration now (another cloth's particle, or one of the
+    /// same cloth more than `1.5 d` away at rest, closer than `0.9 d`); `None` without
+    /// self-collision.
+    pub fn self_penetration_pct(&self) -> Option<f64> {
+        self.selfcol.as_ref().map(|s| s.penetration_pct(&self.x))
     }
 
     fn wind_forces(&self, t: f64) -> Option<Vec<[f64; 3]>> {

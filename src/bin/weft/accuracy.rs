@@ -27,7 +27,7 @@ pub struct AccuracyArgs {
     #[arg(long, default_value_t = 1.0)]
     time: f64,
     /// Substeps per step of the reference's finer run (even; default 1024, or 64 for scenes
-    /// with obstacles or self-collision, whose reference is f32: see weft::accuracy::reference).
+    /// with mesh obstacles, whose reference is f32: see weft::accuracy::reference).
     #[arg(long)]
     reference_substeps: Option<u32>,
     /// Richardson-extrapolate the reference from its R and R/2 runs (helps smooth motion,
@@ -132,14 +132,16 @@ pub fn accuracy(args: AccuracyArgs) -> weft::Result<ExitCode> {
         );
         print!("{}", table(&report.outcomes));
         println!(
-            "* = Pareto front (no other setting is both faster and more accurate). penet = deepest obstacle penetration (m) / particles deeper than 0.1 mm at the end; self% = mean % of particles in self-penetration."
+            "* = Pareto front (no other setting is both faster and more accurate). penet = deepest obstacle penetration (m) / particles deeper than 0.1 mm at the end; self% = mean % of particles in self-penetration; bounded = finite but blown up (kinetic energy over {} x the reference's energy budget).",
+            weft::accuracy::BLOWUP_FACTOR
         );
     }
     Ok(ExitCode::SUCCESS)
 }
 
-fn num(v: Option<f64>) -> String {
-    v.map_or_else(|| "diverged".to_string(), |v| format!("{v:.3e}"))
+fn num(v: Option<f64>, status: &str) -> String {
+    let what = if status == "diverged-bounded" { "bounded" } else { "diverged" };
+    v.map_or_else(|| what.to_string(), |v| format!("{v:.3e}"))
 }
 
 /// The text table.
@@ -176,10 +178,10 @@ pub fn table(outcomes: &[Outcome]) -> String {
             o.iterations,
             format!("{:?}", o.precision).to_lowercase(),
             o.ms_per_step,
-            num(o.rms_error),
-            num(o.max_error),
-            num(o.max_strain),
-            num(o.energy_drift),
+            num(o.rms_error, o.status),
+            num(o.max_error, o.status),
+            num(o.max_strain, o.status),
+            num(o.energy_drift, o.status),
             penet,
             o.self_penetration_pct.map_or("-".into(), |p| format!("{p:.2}")),
             if o.pareto { " *" } else { "" }
