@@ -44,6 +44,8 @@ pub struct MassSpringState {
     /// The predictions before the collision stages moved them (see
     /// [`crate::integrate::contacts`]).
     pub predicted: [Vec<f32>; 3],
+    /// Velocities before the self-collision speed clamp (see [`crate::integrate::contacts`]).
+    pub before_clamp: [Vec<f32>; 3],
 }
 
 /// What one kick/drift pass does to a chunk of particles.
