@@ -111,14 +111,31 @@ impl CachedFaces {
         keep: bool,
         scratch: &mut Vec<u32>,
     ) -> Option<Contact> {
-        let (lo, hi) = query_box(x, p, reach);
+        self.contact_in(mesh, bp, x, p, reach, query_box(x, p, reach), keep, scratch)
+    }
+
+    /// [`step_contact`](Self::step_contact) given the step's query box `q`
+    /// (`query_box(x, p, reach)`).
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn contact_in<B: FaceBroadphase + ?Sized>(
+        &mut self,
+        mesh: &TriMesh,
+        bp: &B,
+        x: [f32; 3],
+        p: [f32; 3],
+        reach: f32,
+        (lo, hi): ([f32; 3], [f32; 3]),
+        keep: bool,
+        scratch: &mut Vec<u32>,
+    ) -> Option<Contact> {
         if !keep {
             self.clear();
         }
-        if self.holds(lo, hi) && self.len == 0 {
+        let holds = self.holds(lo, hi);
+        if holds && self.len == 0 {
             return None;
         }
-        if !self.holds(lo, hi) {
+        if !holds {
             let margin = if keep { margin(x, p, reach) } else { 0.0 };
             let (glo, ghi) = (lo.map(|v| v - margin), hi.map(|v| v + margin));
             bp.candidates(mesh, glo, ghi, scratch);

@@ -285,7 +285,8 @@ impl TriMesh {
     }
     /// The three corners of face `f`.
     pub fn corners(&self, f: u32) -> [[f32; 3]; 3] {
-        self.faces[f as usize].map(|k| self.vertices[k as usize])
+        let [i, j, k] = self.faces[f as usize];
+        [self.vertices[i as usize], self.vertices[j as usize], self.vertices[k as usize]]
     }
     /// Lower corner of face `f`'s box.
     pub fn face_lo(&self, f: u32) -> [f32; 3] {
@@ -307,7 +308,8 @@ impl TriMesh {
     #[inline]
     pub fn face_overlaps(&self, f: u32, lo: [f32; 3], hi: [f32; 3]) -> bool {
         let (a, b) = (&self.face_lo[f as usize], &self.face_hi[f as usize]);
-        a[0] <= hi[0] && a[1] <= hi[1] && a[2] <= hi[2] && lo[0] <= b[0] && lo[1] <= b[1] && lo[2] <= b[2]
+        // `&` rather than `&&`: one branch for the six comparisons
+        (a[0] <= hi[0]) & (a[1] <= hi[1]) & (a[2] <= hi[2]) & (lo[0] <= b[0]) & (lo[1] <= b[1]) & (lo[2] <= b[2])
     }
     /// For a closed, consistently wound mesh (a solid): `+1.0` if the face normals point out
     /// (positive [`signed_volume`](Self::signed_volume)), `-1.0` if they point in. `None` for

@@ -80,7 +80,7 @@ type V = [f64; 3];
 
 #[inline]
 fn d(a: [f32; 3]) -> V {
-    a.map(|x| x as f64)
+    [a[0] as f64, a[1] as f64, a[2] as f64]
 }
 #[inline]
 fn sub(a: V, b: V) -> V {
@@ -143,6 +143,12 @@ pub(crate) fn inside(q: V, a: V, b: V, c: V, n: V, nn: f64, tol: f64) -> bool {
     dot(cross(qb, qc), n) >= -tol * nn && dot(cross(qc, qa), n) >= -tol * nn && dot(cross(qa, qb), n) >= -tol * nn
 }
 
+/// The behind-the-plane pad of [`face_contact`]: [`PLANE_SLACK`] times `1 + max |p_k|`.
+#[inline]
+fn slack(p: V) -> f64 {
+    PLANE_SLACK * (1.0 + p.iter().fold(0.0f64, |m, v| m.max(v.abs())))
+}
+
 /// Tests the step `x -> p` of a particle with thickness `th` against face `f` alone.
 pub fn face_contact(mesh: &TriMesh, f: u32, x: [f32; 3], p: [f32; 3], th: f32) -> Option<Contact> {
     let FacePlane { a, n, nn, u } = mesh.planes()[f as usize];
@@ -158,12 +164,13 @@ pub fn face_contact(mesh: &TriMesh, f: u32, x: [f32; 3], p: [f32; 3], th: f32) -
     // Cheap reject: no crossing, and `p` is farther than `th` from the plane (so from the
     // triangle) on either side. Behind the plane the bound is padded by `PLANE_SLACK`
     // relative to the coordinates, far above the rounding of `hp` and of the closest point,
-    // so no proximity the full test would find is dropped.
-    let slack = PLANE_SLACK * (1.0 + pd.iter().fold(0.0f64, |m, v| m.max(v.abs())));
-    if !crossing && (th.is_nan() || s * hp >= th as f64 || s * hp <= -(th as f64) - slack) {
+    // so no proximity the full test would find is dropped (the pad is computed only when
+    // `p` lies behind the plane by more than `th`).
+    if !crossing && (th.is_nan() || s * hp >= th as f64 || (s * hp <= -(th as f64) && s * hp <= -(th as f64) - slack(pd))) {
         return None;
     }
-    let [_, b, c] = mesh.corners(f).map(d);
+    let [_, b, c] = mesh.corners(f);
+    let (b, c) = (d(b), d(c));
     let fnorm = mesh.normals()[f as usize];
     let make = |point: V, t: f64, kind| Contact {
         face: f,
@@ -194,9 +201,13 @@ pub fn face_contact(mesh: &TriMesh, f: u32, x: [f32; 3], p: [f32; 3], th: f32) -
 /// The box a step `x -> p` with thickness `th` may touch: the segment's box grown by `th`
 /// and by [`QUERY_PAD`] relative to the coordinates' size.
 pub fn query_box(x: [f32; 3], p: [f32; 3], th: f32) -> ([f32; 3], [f32; 3]) {
-    let big = x.iter().chain(p.iter()).fold(0.0f32, |m, v| m.max(v.abs()));
+    let mut big = 0.0f32;
+    for v in [x[0], x[1], x[2], p[0], p[1], p[2]] {
+        big = big.max(v.abs());
+    }
     let g = th + QUERY_PAD * (1.0 + big);
-    ([0, 1, 2].map(|k| x[k].min(p[k]) - g), [0, 1, 2].map(|k| x[k].max(p[k]) + g))
+    let lo = [x[0].min(p[0]) - g, x[1].min(p[1]) - g, x[2].min(p[2]) - g];
+    (lo, [x[0].max(p[0]) + g, x[1].max(p[1]) + g, x[2].max(p[2]) + g])
 }
 
 /// Is contact `a` chosen over `b`? Smaller time of impact first, then smaller face index.
