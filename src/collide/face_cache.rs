@@ -257,7 +257,7 @@ mod tests {
     }
 
     /// A cloth draped on a form gives bitwise the same run with the kept lists (and the
-    /// skipped far blocks) as with a fresh broadphase search for every particle every
+    /// particles skipped as far from the mesh, `mesh_pass.rs`) as with a fresh broadphase search for every particle every
     /// substep (on one thread against two), for every broadphase, with and without face
     /// memory.
     #[test]
