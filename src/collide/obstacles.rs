@@ -157,6 +157,7 @@ impl ObstacleSet {
                         u,
                         remember: !m.memory.is_empty(),
                         fresh: self.fresh_search,
+                        simd,
                     };
                     for_blocks(
                         slots,
