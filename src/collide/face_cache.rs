@@ -74,7 +74,13 @@ impl CachedFaces {
     /// Does the gathered box contain `[lo, hi]`?
     #[inline]
     fn holds(&self, lo: [f32; 3], hi: [f32; 3]) -> bool {
-        (0..3).all(|k| self.lo[k] <= lo[k] && hi[k] <= self.hi[k])
+        // `&` rather than `&&`: one branch for the six comparisons
+        (self.lo[0] <= lo[0])
+            & (self.lo[1] <= lo[1])
+            & (self.lo[2] <= lo[2])
+            & (hi[0] <= self.hi[0])
+            & (hi[1] <= self.hi[1])
+            & (hi[2] <= self.hi[2])
     }
 
     /// The faces gathered (at least every face overlapping the gathered box).
@@ -111,28 +117,61 @@ impl CachedFaces {
         keep: bool,
         scratch: &mut Vec<u32>,
     ) -> Option<Contact> {
-        let (lo, hi) = query_box(x, p, reach);
-        if !keep {
+        self.contact_in(mesh, bp, x, p, reach, query_box(x, p, reach), keep, scratch)
+    }
+
+    /// [`step_contact`](Self::step_contact) given the step's query box `q`
+    /// (`query_box(x, p, reach)`).
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    pub(crate) fn contact_in<B: FaceBroadphase + ?Sized>(
+        &mut self,
+        mesh: &TriMesh,
+        bp: &B,
+        x: [f32; 3],
+        p: [f32; 3],
+        reach: f32,
+        (lo, hi): ([f32; 3], [f32; 3]),
+        keep: bool,
+        scratch: &mut Vec<u32>,
+    ) -> Option<Contact> {
+        if keep && self.holds(lo, hi) {
+            return match self.len {
+                0 => None,
+                _ => best_contact(mesh, self.faces(), x, p, reach, lo, hi),
+            };
+        }
+        self.gather(mesh, bp, x, p, reach, (lo, hi), keep, scratch)
+    }
+
+    /// [`contact_in`](Self::contact_in) when the list does not cover the query box (or is
+    /// not kept): gathers afresh.
+    #[inline(never)]
+    #[allow(clippy::too_many_arguments)]
+    fn gather<B: FaceBroadphase + ?Sized>(
+        &mut self,
+        mesh: &TriMesh,
+        bp: &B,
+        x: [f32; 3],
+        p: [f32; 3],
+        reach: f32,
+        (lo, hi): ([f32; 3], [f32; 3]),
+        keep: bool,
+        scratch: &mut Vec<u32>,
+    ) -> Option<Contact> {
+        let margin = if keep { margin(x, p, reach) } else { 0.0 };
+        let (glo, ghi) = (lo.map(|v| v - margin), hi.map(|v| v + margin));
+        bp.candidates(mesh, glo, ghi, scratch);
+        // A NaN or a margin lost to rounding leaves a box that does not hold the query: then
+        // this step uses the fresh candidates and keeps nothing (so does a fresh search).
+        if !(keep && margin >= 0.0 && (0..3).all(|k| glo[k] <= lo[k] && hi[k] <= ghi[k])) {
             self.clear();
+            return best_contact(mesh, scratch, x, p, reach, lo, hi);
         }
-        if self.holds(lo, hi) && self.len == 0 {
-            return None;
-        }
-        if !self.holds(lo, hi) {
-            let margin = if keep { margin(x, p, reach) } else { 0.0 };
-            let (glo, ghi) = (lo.map(|v| v - margin), hi.map(|v| v + margin));
-            bp.candidates(mesh, glo, ghi, scratch);
-            // A NaN or a margin lost to rounding leaves a box that does not hold the query:
-            // then this step uses the fresh candidates and keeps nothing.
-            if !(margin >= 0.0 && (0..3).all(|k| glo[k] <= lo[k] && hi[k] <= ghi[k])) {
-                self.clear();
-                return best_contact(mesh, scratch, x, p, reach, lo, hi);
-            }
-            let n = mesh.face_count();
-            scratch.retain(|&f| (f as usize) < n && mesh.face_overlaps(f, glo, ghi));
-            self.store(scratch);
-            (self.lo, self.hi) = (glo, ghi);
-        }
+        let n = mesh.face_count();
+        scratch.retain(|&f| (f as usize) < n && mesh.face_overlaps(f, glo, ghi));
+        self.store(scratch);
+        (self.lo, self.hi) = (glo, ghi);
         best_contact(mesh, self.faces(), x, p, reach, lo, hi)
     }
 }
@@ -218,7 +257,7 @@ mod tests {
     }
 
     /// A cloth draped on a form gives bitwise the same run with the kept lists (and the
-    /// skipped far blocks) as with a fresh broadphase search for every particle every
+    /// particles skipped as far from the mesh, `mesh_pass.rs`) as with a fresh broadphase search for every particle every
     /// substep (on one thread against two), for every broadphase, with and without face
     /// memory.
     #[test]

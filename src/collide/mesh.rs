@@ -285,7 +285,8 @@ impl TriMesh {
     }
     /// The three corners of face `f`.
     pub fn corners(&self, f: u32) -> [[f32; 3]; 3] {
-        self.faces[f as usize].map(|k| self.vertices[k as usize])
+        let [i, j, k] = self.faces[f as usize];
+        [self.vertices[i as usize], self.vertices[j as usize], self.vertices[k as usize]]
     }
     /// Lower corner of face `f`'s box.
     pub fn face_lo(&self, f: u32) -> [f32; 3] {
@@ -307,7 +308,8 @@ impl TriMesh {
     #[inline]
     pub fn face_overlaps(&self, f: u32, lo: [f32; 3], hi: [f32; 3]) -> bool {
         let (a, b) = (&self.face_lo[f as usize], &self.face_hi[f as usize]);
-        a[0] <= hi[0] && a[1] <= hi[1] && a[2] <= hi[2] && lo[0] <= b[0] && lo[1] <= b[1] && lo[2] <= b[2]
+        // `&` rather than `&&`: one branch for the six comparisons
+        (a[0] <= hi[0]) & (a[1] <= hi[1]) & (a[2] <= hi[2]) & (lo[0] <= b[0]) & (lo[1] <= b[1]) & (lo[2] <= b[2])
     }
     /// For a closed, consistently wound mesh (a solid): `+1.0` if the face normals point out
     /// (positive [`signed_volume`](Self::signed_volume)), `-1.0` if they point in. `None` for
@@ -342,78 +344,5 @@ pub(crate) fn unit_square() -> TriMesh {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn tetra() -> (Vec<[f32; 3]>, Vec<[u32; 3]>) {
-        let v = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
-        let f = vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
-        (v, f)
-    }
-
-    #[test]
-    fn tetra_is_closed_and_outward() {
-        let (v, f) = tetra();
-        let (m, r) = TriMesh::new(v, f).unwrap();
-        assert_eq!(r.non_manifold_edges, 0);
-        assert_eq!(r.boundary_edges, 0);
-        assert!(r.warnings.is_empty());
-        assert!((m.signed_volume() - 1.0 / 6.0).abs() < 1e-9);
-        assert_eq!(m.solid_side(), Some(1.0));
-        let (v, f) = tetra();
-        let inward = f.iter().map(|t| [t[0], t[2], t[1]]).collect();
-        assert_eq!(TriMesh::new(v.clone(), inward).unwrap().0.solid_side(), Some(-1.0));
-        let mut mixed = f.clone();
-        mixed[1] = [0, 3, 1];
-        let (mm, r) = TriMesh::new(v, mixed).unwrap();
-        assert_eq!((mm.solid_side(), r.misoriented_edges), (None, 3));
-        assert_eq!(m.bounds(), ([0.0; 3], [1.0; 3]));
-        assert_eq!(m.normals()[0], [0.0, 0.0, -1.0]);
-    }
-
-    #[test]
-    fn bad_input_is_an_error() {
-        let (v, f) = tetra();
-        let mut vn = v.clone();
-        vn[2][1] = f32::NAN;
-        let e = TriMesh::new(vn, f.clone()).unwrap_err().to_string();
-        assert!(e.contains("vertex 2 is not finite"), "{e}");
-        let mut fi = f.clone();
-        fi[3][2] = 9;
-        let e = TriMesh::new(v.clone(), fi).unwrap_err().to_string();
-        assert!(e.contains("face 3 uses vertex 9"), "{e}");
-        assert!(TriMesh::new(vec![], vec![]).is_err());
-        assert!(TriMesh::new(v.clone(), vec![]).is_err());
-        let e = TriMesh::new(v, vec![[0, 0, 1]]).unwrap_err().to_string();
-        assert!(e.contains("zero area"), "{e}");
-    }
-
-    #[test]
-    fn slivers_skipped_and_non_manifold_counted() {
-        let (mut v, mut f) = tetra();
-        v.push([0.5, 0.5, 0.0]); // on edge 1-2: face (1,2,4) has zero area
-        f.push([1, 2, 4]);
-        v.push([0.3, 0.3, -1.0]); // a fin on edge 0-1: that edge now has three faces
-        f.push([0, 1, 5]);
-        let (m, r) = TriMesh::new(v, f).unwrap();
-        assert_eq!(r.skipped_faces, vec![4]);
-        assert_eq!(m.face_count(), 5);
-        assert_eq!(r.non_manifold_edges, 1);
-        assert_eq!(r.boundary_edges, 2);
-        assert_eq!(r.warnings.len(), 3);
-        assert_eq!(m.solid_side(), None);
-    }
-
-    #[test]
-    fn translate_moves_boxes_and_changes_stamp() {
-        let (v, f) = tetra();
-        let (mut m, _) = TriMesh::new(v, f).unwrap();
-        let s = m.stamp();
-        m.translate([1.0, 2.0, 3.0]).unwrap();
-        assert_ne!(m.stamp(), s);
-        assert_eq!(m.bounds(), ([1.0, 2.0, 3.0], [2.0, 3.0, 4.0]));
-        assert_eq!(m.face_lo(3), [1.0, 2.0, 3.0]);
-        assert!(m.translate([f32::NAN, 0.0, 0.0]).is_err());
-        assert!(m.translate([f32::MAX, 0.0, 0.0]).is_err());
-    }
-}
+#[path = "mesh_tests.rs"]
+mod tests;

@@ -80,7 +80,8 @@ impl FaceBroadphase for MeshBroadphase {
 }
 
 fn dist2(a: [f32; 3], b: [f32; 3]) -> f32 {
-    (0..3).map(|k| (a[k] - b[k]) * (a[k] - b[k])).sum()
+    let d = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
 }
 
 /// Is `a` preferred over `b` for the step ending at `p` (module doc)?

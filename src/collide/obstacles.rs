@@ -35,15 +35,14 @@
 
 use rayon::prelude::*;
 
-use super::face_broadphase::FaceBroadphase;
-use super::face_cache::{CachedFaces, FaceCache};
+use super::face_cache::CachedFaces;
 use super::face_memory::NO_FACE;
-use super::mesh::TriMesh;
+use super::mesh_pass::MeshPass;
+use super::obstacle::displacement;
+pub use super::obstacle::{Geometry, MeshObstacle, Obstacle};
 use super::obstacle_kernels::{self as k, GenInput, Slots, SLOT_BLOCK};
-use super::obstacle_mesh::remembered_with;
 pub use super::obstacle_mesh::{BroadphaseKind, MeshBroadphase};
-use super::shapes::Shape;
-use crate::error::{finite3, non_negative, Result};
+use crate::error::{non_negative, Result};
 use crate::lanes::LANES;
 use crate::particles::{ParticleChunk, Particles};
 use crate::world::World;
@@ -52,161 +51,6 @@ use crate::world::World;
 pub const MIN_MARGIN: f32 = 3e-3;
 /// Blocks of eight particles per parallel task.
 const BLOCKS_PER_TASK: usize = 32;
-
-/// A triangle-mesh obstacle.
-#[derive(Debug, Clone)]
-pub struct MeshObstacle {
-    base: TriMesh,
-    mesh: TriMesh,
-    kind: BroadphaseKind,
-    broadphase: MeshBroadphase,
-    face_memory: bool,
-    memory: Vec<u32>,
-    cache: FaceCache,
-    placed: [f32; 3],
-}
-
-impl MeshObstacle {
-    /// The mesh at its current place.
-    pub fn mesh(&self) -> &TriMesh {
-        &self.mesh
-    }
-    /// The broadphase in use.
-    pub fn broadphase(&self) -> &MeshBroadphase {
-        &self.broadphase
-    }
-    /// Whether the paper's face memory is on.
-    pub fn face_memory(&self) -> bool {
-        self.face_memory
-    }
-    fn place(&mut self, d: [f32; 3]) {
-        if d == self.placed {
-            return;
-        }
-        let mut m = self.base.clone();
-        // A translation that would overflow f32 leaves the obstacle where it was.
-        if m.translate(d).is_ok() {
-            let bp = match (&mut self.broadphase, self.kind) {
-                (MeshBroadphase::Bvh(b), _) => b.refit(&m).map(|_| None),
-                (_, kind) => MeshBroadphase::build(kind, &m).map(Some),
-            };
-            if let Ok(bp) = bp {
-                if let Some(bp) = bp {
-                    self.broadphase = bp;
-                }
-                self.mesh = m;
-                self.placed = d;
-            }
-        }
-    }
-}
-
-/// What an obstacle is.
-#[derive(Debug, Clone)]
-pub enum Geometry {
-    /// An analytic shape (at time 0).
-    Shape(Shape),
-    /// A triangle mesh.
-    Mesh(Box<MeshObstacle>),
-}
-
-/// An obstacle: geometry, constant velocity, optional own friction coefficient.
-#[derive(Debug, Clone)]
-pub struct Obstacle {
-    geometry: Geometry,
-    velocity: [f32; 3],
-    friction: Option<f32>,
-}
-
-impl Obstacle {
-    /// An analytic obstacle (validated).
-    pub fn shape(shape: Shape) -> Result<Obstacle> {
-        shape.validate()?;
-        Ok(Obstacle {
-            geometry: Geometry::Shape(shape),
-            velocity: [0.0; 3],
-            friction: None,
-        })
-    }
-
-    /// A mesh obstacle with the given broadphase and, optionally, the paper's face memory.
-    pub fn mesh(mesh: TriMesh, broadphase: BroadphaseKind, face_memory: bool) -> Result<Obstacle> {
-        let bp = MeshBroadphase::build(broadphase, &mesh)?;
-        Ok(Obstacle {
-            geometry: Geometry::Mesh(Box::new(MeshObstacle {
-                base: mesh.clone(),
-                mesh,
-                kind: broadphase,
-                broadphase: bp,
-                face_memory,
-                memory: Vec::new(),
-                cache: FaceCache::default(),
-                placed: [0.0; 3],
-            })),
-            velocity: [0.0; 3],
-            friction: None,
-        })
-    }
-
-    /// The same obstacle moving with constant velocity `v` (m/s) from time 0.
-    pub fn with_velocity(mut self, v: [f32; 3]) -> Result<Obstacle> {
-        finite3("obstacle.velocity", v)?;
-        self.velocity = v;
-        Ok(self)
-    }
-
-    /// The same obstacle with its own Coulomb friction coefficient (>= 0).
-    pub fn with_friction(mut self, mu: f32) -> Result<Obstacle> {
-        non_negative("obstacle.friction", mu)?;
-        self.friction = Some(mu);
-        Ok(self)
-    }
-
-    /// Geometry (meshes at their current place, shapes at time 0).
-    pub fn geometry(&self) -> &Geometry {
-        &self.geometry
-    }
-    /// Velocity, m/s.
-    pub fn velocity(&self) -> [f32; 3] {
-        self.velocity
-    }
-    /// Own friction coefficient, if any.
-    pub fn friction(&self) -> Option<f32> {
-        self.friction
-    }
-    /// The analytic shape at time `t`, if this is one.
-    pub fn shape_at(&self, t: f64) -> Option<Shape> {
-        match &self.geometry {
-            Geometry::Shape(s) => Some(s.translated(displacement(self.velocity, t))),
-            Geometry::Mesh(_) => None,
-        }
-    }
-    /// One line for reports: kind, size, broadphase.
-    pub fn describe(&self) -> String {
-        let v = if self.velocity == [0.0; 3] {
-            String::from("static")
-        } else {
-            format!("moving {:?} m/s", self.velocity)
-        };
-        let what = match &self.geometry {
-            Geometry::Shape(Shape::Plane { point, normal }) => format!("plane through {point:?}, normal {normal:?}"),
-            Geometry::Shape(Shape::Sphere { center, radius }) => format!("sphere at {center:?}, radius {radius}"),
-            Geometry::Shape(Shape::Capsule { a, b, radius }) => format!("capsule {a:?} - {b:?}, radius {radius}"),
-            Geometry::Shape(Shape::Box { center, half, .. }) => format!("box at {center:?}, half extents {half:?}"),
-            Geometry::Mesh(m) => format!(
-                "mesh of {} faces, {}{}",
-                m.mesh.face_count(),
-                m.broadphase.describe(),
-                if m.face_memory { ", face memory" } else { "" }
-            ),
-        };
-        format!("{what}, {v}")
-    }
-}
-
-fn displacement(v: [f32; 3], t: f64) -> [f32; 3] {
-    v.map(|c| (c as f64 * t) as f32)
-}
 
 /// The world's obstacles and their per-particle scratch (empty until the first obstacle).
 #[derive(Debug, Clone, Default)]
@@ -280,7 +124,6 @@ impl ObstacleSet {
 
     /// Places every obstacle at time `t` and finds the contacts of the step `x -> p` of
     /// length `h` (module doc, stages 1 and 2).
-    #[allow(clippy::needless_range_loop)] // lane `l` indexes the slot block and the memory alike
     pub(crate) fn generate(&mut self, particles: &Particles, t: f64, h: f32, parallel: bool, simd: bool) {
         let n = particles.count();
         let vel = [&particles.vx[..], &particles.vy[..], &particles.vz[..]];
@@ -324,41 +167,22 @@ impl ObstacleSet {
                 Geometry::Mesh(m) => {
                     m.place(displacement(u, t));
                     m.cache.sync(self.th.len(), m.mesh.stamp());
-                    let (mesh, bp, memory) = (&m.mesh, &m.broadphase, &mut m.memory);
-                    let remember = !memory.is_empty();
-                    let fresh = self.fresh_search;
-                    let (mlo, mhi) = mesh.bounds();
+                    let pass = MeshPass {
+                        mesh: &m.mesh,
+                        bp: &m.broadphase,
+                        input: g,
+                        vel,
+                        u,
+                        remember: !m.memory.is_empty(),
+                        fresh: self.fresh_search,
+                        simd,
+                    };
                     for_blocks(
                         slots,
-                        memory,
+                        &mut m.memory,
                         m.cache.entries_mut(),
                         parallel,
-                        |b, out, was, mem, cache, scratch| {
-                            let lanes = g.block(b);
-                            // A block far from the mesh box has no contact (with face memory the
-                            // per-particle path runs: it also keeps the memories).
-                            if !remember && !fresh && k::lanes_miss(&lanes, mlo, mhi) {
-                                if was {
-                                    out.fill(0.0);
-                                }
-                                return false;
-                            }
-                            for (l, lane) in lanes.into_iter().enumerate() {
-                                let c = lane.and_then(|(x, p, reach)| {
-                                    let entry = &mut cache[l];
-                                    let mut search = || entry.step_contact(mesh, bp, x, p, reach, !fresh, scratch);
-                                    if remember {
-                                        remembered_with(mesh, &mut mem[l], x, p, reach, 2.0 * reach, search)
-                                    } else {
-                                        search()
-                                    }
-                                });
-                                let (pt, nr) = c.map_or(([0.0; 3], [0.0; 3]), |c| (c.point, c.normal));
-                                k::write_slot(out, l, pt, nr);
-                            }
-                            k::fill_approach(out, b, vel, u);
-                            k::block_nonzero(out)
-                        },
+                        |b, out, was, mem, cache, scratch| pass.block(b, out, was, mem, cache, scratch),
                     );
                 }
             }
@@ -529,7 +353,7 @@ mod tests {
         w.step(1.0 / 60.0).unwrap();
         let o = &w.obstacles;
         assert!(o.is_empty() && o.th.capacity() == 0 && o.reach.capacity() == 0 && o.slots.capacity() == 0);
-        w.add_obstacle(super::Obstacle::shape(super::Shape::plane([0.0; 3], [0.0, 1.0, 0.0]).unwrap()).unwrap())
+        w.add_obstacle(super::Obstacle::shape(crate::collide::shapes::Shape::plane([0.0; 3], [0.0, 1.0, 0.0]).unwrap()).unwrap())
             .unwrap();
         w.step(1.0 / 60.0).unwrap();
         assert_eq!(w.obstacles.th.len(), w.particles.padded_len());
