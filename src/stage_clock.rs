@@ -119,7 +119,7 @@ mod tests {
             "obstacle contacts",
             "distance constraints",
             "obstacle projection",
-            "update, obstacle velocity",
+            "update, obstacle velocity, next predict",
         ] {
             assert!(c.stages().iter().any(|(n, _)| *n == s), "{s} missing from {:?}", c.stages());
         }

@@ -187,6 +187,12 @@ impl World {
             self.selfcol.record_start_state([&p.x, &p.y, &p.z], n, steps, parallel);
         }
         self.clock.lap("step setup");
+        // Without wind nothing runs between a substep's update and the next substep's predict,
+        // and both are element-wise, so the update pass runs the next predict on each chunk
+        // while it is in cache: the same bits as two passes, one sweep over 1M particles fewer
+        // a substep.
+        let fuse_next = self.fuse_predict && !check && self.effects.wind.is_none() && self.wind.is_none();
+        let mut predicted_ahead = false;
         for s in 0..n_sub {
             let t = self.time + (s as f64) * (h as f64);
             if let (Some(w), Some(state)) = (&self.effects.wind, &mut self.wind) {
@@ -203,7 +209,9 @@ impl World {
                     drag: self.effects.drag,
                     force,
                 };
-                if fused_guard && s == 0 {
+                if predicted_ahead {
+                    // done by the previous substep's update pass
+                } else if fused_guard && s == 0 {
                     self.particles.for_chunks_saving(parallel, &mut self.backup, |c, saved| {
                         for (dst, src) in saved.into_iter().zip(c.state()) {
                             dst.copy_from_slice(src);
@@ -286,6 +294,13 @@ impl World {
                 // update, the obstacle velocity pass and (last substep) the guard's check,
                 // chunk by chunk: element-wise, so the same bits as three passes
                 let last = fused_guard && s + 1 == n_sub;
+                let ahead = fuse_next && s + 1 < n_sub;
+                let pp_next = PredictParams {
+                    h,
+                    gravity: self.effects.gravity,
+                    drag: self.effects.drag,
+                    force: None,
+                };
                 let motion = if has_obstacles { self.obstacles.motion() } else { Vec::new() };
                 let (obstacles, finite) = (&self.obstacles, &all_finite);
                 let velocity_ns = std::sync::atomic::AtomicU64::new(0);
@@ -303,14 +318,18 @@ impl World {
                             finite.store(false, std::sync::atomic::Ordering::Relaxed);
                         }
                     }
+                    if ahead {
+                        predict(c, &pp_next, simd);
+                    }
                 });
+                predicted_ahead = ahead;
                 if has_obstacles {
                     // the velocity part's time summed over chunks, shared by the threads
                     let threads = if parallel { rayon::current_num_threads() as u64 } else { 1 };
                     let ns = velocity_ns.into_inner() / threads.max(1);
                     self.obstacles.add_duration(std::time::Duration::from_nanos(ns));
                 }
-                self.clock.lap("update, obstacle velocity");
+                self.clock.lap("update, obstacle velocity, next predict");
                 continue;
             }
             self.particles.for_chunks(parallel, |c| update(c, h, damp, simd));
@@ -376,3 +395,7 @@ impl World {
             .apply([&p.x, &p.y, &p.z], &p.w, [&mut p.px, &mut p.py, &mut p.pz], ap, parallel, simd);
     }
 }
+
+#[cfg(test)]
+#[path = "step_fusion_tests.rs"]
+mod fusion_tests;

@@ -45,6 +45,9 @@ pub struct World {
     pub(crate) cloths: Vec<ClothInfo>,
     pub(crate) damping_rate: Vec<f32>,
     pub(crate) has_damping: bool,
+    /// Whether a substep's update pass also runs the next substep's predict, chunk by chunk
+    /// (`src/step.rs`; off only in tests that hold the fused path to the separate passes).
+    pub(crate) fuse_predict: bool,
     pub(crate) damp_factor: Vec<f32>,
     pub(crate) damp_h: f32,
     pub(crate) params: SolverParams,
@@ -84,6 +87,7 @@ impl World {
             cloths: Vec::new(),
             damping_rate: Vec::new(),
             has_damping: false,
+            fuse_predict: true,
             damp_factor: Vec::new(),
             damp_h: f32::NAN,
             params,
