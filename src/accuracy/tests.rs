@@ -214,9 +214,12 @@ fn scenes_with_mesh_obstacles_keep_the_f32_reference_and_no_f64_rows() {
 
 #[test]
 fn bounded_blow_ups_are_flagged_and_stiff_implicit_runs_are_not() {
-    // Stiff cotton-like stretch (k = 1e8 N/m) hanging from a line, with self-collision: explicit
-    // Euler at 2048 substeps is unstable, but the self-collision clamp keeps its positions
-    // finite while its velocities grow.
+    // Stiff cotton-like stretch (k = 1e8 N/m) hanging from a line, with self-collision. Leapfrog
+    // at the edge of its stability: measured on this scene, 1378 substeps or fewer end in NaN,
+    // 1381 to 1390 stay finite while the kinetic energy reaches 140 to 10 000 times the
+    // reference's budget, and from 1393 the run is stable (below 100 times). 1384 sits inside
+    // that window (827 times). (Before the force-based clamp was fixed, symplectic Euler at
+    // 2048 substeps blew up here too, because the clamp reflected fast particles.)
     let text = format!("{SCENE}\n[effects.self_collision]\nresponse = \"vccpbd\"\n")
         .replace("stretch_compliance = 1e-2", "stretch_compliance = 1e-8")
         .replace("pins = [\"first-row-corners\"]", "pins = [{ row = 2 }]");
@@ -224,9 +227,12 @@ fn bounded_blow_ups_are_flagged_and_stiff_implicit_runs_are_not() {
     let make = || s.world();
     let steps = 30;
     let r = Reference::compute(&make, steps, 256, false).unwrap();
-    let blown = run_setting(&make, &r, setting(Method::SymplecticEuler, 2048), steps).unwrap();
+    let blown = run_setting(&make, &r, setting(Method::Leapfrog, 1384), steps).unwrap();
     assert_eq!(blown.status, "diverged-bounded", "{blown:?}");
-    assert!(blown.kinetic_ratio.unwrap() > 1e3 * BLOWUP_FACTOR, "{blown:?}");
+    assert!(blown.kinetic_ratio.unwrap() > BLOWUP_FACTOR, "{blown:?}");
+    // The stable run above the window is not flagged.
+    let stable = run_setting(&make, &r, setting(Method::Leapfrog, 2048), steps).unwrap();
+    assert_eq!(stable.status, "ok", "{stable:?}");
     assert!(blown.rms_error.is_none() && blown.energy_drift.is_none() && !blown.pareto);
     let json = serde_json::to_string(&blown).unwrap();
     assert!(!json.contains("NaN") && json.contains("\"diverged-bounded\""), "{json}");
