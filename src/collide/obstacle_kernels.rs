@@ -104,26 +104,6 @@ fn load_block(blocks: &[f32], b: usize, k: usize) -> F32s {
     crate::lanes::load(blocks, b * SLOT_BLOCK + k * LANES)
 }
 
-/// One live particle of a block: start (in the obstacle's end frame), prediction, reach.
-pub type Lane = ([f32; 3], [f32; 3], f32);
-
-/// Do the query boxes ([`query_box`](super::narrow::query_box): path box grown by the reach
-/// and the relative pad) of all `lanes` miss the box `[lo, hi]`? The lanes' common box is
-/// grown by the largest growth, computed as `query_box` does; rounding is monotonic, so every
-/// lane's own query box lies inside and no face within `[lo, hi]` can overlap it.
-pub fn lanes_miss(lanes: &[Option<Lane>; LANES], lo: [f32; 3], hi: [f32; 3]) -> bool {
-    let (mut blo, mut bhi, mut grow) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3], 0.0f32);
-    for (x, p, reach) in lanes.iter().flatten() {
-        let big = x.iter().chain(p.iter()).fold(0.0f32, |m, v| m.max(v.abs()));
-        grow = grow.max(reach + super::narrow::QUERY_PAD * (1.0 + big));
-        for k in 0..3 {
-            blo[k] = blo[k].min(x[k].min(p[k]));
-            bhi[k] = bhi[k].max(x[k].max(p[k]));
-        }
-    }
-    (0..3).any(|k| bhi[k] + grow < lo[k] || blo[k] - grow > hi[k])
-}
-
 /// Read-only particle data a generator needs, all padded arrays of the same length.
 #[derive(Clone, Copy)]
 pub struct GenInput<'a> {
@@ -149,18 +129,6 @@ impl GenInput<'_> {
     pub fn path(&self, i: usize) -> ([f32; 3], [f32; 3]) {
         let x = [0, 1, 2].map(|k| self.x[k][i] - self.shift[k]);
         (x, [0, 1, 2].map(|k| self.p[k][i]))
-    }
-    /// [`path`](Self::path) and reach of each particle of block `b`, `None` for the lanes
-    /// that are not [`live`](Self::live) (the same values, read once per block).
-    #[inline]
-    pub fn block(&self, b: usize) -> [Option<Lane>; LANES] {
-        let r = b * LANES..(b + 1) * LANES;
-        let (x, p) = (self.x.map(|a| &a[r.clone()]), self.p.map(|a| &a[r.clone()]));
-        let (w, reach) = (&self.w[r.clone()], &self.reach[r]);
-        std::array::from_fn(|l| {
-            let live = b * LANES + l < self.n && w[l] > 0.0;
-            live.then(|| ([0, 1, 2].map(|k| x[k][l] - self.shift[k]), [0, 1, 2].map(|k| p[k][l]), reach[l]))
-        })
     }
     /// Is particle `i` a real, movable particle?
     #[inline]
