@@ -99,11 +99,6 @@ pub fn contact_velocity(w: [f32; 3], n: [f32; 3], a: f32, mu: f32) -> [f32; 3] {
     [0, 1, 2].map(|k| wt[k] * f + keep_n * n[k])
 }
 
-#[inline(always)]
-fn load_block(blocks: &[f32], b: usize, k: usize) -> F32s {
-    crate::lanes::load(blocks, b * SLOT_BLOCK + k * LANES)
-}
-
 /// Read-only particle data a generator needs, all padded arrays of the same length.
 #[derive(Clone, Copy)]
 pub struct GenInput<'a> {
@@ -320,18 +315,7 @@ pub fn project_simd(slots: &[Slots], th: &[f32], start: usize, p: [&mut [f32]; 3
         let mut q = Vec3x8::load(px, py, pz, j);
         let t = crate::lanes::load(th, g);
         for s in slots {
-            let s = &s.data;
-            let c = Vec3x8 {
-                x: load_block(s, b, 0),
-                y: load_block(s, b, 1),
-                z: load_block(s, b, 2),
-            };
-            let n = Vec3x8 {
-                x: load_block(s, b, 3),
-                y: load_block(s, b, 4),
-                z: load_block(s, b, 5),
-            };
-            let set = n.x.simd_ne(zero) | n.y.simd_ne(zero) | n.z.simd_ne(zero);
+            let (c, n, set) = simd::slot_lanes(&s.data, b);
             let d = (t - n.dot(q - c)).max(zero);
             q = Vec3x8::select(set, q + n.scale(d), q);
         }

@@ -19,7 +19,7 @@ use crate::lanes::{load, F32s, Vec3x8, LANES};
 
 /// Contact point and normal of the eight slots of block `b`, and the lanes holding a contact.
 #[inline(always)]
-fn slot_lanes(s: &[f32], b: usize) -> (Vec3x8, Vec3x8, F32s) {
+pub(super) fn slot_lanes(s: &[f32], b: usize) -> (Vec3x8, Vec3x8, F32s) {
     let o = b * super::SLOT_BLOCK;
     let c = Vec3x8 {
         x: load(s, o),
