@@ -31,8 +31,8 @@
 //!   kinematic pins land exactly on their targets                     [embed::kinematic]
 //! ```
 
-use crate::collide::response::{clamp_speed, ApplyMode, ClampParams};
-use crate::collide::self_collision::{mean_velocity, Active, ApplyParams, Response, BOX_RADIUS, TRAVEL_FACTOR};
+use crate::collide::response::{clamp_speed, ClampParams};
+use crate::collide::self_collision::{mean_velocity, Active, TRAVEL_FACTOR};
 use crate::error::{positive, Result, WeftError};
 use crate::integrate::{predict, update, PredictParams};
 use crate::params::{Backend, Method};
@@ -380,16 +380,7 @@ impl World {
         let p = &self.particles;
         self.selfcol
             .pair_pass([&p.x, &p.y, &p.z], [&p.px, &p.py, &p.pz], &p.w, n, parallel, simd);
-        let ap = ApplyParams {
-            mode: if a.response == Response::Vccpbd {
-                ApplyMode::Vccpbd
-            } else {
-                ApplyMode::Plain
-            },
-            friction: a.friction,
-            h,
-            r: BOX_RADIUS * a.d,
-        };
+        let ap = a.apply_params(h);
         let p = &mut self.particles;
         self.selfcol
             .apply([&p.x, &p.y, &p.z], &p.w, [&mut p.px, &mut p.py, &mut p.pz], ap, parallel, simd);

@@ -58,16 +58,7 @@ fn compact(
     data.keep_predictions([&out[0][..], &out[1][..], &out[2][..]]);
     data.pair_pass(xs, [&p[0][..], &p[1][..], &p[2][..]], w, n, parallel, simd);
     let a = data.active().unwrap();
-    let ap = ApplyParams {
-        mode: if a.response == Response::Vccpbd {
-            ApplyMode::Vccpbd
-        } else {
-            ApplyMode::Plain
-        },
-        friction: a.friction,
-        h: 0.005,
-        r: BOX_RADIUS * a.d,
-    };
+    let ap = a.apply_params(0.005);
     let [o0, o1, o2] = &mut out;
     data.apply(xs, w, [o0, o1, o2], ap, parallel, simd);
     let st = data.state.as_ref().unwrap();

@@ -166,6 +166,22 @@ pub(crate) struct Active {
     pub friction: f32,
 }
 
+impl Active {
+    /// The correction pass's parameters for a substep of length `h`.
+    pub(crate) fn apply_params(&self, h: f32) -> ApplyParams {
+        ApplyParams {
+            mode: if self.response == Response::Vccpbd {
+                crate::collide::response::ApplyMode::Vccpbd
+            } else {
+                crate::collide::response::ApplyMode::Plain
+            },
+            friction: self.friction,
+            h,
+            r: BOX_RADIUS * self.d,
+        }
+    }
+}
+
 impl SelfCollisionData {
     /// Records the rest (grid) positions of a new cloth with index `cloth`.
     pub(crate) fn add_cloth(&mut self, rest: &[[f32; 3]], cloth: u32, spacing: f32, thickness: f32) {
