@@ -79,6 +79,18 @@ impl ContactSums {
         }
     }
 
+    /// Stores particle `k`'s sums from one array laid out `c (3), f (3), n (3), gap, count`.
+    #[inline]
+    pub fn set(&mut self, k: usize, v: &[f32; 11]) {
+        for a in 0..3 {
+            self.c[a][k] = v[a];
+            self.f[a][k] = v[3 + a];
+            self.n[a][k] = v[6 + a];
+        }
+        self.gap[k] = v[9];
+        self.count[k] = v[10];
+    }
+
     /// Number of entries.
     pub fn len(&self) -> usize {
         self.count.len()

@@ -172,13 +172,7 @@ impl ActiveSet {
             self.hit[k as usize] = false;
             for g in k as usize * LANES..(k as usize + 1) * LANES {
                 self.acc[g] = ([0.0; 11], 0.0);
-                for a in 0..3 {
-                    s.c[a][g] = 0.0;
-                    s.f[a][g] = 0.0;
-                    s.n[a][g] = 0.0;
-                }
-                s.gap[g] = 0.0;
-                s.count[g] = 0.0;
+                s.set(g, &[0.0; 11]);
             }
         }
         self.touched.clear();
@@ -207,13 +201,7 @@ impl ActiveSet {
             for k in blk as usize * LANES..(blk as usize + 1) * LANES {
                 let (out, approaching) = &mut self.acc[k];
                 PairCtx::finish(out, *approaching);
-                for a in 0..3 {
-                    s.c[a][k] = out[a];
-                    s.f[a][k] = out[3 + a];
-                    s.n[a][k] = out[6 + a];
-                }
-                s.gap[k] = out[9];
-                s.count[k] = out[10];
+                s.set(k, out);
             }
         }
     }

@@ -103,13 +103,7 @@ fn reference(data: &SelfCollisionData, x: &[Vec<f32>; 3], p: &[Vec<f32>; 3], w: 
     let len = p[0].len();
     let mut full = ContactSums::new(len);
     for (i, v) in sums.iter().enumerate() {
-        for a in 0..3 {
-            full.c[a][i] = v[a];
-            full.f[a][i] = v[3 + a];
-            full.n[a][i] = v[6 + a];
-        }
-        full.gap[i] = v[9];
-        full.count[i] = v[10];
+        full.set(i, v);
     }
     let damping = padded(&vec![0.8f32; n]);
     let mut out = p.clone();
