@@ -192,49 +192,58 @@ impl Particles {
     {
         use rayon::prelude::*;
         if parallel && self.padded_len() > CHUNK {
-            (
-                self.x.par_chunks_mut(CHUNK),
-                self.y.par_chunks_mut(CHUNK),
-                self.z.par_chunks_mut(CHUNK),
-                self.px.par_chunks_mut(CHUNK),
-                self.py.par_chunks_mut(CHUNK),
-                self.pz.par_chunks_mut(CHUNK),
-                self.vx.par_chunks_mut(CHUNK),
-                self.vy.par_chunks_mut(CHUNK),
-                self.vz.par_chunks_mut(CHUNK),
-                self.w.par_chunks(CHUNK),
-            )
-                .into_par_iter()
-                .enumerate()
-                .for_each(|(k, (x, y, z, px, py, pz, vx, vy, vz, w))| {
-                    f(ParticleChunk {
-                        start: k * CHUNK,
-                        x,
-                        y,
-                        z,
-                        px,
-                        py,
-                        pz,
-                        vx,
-                        vy,
-                        vz,
-                        w,
-                    })
-                });
+            self.par_chunks().for_each(f);
         } else {
-            f(ParticleChunk {
-                start: 0,
-                x: &mut self.x,
-                y: &mut self.y,
-                z: &mut self.z,
-                px: &mut self.px,
-                py: &mut self.py,
-                pz: &mut self.pz,
-                vx: &mut self.vx,
-                vy: &mut self.vy,
-                vz: &mut self.vz,
-                w: &self.w,
-            });
+            f(self.whole());
+        }
+    }
+
+    /// The particles in chunks of [`CHUNK`], as a parallel iterator.
+    fn par_chunks(&mut self) -> impl rayon::iter::IndexedParallelIterator<Item = ParticleChunk<'_>> {
+        use rayon::prelude::*;
+        (
+            self.x.par_chunks_mut(CHUNK),
+            self.y.par_chunks_mut(CHUNK),
+            self.z.par_chunks_mut(CHUNK),
+            self.px.par_chunks_mut(CHUNK),
+            self.py.par_chunks_mut(CHUNK),
+            self.pz.par_chunks_mut(CHUNK),
+            self.vx.par_chunks_mut(CHUNK),
+            self.vy.par_chunks_mut(CHUNK),
+            self.vz.par_chunks_mut(CHUNK),
+            self.w.par_chunks(CHUNK),
+        )
+            .into_par_iter()
+            .enumerate()
+            .map(|(k, (x, y, z, px, py, pz, vx, vy, vz, w))| ParticleChunk {
+                start: k * CHUNK,
+                x,
+                y,
+                z,
+                px,
+                py,
+                pz,
+                vx,
+                vy,
+                vz,
+                w,
+            })
+    }
+
+    /// All particles as one chunk.
+    fn whole(&mut self) -> ParticleChunk<'_> {
+        ParticleChunk {
+            start: 0,
+            x: &mut self.x,
+            y: &mut self.y,
+            z: &mut self.z,
+            px: &mut self.px,
+            py: &mut self.py,
+            pz: &mut self.pz,
+            vx: &mut self.vx,
+            vy: &mut self.vy,
+            vz: &mut self.vz,
+            w: &self.w,
         }
     }
 }
@@ -288,52 +297,11 @@ impl Particles {
                 s5.par_chunks_mut(CHUNK),
             )
                 .into_par_iter();
-            (
-                self.x.par_chunks_mut(CHUNK),
-                self.y.par_chunks_mut(CHUNK),
-                self.z.par_chunks_mut(CHUNK),
-                self.px.par_chunks_mut(CHUNK),
-                self.py.par_chunks_mut(CHUNK),
-                self.pz.par_chunks_mut(CHUNK),
-                self.vx.par_chunks_mut(CHUNK),
-                self.vy.par_chunks_mut(CHUNK),
-                self.vz.par_chunks_mut(CHUNK),
-                self.w.par_chunks(CHUNK),
-            )
-                .into_par_iter()
+            self.par_chunks()
                 .zip(parts)
-                .enumerate()
-                .for_each(|(k, ((x, y, z, px, py, pz, vx, vy, vz, w), (a, b, c, d, e, g)))| {
-                    let chunk = ParticleChunk {
-                        start: k * CHUNK,
-                        x,
-                        y,
-                        z,
-                        px,
-                        py,
-                        pz,
-                        vx,
-                        vy,
-                        vz,
-                        w,
-                    };
-                    f(chunk, [a, b, c, d, e, g])
-                });
+                .for_each(|(chunk, (a, b, c, d, e, g))| f(chunk, [a, b, c, d, e, g]));
         } else {
-            let chunk = ParticleChunk {
-                start: 0,
-                x: &mut self.x,
-                y: &mut self.y,
-                z: &mut self.z,
-                px: &mut self.px,
-                py: &mut self.py,
-                pz: &mut self.pz,
-                vx: &mut self.vx,
-                vy: &mut self.vy,
-                vz: &mut self.vz,
-                w: &self.w,
-            };
-            f(chunk, [s0, s1, s2, s3, s4, s5]);
+            f(self.whole(), [s0, s1, s2, s3, s4, s5]);
         }
     }
 }
