@@ -45,6 +45,7 @@ pub mod response;
 mod self_active;
 pub mod self_collision;
 pub mod self_config;
+mod self_near;
 mod self_pairs;
 mod self_verlet;
 pub mod shapes;

@@ -140,7 +140,7 @@ impl ActiveSet {
         }
     }
 
-    /// The pair pass over the near pairs `near` (see [`super::self_verlet`]): the contact sums
+    /// The pair pass over the near pairs `near` (see [`super::self_near`]): the contact sums
     /// of every particle of the active blocks (zero for particles with no contact).
     ///
     /// Each unordered pair is tested once: the near pairs `(i, j)`, `i < j`, closer than `d`

@@ -90,8 +90,9 @@ use super::particle_tree::{ParticleTree, TreeShape};
 pub(crate) use super::response::mean_velocity;
 use super::self_active::ActiveSet;
 pub(crate) use super::self_active::ApplyParams;
+use super::self_near::NearList;
 use super::self_pairs::PairCtx;
-use super::self_verlet::{NearList, VerletLists};
+use super::self_verlet::VerletLists;
 use crate::error::{positive, Result, WeftError};
 
 pub use super::self_config::{Response, SelfBroadphase, SelfCollision, SelfCollisionPhases, SelfCollisionStats, PENETRATION_TOLERANCE};
