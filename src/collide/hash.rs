@@ -33,7 +33,9 @@
 //!   reads each row of its search box as one contiguous range of `cell_entries` (9 to 16 ranges
 //!   instead of 27 to 64 cells), while different rows land at random places.
 //! * The build also copies the positions into `cell_entries` order, so candidates are read
-//!   contiguously; the query checks that it is given the positions of the build.
+//!   contiguously; the query checks that it is given the positions of the build. The
+//!   self-collision query ([`SpatialHash::query_upper_unskipped`], module `hash_rest`) also
+//!   reads rest positions and cloth ids copied into that order after the build.
 //! * Spacing: the paper uses `spacing = max_dist`. On a folded cloth at rest (particles on the
 //!   cell lattice) a spacing of about `1.5 * max_dist` queried ~1.5x faster in our runs (fewer
 //!   ranges for a similar number of candidates); measure on your scene (`benches/broadphase.rs`).
@@ -75,6 +77,8 @@ pub struct SpatialHash {
     sz: Vec<f32>,
     /// Index of each particle in `cell_entries`, `NO_BUCKET` when non-finite.
     slot_of: Vec<u32>,
+    /// Rest data in cell order for the self-collision query (the `hash_rest` module).
+    rest: rest::RestCopy,
 }
 
 /// The table size used for `n` particles: smallest power of two `>= max(2n, 16)`.
@@ -105,6 +109,7 @@ impl SpatialHash {
             sy: Vec::with_capacity(max_particles + LANES),
             sz: Vec::with_capacity(max_particles + LANES),
             slot_of: Vec::with_capacity(max_particles),
+            rest: rest::RestCopy::default(),
         }
     }
 
@@ -192,6 +197,7 @@ impl SpatialHash {
         self.table_size = table_size_for(n);
         self.shift = 64 - self.table_size.trailing_zeros();
         self.n = n;
+        self.rest.valid = false;
         self.bucket_of.clear();
         self.bucket_of.resize(n, 0);
         Ok(())
@@ -275,3 +281,6 @@ impl SpatialHash {
 
 #[path = "hash_query.rs"]
 mod query;
+
+#[path = "hash_rest.rs"]
+mod rest;

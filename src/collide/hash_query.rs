@@ -13,7 +13,7 @@ impl SpatialHash {
     /// Whether particle `i` has the position it had at the last build (bitwise; a non-finite
     /// particle only has to stay non-finite).
     #[inline]
-    fn unchanged(&self, x: &[f32], y: &[f32], z: &[f32], i: usize) -> bool {
+    pub(super) fn unchanged(&self, x: &[f32], y: &[f32], z: &[f32], i: usize) -> bool {
         match self.slot_of[i] {
             NO_BUCKET => !(x[i].is_finite() && y[i].is_finite() && z[i].is_finite()),
             k => {
@@ -25,7 +25,7 @@ impl SpatialHash {
 
     /// Checks query inputs against the build; returns `max_dist²`. `same` is whether the
     /// positions are those of the build (computed by the caller, in parallel or not).
-    fn check_query(&self, x: &[f32], y: &[f32], z: &[f32], n: usize, max_dist: f32, same: impl FnOnce() -> bool) -> Result<f32> {
+    pub(super) fn check_query(&self, x: &[f32], y: &[f32], z: &[f32], n: usize, max_dist: f32, same: impl FnOnce() -> bool) -> Result<f32> {
         check_positions(x, y, z, n)?;
         if n != self.n {
             return Err(WeftError::param(
@@ -168,13 +168,11 @@ impl SpatialHash {
         if !(xi.is_finite() && yi.is_finite() && zi.is_finite()) {
             return;
         }
-        // Clamping to ±f32::MAX keeps the range finite; finite neighbours lie inside anyway.
-        let lo = |v: f32| self.coord((v - r).max(-f32::MAX));
-        let hi = |v: f32| self.coord((v + r).min(f32::MAX));
-        let (x0, x1, y0, y1, z0, z1) = (lo(xi), hi(xi), lo(yi), hi(yi), lo(zi), hi(zi));
         let start = buf.len();
-        let wide = |a: i32, b: i32| i64::from(b) - i64::from(a) > 3;
-        if wide(x0, x1) || wide(y0, y1) || wide(z0, z1) {
+        let iu = i as u32;
+        let p = [xi, yi, zi];
+        let boxed = self.box_ranges(p, r, |b0, b1| self.scan_buckets::<SIMD, UPPER>(b0, b1, iu, p, md2, buf));
+        if !boxed {
             for j in 0..n {
                 if (if UPPER { j > i } else { j != i }) && within(xi, yi, zi, x[j], y[j], z[j], md2) && keep(i, j as u32) {
                     buf.push(j as u32);
@@ -182,9 +180,25 @@ impl SpatialHash {
             }
             return;
         }
-        let iu = i as u32;
+        retain_tail(buf, start, |j| keep(i, j));
+        sort_dedup_tail(buf, start);
+    }
+
+    /// Calls `f(b0, b1)` for each row of cells overlapped by the box `[p - r, p + r]³`
+    /// (`p` finite), `b0..b1` being the row's contiguous bucket range (a row wrapping past the
+    /// table's end gives two calls). Returns `false`, calling nothing, when the box spans more
+    /// than 4 cells along an axis (the caller then tests all particles).
+    #[inline(always)]
+    pub(super) fn box_ranges(&self, p: [f32; 3], r: f32, mut f: impl FnMut(usize, usize)) -> bool {
+        // Clamping to ±f32::MAX keeps the range finite; finite neighbours lie inside anyway.
+        let lo = |v: f32| self.coord((v - r).max(-f32::MAX));
+        let hi = |v: f32| self.coord((v + r).min(f32::MAX));
+        let (x0, x1, y0, y1, z0, z1) = (lo(p[0]), hi(p[0]), lo(p[1]), hi(p[1]), lo(p[2]), hi(p[2]));
+        let wide = |a: i32, b: i32| i64::from(b) - i64::from(a) > 3;
+        if wide(x0, x1) || wide(y0, y1) || wide(z0, z1) {
+            return false;
+        }
         let ts = self.table_size;
-        let p = [xi, yi, zi];
         // Buckets b0 ..= b0 + w hold one row of cells; they may wrap past the table's end.
         let cells = (x1 as i64 - x0 as i64) as usize + 1;
         for cz in z0..=z1 {
@@ -192,15 +206,14 @@ impl SpatialHash {
                 let b0 = self.bucket(x0, cy, cz);
                 let b1 = b0 + cells;
                 if b1 <= ts {
-                    self.scan_buckets::<SIMD, UPPER>(b0, b1, iu, p, md2, buf);
+                    f(b0, b1);
                 } else {
-                    self.scan_buckets::<SIMD, UPPER>(b0, ts, iu, p, md2, buf);
-                    self.scan_buckets::<SIMD, UPPER>(0, b1 - ts, iu, p, md2, buf);
+                    f(b0, ts);
+                    f(0, b1 - ts);
                 }
             }
         }
-        retain_tail(buf, start, |j| keep(i, j));
-        sort_dedup_tail(buf, start);
+        true
     }
 
     /// Tests the particles of buckets `b0..b1` (one contiguous range) against `p`.

@@ -288,15 +288,9 @@ impl SelfCollisionData {
                     (Some(t), SelfBroadphase::AabbTree) => t
                         .query_all(x[0], x[1], x[2], n, reach, &mut st.verlet.cand)
                         .map(|_| st.verlet.cand.retain(keep)),
-                    _ => st.hash.query_upper_filtered(
-                        x[0],
-                        x[1],
-                        x[2],
-                        n,
-                        reach,
-                        &|i, j| !self.rest_skipped(i, j as usize, a.d),
-                        &mut st.verlet.cand,
-                    ),
+                    _ => st
+                        .hash
+                        .query_upper_unskipped(x[0], x[1], x[2], n, reach, REST_SKIP_FACTOR * a.d, &mut st.verlet.cand),
                 });
                 let ph = &mut self.stats.phases;
                 ph.build_s += t1.duration_since(t0).as_secs_f64();
@@ -321,7 +315,10 @@ impl SelfCollisionData {
     fn build_structure(&self, st: &mut State, x: [&[f32]; 3], n: usize, reach: f32, broadphase: SelfBroadphase) -> Result<()> {
         st.structure_fresh = false;
         match broadphase {
-            SelfBroadphase::Hash => st.hash.build(x[0], x[1], x[2], n, reach * CELL_FACTOR)?,
+            SelfBroadphase::Hash => {
+                st.hash.build(x[0], x[1], x[2], n, reach * CELL_FACTOR)?;
+                st.hash.attach_rest([&self.rest[0], &self.rest[1], &self.rest[2]], &self.cloth_of)?;
+            }
             SelfBroadphase::AabbTree => {
                 let t = match st.tree.take() {
                     Some(mut t) if t.len() == n => t.refit(x[0], x[1], x[2], n).map(|_| t),
