@@ -22,16 +22,18 @@
 //! neighbour, so all that work is thrown away. Here [`SpatialHash::attach_rest`] copies the
 //! rest positions, cloth ids and particle ids into `cell_entries` order once per build (a
 //! gather of `n` particles), so the three tests are lane operations on contiguous data; only
-//! kept pairs reach scalar code, and a particle with nothing kept skips the sort.
+//! kept pairs reach scalar code, and a particle with nothing kept skips the sort. The query
+//! reads the positions from the build's cell-ordered copy (the query particle's through its
+//! slot), so unlike [`SpatialHash::query_all`] it needs no pass checking that it was given the
+//! build's positions.
 //!
 //! Measured on `self_collision_timeline` (100x100 fold, one thread; figures in the report of
 //! issue #5 and in `self_collision`'s docs).
 
-use super::SpatialHash;
-use crate::collide::neighbours::{search_radius, sort_dedup_tail, within, Neighbours};
+use super::{SpatialHash, NO_BUCKET};
+use crate::collide::neighbours::{check_max_dist, search_radius, sort_dedup_tail, within, Neighbours};
 use crate::lanes::{load_idx, F32s, Vec3x8, LANES};
 use crate::{Result, WeftError};
-use rayon::prelude::*;
 use wide::u32x8;
 
 /// Rest data in `cell_entries` order, padded with [`LANES`] entries (NaN positions, id 0), so
@@ -97,59 +99,37 @@ impl SpatialHash {
         Ok(())
     }
 
-    /// For every particle `i`, the ids `j > i` within `max_dist` that are not rest neighbours
-    /// (same cloth and rest distance at most `skip`), sorted (see the module docs); parallel
-    /// over particles, eight candidates a lane operation.
+    /// For every particle `i` of the last build, the ids `j > i` within `max_dist` that are
+    /// not rest neighbours (same cloth and rest distance at most `skip`), sorted (see the
+    /// module docs); parallel over particles, eight candidates a lane operation. The positions
+    /// are the build's own (its cell-ordered copy), so they need no check.
     ///
-    /// Errors like [`SpatialHash::query_all`], if `skip` is negative or non-finite, or if no
-    /// rest data was attached since the last build.
-    #[allow(clippy::too_many_arguments)]
-    pub fn query_upper_unskipped(
-        &self,
-        x: &[f32],
-        y: &[f32],
-        z: &[f32],
-        n: usize,
-        max_dist: f32,
-        skip: f32,
-        out: &mut Neighbours,
-    ) -> Result<()> {
-        let same = || (0..n).into_par_iter().all(|i| self.unchanged(x, y, z, i));
-        let (md2, s2) = self.check_rest_query(x, y, z, n, max_dist, skip, same)?;
+    /// Errors if `max_dist` or `skip` is negative or non-finite, `max_dist` exceeds the
+    /// spacing, or no rest data was attached since the last build.
+    pub fn query_upper_unskipped(&self, max_dist: f32, skip: f32, out: &mut Neighbours) -> Result<()> {
+        let (md2, s2) = self.check_rest_query(max_dist, skip)?;
         let r = search_radius(max_dist);
-        out.fill_parallel(n, |i, buf| self.scan_unskipped::<true>(x, y, z, i, md2, r, s2, buf))
+        out.fill_parallel(self.n, |i, buf| self.scan_unskipped::<true>(i, md2, r, s2, buf))
     }
 
     /// Serial, scalar twin of [`SpatialHash::query_upper_unskipped`]; produces identical lists.
-    #[allow(clippy::too_many_arguments)]
-    pub fn query_upper_unskipped_serial(
-        &self,
-        x: &[f32],
-        y: &[f32],
-        z: &[f32],
-        n: usize,
-        max_dist: f32,
-        skip: f32,
-        out: &mut Neighbours,
-    ) -> Result<()> {
-        let same = || (0..n).all(|i| self.unchanged(x, y, z, i));
-        let (md2, s2) = self.check_rest_query(x, y, z, n, max_dist, skip, same)?;
+    pub fn query_upper_unskipped_serial(&self, max_dist: f32, skip: f32, out: &mut Neighbours) -> Result<()> {
+        let (md2, s2) = self.check_rest_query(max_dist, skip)?;
         let r = search_radius(max_dist);
-        out.fill_serial(n, |i, buf| self.scan_unskipped::<false>(x, y, z, i, md2, r, s2, buf))
+        out.fill_serial(self.n, |i, buf| self.scan_unskipped::<false>(i, md2, r, s2, buf))
     }
 
-    #[allow(clippy::too_many_arguments)]
-    fn check_rest_query(
-        &self,
-        x: &[f32],
-        y: &[f32],
-        z: &[f32],
-        n: usize,
-        max_dist: f32,
-        skip: f32,
-        same: impl FnOnce() -> bool,
-    ) -> Result<(f32, f32)> {
+    /// Checks the arguments; returns `max_dist²` and `skip²`.
+    fn check_rest_query(&self, max_dist: f32, skip: f32) -> Result<(f32, f32)> {
         crate::error::non_negative("skip", skip)?;
+        let md2 = check_max_dist(max_dist)?;
+        if max_dist > self.spacing {
+            return Err(WeftError::param(
+                "max_dist",
+                max_dist,
+                format!("must not exceed the hash spacing ({})", self.spacing),
+            ));
+        }
         if !self.rest.valid {
             return Err(WeftError::param(
                 "rest",
@@ -157,20 +137,19 @@ impl SpatialHash {
                 "attach the rest data after each build (attach_rest)",
             ));
         }
-        Ok((self.check_query(x, y, z, n, max_dist, same)?, skip * skip))
+        Ok((md2, skip * skip))
     }
 
     /// Appends the kept neighbours of particle `i`, sorted, to `buf`.
-    #[allow(clippy::too_many_arguments)]
     #[inline]
-    fn scan_unskipped<const SIMD: bool>(&self, x: &[f32], y: &[f32], z: &[f32], i: usize, md2: f32, r: f32, s2: f32, buf: &mut Vec<u32>) {
-        let p = [x[i], y[i], z[i]];
-        if !p.iter().all(|v| v.is_finite()) {
-            return;
-        }
-        // A finite particle has a slot (non-finite ones have none).
-        let k = self.slot_of[i] as usize;
+    fn scan_unskipped<const SIMD: bool>(&self, i: usize, md2: f32, r: f32, s2: f32, buf: &mut Vec<u32>) {
+        // Non-finite particles have no slot and no neighbours.
+        let k = match self.slot_of[i] {
+            NO_BUCKET => return,
+            k => k as usize,
+        };
         let rc = &self.rest;
+        let p = [self.sx[k], self.sy[k], self.sz[k]];
         let probe = Probe {
             i: i as u32,
             p,
@@ -285,7 +264,7 @@ mod tests {
         let mut h = SpatialHash::new(n);
         h.build(&p[0], &p[1], &p[2], n, reach).unwrap();
         let mut got = Neighbours::new();
-        let err = h.query_upper_unskipped(&p[0], &p[1], &p[2], n, reach, skip, &mut got);
+        let err = h.query_upper_unskipped(reach, skip, &mut got);
         assert!(err.is_err(), "no rest data attached");
         h.attach_rest([&rest[0], &rest[1], &rest[2]], &cloth).unwrap();
         // The rule as the self-collision stage writes it (`rest_skipped`).
@@ -300,26 +279,22 @@ mod tests {
         assert!(kept > 200 && all > 200, "{kept} kept pairs, {all} particles with rest neighbours");
         let pool = |t: usize| rayon::ThreadPoolBuilder::new().num_threads(t).build().unwrap();
         for t in [1, 2] {
-            pool(t)
-                .install(|| h.query_upper_unskipped(&p[0], &p[1], &p[2], n, reach, skip, &mut got))
-                .unwrap();
+            pool(t).install(|| h.query_upper_unskipped(reach, skip, &mut got)).unwrap();
             assert_eq!(got, want, "{t} threads");
         }
-        h.query_upper_unskipped_serial(&p[0], &p[1], &p[2], n, reach, skip, &mut got)
-            .unwrap();
+        h.query_upper_unskipped_serial(reach, skip, &mut got).unwrap();
         assert_eq!(got, want);
         // A zero skip drops only coincident rest positions (none): every upper pair is kept.
-        h.query_upper_unskipped(&p[0], &p[1], &p[2], n, reach, 0.0, &mut got).unwrap();
+        h.query_upper_unskipped(reach, 0.0, &mut got).unwrap();
         h.query_upper_filtered(&p[0], &p[1], &p[2], n, reach, &|_, _| true, &mut want)
             .unwrap();
         assert_eq!(got, want);
-        assert!(h.query_upper_unskipped(&p[0], &p[1], &p[2], n, reach, f32::NAN, &mut got).is_err());
+        assert!(h.query_upper_unskipped(reach, f32::NAN, &mut got).is_err());
+        assert!(h.query_upper_unskipped(2.0 * reach, skip, &mut got).is_err(), "beyond the spacing");
         assert!(h.attach_rest([&rest[0], &rest[1], &rest[2][..5]], &cloth).is_err());
         // A new build needs the rest data again.
         h.build(&p[0], &p[1], &p[2], n, reach).unwrap();
-        assert!(h
-            .query_upper_unskipped_serial(&p[0], &p[1], &p[2], n, reach, skip, &mut got)
-            .is_err());
+        assert!(h.query_upper_unskipped_serial(reach, skip, &mut got).is_err());
     }
 
     #[test]
@@ -333,7 +308,7 @@ mod tests {
         h.attach_rest([&rest[0], &rest[1], &rest[2]], &cloth).unwrap();
         let mut got = Neighbours::new();
         // Skip 1: rest neighbours are (0,1), (1,2), (3,4), (4,5).
-        h.query_upper_unskipped(&z[0], &z[1], &z[2], 6, 1e-30, 1.0, &mut got).unwrap();
+        h.query_upper_unskipped(1e-30, 1.0, &mut got).unwrap();
         let pairs: Vec<_> = got.pairs().collect();
         assert_eq!(
             pairs,

@@ -14,16 +14,35 @@
 //! was at most `SLOW_FACTOR d` (a slow, folded cloth: the lists then last several steps),
 //! otherwise zero (a falling cloth: a larger reach would cost more than it saves; with a zero
 //! skin the lists are reused only if no particle moved at all).
+//!
+//! # Choice of the skin (measured)
+//! `examples/self_collision_timeline` (100x100 fold, basic VcCPBD, 150 steps, one thread,
+//! load 3-5 on two cores), broadphase = hash build + query, ms a step averaged over the run,
+//! with the query that tests order and rest neighbours in the lanes (`hash_rest`):
+//!
+//! | skin / slow | build + query | rebuilds | pairs (near list) | stage total |
+//! |---|---|---|---|---|
+//! | d / 0.25 d (before) | 0.98-1.29 | 63 | 0.56-0.70 | 1.86-2.42 |
+//! | 0.5 d / 0.25 d | 1.26 | 72 | 0.73 | 2.41 |
+//! | 2 d / d | 0.69-0.83 | 49 | 0.66-0.81 | 1.65-2.04 |
+//! | 3 d / d (kept) | 0.59-0.60 | 47 | 0.76-0.80 | 1.66-1.69 |
+//! | 3 d / 2 d | 1.27 | 38 | 1.11 | 2.74 |
+//!
+//! A wider skin makes each rebuild's reach (`q + s`) and candidate count larger but lets the
+//! folding cloth (steps ~42-75, 4.5-9.7 ms of queries a step before) keep its lists for
+//! several steps; allowing the skin for faster motion (`SLOW_FACTOR` 2) makes the falling
+//! steps query with the wide reach and still rebuild every step, which costs more.
 
 use super::neighbours::Neighbours;
 use super::self_config::SelfBroadphase;
 use crate::lanes::{load, F32s, LANES};
 
-/// Skin of the candidate lists over the collision distance, when the cloth moves slowly.
-pub const SKIN_FACTOR: f32 = 1.0;
+/// Skin of the candidate lists over the collision distance, when the cloth moves slowly
+/// (measured, see the module docs).
+pub const SKIN_FACTOR: f32 = 3.0;
 
 /// Largest displacement a step (over the collision distance) for which the skin is used.
-pub const SLOW_FACTOR: f32 = 0.25;
+pub const SLOW_FACTOR: f32 = 1.0;
 
 /// Share of half the skin a particle may move before the lists are rebuilt.
 pub(crate) const SAFE: f32 = 0.98;
@@ -144,28 +163,31 @@ mod tests {
     #[test]
     fn plan_reuses_within_the_skin_and_rebuilds_past_it() {
         let n = 4;
+        let d = 0.1f32;
+        let (skin, slow) = (SKIN_FACTOR * d, SLOW_FACTOR * d);
         let x = [vec![0.0f32, 1.0, 2.0, 3.0], vec![0.0; 4], vec![0.0; 4]];
         let r = [&x[0][..], &x[1][..], &x[2][..]];
         let mut v = VerletLists::default();
         let bp = SelfBroadphase::Hash;
-        assert_eq!(v.plan(r, n, 0.1, bp, false), Some(0.0), "nothing built yet");
-        v.built(r, n, 0.1, bp, 0.1);
-        assert_eq!(v.plan(r, n, 0.1, bp, false), None);
-        assert_eq!(v.plan(r, n, 0.1, bp, true), Some(0.0), "forced");
+        assert_eq!(v.plan(r, n, d, bp, false), Some(0.0), "nothing built yet");
+        v.built(r, n, d, bp, skin);
+        assert_eq!(v.plan(r, n, d, bp, false), None);
+        assert_eq!(v.plan(r, n, d, bp, true), Some(0.0), "forced");
         assert_eq!(v.plan(r, n, 0.2, bp, false), Some(0.0), "other distance");
         let mut y = x.clone();
-        y[2][3] = 0.048;
-        assert_eq!(v.plan([&y[0], &y[1], &y[2]], n, 0.1, bp, false), None);
-        y[2][3] = 0.05;
-        // Past 0.49 skin after three steps: 0.0167 a step is below SLOW_FACTOR d, skin d.
-        assert_eq!(v.plan([&y[0], &y[1], &y[2]], n, 0.1, bp, false), Some(0.1));
-        y[2][3] = 0.5;
-        assert_eq!(v.plan([&y[0], &y[1], &y[2]], n, 0.1, bp, false), Some(0.0), "fast: no skin");
-        v.built(r, n, 0.1, bp, 0.0);
-        assert_eq!(v.plan(r, n, 0.1, bp, false), None, "unmoved: reused even with no skin");
+        y[2][3] = 0.48 * skin;
+        assert_eq!(v.plan([&y[0], &y[1], &y[2]], n, d, bp, false), None);
+        y[2][3] = 0.5 * skin;
+        // Past 0.49 skin after three steps, at a sixth of the skin a step: slow, skin again.
+        assert!(skin / 6.0 <= slow);
+        assert_eq!(v.plan([&y[0], &y[1], &y[2]], n, d, bp, false), Some(skin));
+        y[2][3] = 4.0 * (slow + skin);
+        assert_eq!(v.plan([&y[0], &y[1], &y[2]], n, d, bp, false), Some(0.0), "fast: no skin");
+        v.built(r, n, d, bp, 0.0);
+        assert_eq!(v.plan(r, n, d, bp, false), None, "unmoved: reused even with no skin");
         y[2][3] = 1e-3;
-        assert_eq!(v.plan([&y[0], &y[1], &y[2]], n, 0.1, bp, false), Some(0.1), "slow: skin d");
+        assert_eq!(v.plan([&y[0], &y[1], &y[2]], n, d, bp, false), Some(skin), "slow: skin");
         y[0][0] = f32::NAN;
-        assert_eq!(v.plan([&y[0], &y[1], &y[2]], n, 0.1, bp, false), Some(0.0), "non-finite");
+        assert_eq!(v.plan([&y[0], &y[1], &y[2]], n, d, bp, false), Some(0.0), "non-finite");
     }
 }
