@@ -33,7 +33,7 @@
 //!   cloth, of which none was in contact. After the fold settles the lists last many steps
 //!   and the near list holds a few hundred pairs; while the cloth falls (the first ~50
 //!   steps, up to 4 d of travel a step) every step still runs the query, which is now the
-//!   largest phase. The skin is `3 d` only when the cloth moved at most `d` a step since the
+//!   largest phase. The skin is `2 d` only when the cloth moved at most `d` a step since the
 //!   last build (otherwise zero: a wider reach would cost more than the reuse saves; the
 //!   measurements are in `self_verlet`). The hash query tests `j > i` and the rest-neighbour
 //!   rule in its eight-lane mask (the `hash_rest` module), so only kept pairs leave the lanes.

@@ -24,9 +24,15 @@
 //! |---|---|---|---|---|
 //! | d / 0.25 d (before) | 0.98-1.29 | 63 | 0.56-0.70 | 1.86-2.42 |
 //! | 0.5 d / 0.25 d | 1.26 | 72 | 0.73 | 2.41 |
-//! | 2 d / d | 0.69-0.83 | 49 | 0.66-0.81 | 1.65-2.04 |
-//! | 3 d / d (kept) | 0.59-0.60 | 47 | 0.76-0.80 | 1.66-1.69 |
+//! | 2 d / d (kept) | 0.69-0.83 | 49 | 0.66-0.81 | 1.65-2.04 |
+//! | 3 d / d | 0.59-0.60 | 47 | 0.76-0.80 | 1.66-1.69 |
 //! | 3 d / 2 d | 1.27 | 38 | 1.11 | 2.74 |
+//!
+//! and on the 12 hash rows of `weft reproduce vccpbd --size 100` (mean ms a step, load 5-6,
+//! so only the broadphase columns are clear): build + query + start 1.52 (d / 0.25 d), 0.91
+//! (2 d / d), 0.85 (3 d / d); pairs 1.55, 1.41, 1.71. The near list of the substeps is built
+//! from the candidate lists, so a wider skin costs there: 2 d is kept as the balance (3 d saves
+//! another ~0.05 ms of broadphase and costs more in the pairs phase).
 //!
 //! A wider skin makes each rebuild's reach (`q + s`) and candidate count larger but lets the
 //! folding cloth (steps ~42-75, 4.5-9.7 ms of queries a step before) keep its lists for
@@ -39,7 +45,7 @@ use crate::lanes::{load, F32s, LANES};
 
 /// Skin of the candidate lists over the collision distance, when the cloth moves slowly
 /// (measured, see the module docs).
-pub const SKIN_FACTOR: f32 = 3.0;
+pub const SKIN_FACTOR: f32 = 2.0;
 
 /// Largest displacement a step (over the collision distance) for which the skin is used.
 pub const SLOW_FACTOR: f32 = 1.0;
