@@ -9,7 +9,8 @@
 //! step's start (in the lists of the step), exactly as the fresh path requires.
 
 use super::neighbours::Neighbours;
-use super::self_verlet::{max_disp2, SAFE};
+use super::self_verlet::SAFE;
+use crate::lanes::{load, F32s, LANES};
 
 /// Near pairs of the candidate lists for the substeps (see the module docs).
 #[derive(Clone, Debug, Default)]
@@ -31,14 +32,15 @@ impl NearList {
         self.valid = false;
     }
 
-    /// Makes the list hold for the predicted positions `p` (`len` entries checked: the
-    /// particles of the active blocks are among them): kept if no particle moved more than
-    /// `0.49 s₂` since the build, else rebuilt from `cand` with a new skin.
-    pub(crate) fn update(&mut self, cand: &Neighbours, p: [&[f32]; 3], len: usize, n: usize, d: f32, simd: bool) {
-        let len = len.min(p[0].len());
-        if self.valid && self.at[0].len() >= len {
+    /// Makes the list hold for the predicted positions `p`: kept if no particle of the active
+    /// `blocks` (ascending; every near pair has both ends in them) moved more than `0.49 s₂`
+    /// since the build, else rebuilt from `cand` (first `n` lists) with a new skin. Only the
+    /// active blocks are checked and copied: before the fold they are a few, and the
+    /// particles outside them have no candidate.
+    pub(crate) fn update(&mut self, cand: &Neighbours, p: [&[f32]; 3], blocks: &[u32], n: usize, d: f32, simd: bool) {
+        if self.valid && self.at[0].len() == blocks.len() * LANES {
             let at = [&self.at[0][..], &self.at[1][..], &self.at[2][..]];
-            let m2 = max_disp2(p, at, len, simd);
+            let m2 = max_disp2_blocks(p, at, blocks, simd);
             let lim = 0.5 * SAFE * self.skin;
             self.subs_since += 1;
             if m2 <= lim * lim {
@@ -52,25 +54,193 @@ impl NearList {
         }
         for (a, src) in self.at.iter_mut().zip(p) {
             a.clear();
-            a.extend_from_slice(&src[..len]);
-        }
-        let r = d + self.skin;
-        let r2 = r * r;
-        self.pairs.clear();
-        for i in 0..n.min(cand.len()) {
-            let pi = [p[0][i], p[1][i], p[2][i]];
-            for &j in cand.of(i) {
-                let j = j as usize;
-                let v = [pi[0] - p[0][j], pi[1] - p[1][j], pi[2] - p[2][j]];
-                let d2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
-                // NaN passes: the exact test rejects it later, as the fresh path does.
-                if d2 < r2 || d2.is_nan() {
-                    self.pairs.push((i as u32, j as u32));
-                }
+            for &b in blocks {
+                let g = b as usize * LANES;
+                a.extend((g..g + LANES).map(|i| src.get(i).copied().unwrap_or(0.0)));
             }
         }
+        let r = d + self.skin;
+        collect_near(cand, p, n, r * r, simd, &mut self.pairs);
         self.valid = true;
         self.subs_since = 0;
         self.rebuilds += 1;
+    }
+}
+
+/// Eight entries of `a` (indices `idx`, bounds-checked) in one vector, built in registers:
+/// on AVX, `_mm256_set_ps` of eight scalar loads (the compiler otherwise sometimes builds the
+/// array on the stack and reloads it, a store-forwarding stall that made the pair pass's
+/// candidate test twice as slow, measured). Pure data movement: no result bit depends on it.
+#[inline(always)]
+pub(crate) fn gather8(a: &[f32], idx: [usize; LANES]) -> F32s {
+    let v = idx.map(|i| a[i]);
+    #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
+    {
+        use std::arch::x86_64::{__m256, _mm256_set_ps};
+        // SAFETY: the cfg guarantees AVX at compile time; register-only intrinsic.
+        let r: __m256 = unsafe { _mm256_set_ps(v[7], v[6], v[5], v[4], v[3], v[2], v[1], v[0]) };
+        bytemuck::cast(r)
+    }
+    #[cfg(not(all(target_arch = "x86_64", target_feature = "avx")))]
+    {
+        F32s::from(v)
+    }
+}
+
+/// Largest squared distance between `p_i` and its compact copy `at` over the particles of
+/// `blocks` (block `blocks[k]` at `at[8 k..8 k + 8]`), or infinity when one is NaN: one block
+/// at a time (`f32x8`) when `simd`, else one particle at a time (the twin; same value: `max`
+/// does not round).
+pub(crate) fn max_disp2_blocks(p: [&[f32]; 3], at: [&[f32]; 3], blocks: &[u32], simd: bool) -> f32 {
+    let mut m = 0.0f32;
+    let mut nan = false;
+    let len = p[0].len().min(p[1].len()).min(p[2].len());
+    let mut mv = F32s::splat(0.0);
+    let mut bad = F32s::splat(0.0);
+    for (k, &b) in blocks.iter().enumerate() {
+        let g = b as usize * LANES;
+        let c = k * LANES;
+        if simd && g + LANES <= len {
+            let v = [0, 1, 2].map(|a| load(p[a], g) - load(at[a], c));
+            let d2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+            bad |= d2.is_nan();
+            mv = mv.max(d2);
+            continue;
+        }
+        for l in 0..LANES.min(len.saturating_sub(g)) {
+            let v = [0, 1, 2].map(|a| p[a][g + l] - at[a][c + l]);
+            let d2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+            nan |= d2.is_nan();
+            m = m.max(d2);
+        }
+    }
+    nan |= bad.any();
+    m = mv.to_array().into_iter().fold(m, f32::max);
+    if nan {
+        f32::INFINITY
+    } else {
+        m
+    }
+}
+
+/// Replaces `out` with the candidate pairs `(i, j)` of `cand` (first `n` lists) closer than
+/// `sqrt(r2)` at `p`, or with a NaN distance (the exact test rejects those later, as the fresh
+/// path does), in list order. With `simd`, eight candidates of one particle at a time
+/// (`f32x8` on gathered positions, the same operations as the scalar twin, so the same list).
+pub(crate) fn collect_near(cand: &Neighbours, p: [&[f32]; 3], n: usize, r2: f32, simd: bool, out: &mut Vec<(u32, u32)>) {
+    out.clear();
+    let r2v = F32s::splat(r2);
+    for i in 0..n.min(cand.len()) {
+        let list = cand.of(i);
+        if list.is_empty() {
+            continue;
+        }
+        let pi = [p[0][i], p[1][i], p[2][i]];
+        let mut k = 0;
+        if simd {
+            let piv = pi.map(F32s::splat);
+            while k + LANES <= list.len() {
+                let js = &list[k..k + LANES];
+                let idx = std::array::from_fn(|l| js[l] as usize);
+                let g = |a: &[f32]| gather8(a, idx);
+                let v = [piv[0] - g(p[0]), piv[1] - g(p[1]), piv[2] - g(p[2])];
+                let d2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+                let mut bits = (d2.simd_lt(r2v) | d2.is_nan()).to_bitmask();
+                while bits != 0 {
+                    out.push((i as u32, js[bits.trailing_zeros() as usize]));
+                    bits &= bits - 1;
+                }
+                k += LANES;
+            }
+        }
+        for &j in &list[k..] {
+            let ju = j as usize;
+            let v = [pi[0] - p[0][ju], pi[1] - p[1][ju], pi[2] - p[2][ju]];
+            let d2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+            if d2 < r2 || d2.is_nan() {
+                out.push((i as u32, j));
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::test_rng::signed;
+
+    #[test]
+    fn simd_near_list_equals_scalar_and_brute_force() {
+        let mut rng = signed(5);
+        let n = 301;
+        let p: [Vec<f32>; 3] = std::array::from_fn(|_| (0..n).map(|_| rng()).collect());
+        let mut cand = Neighbours::new();
+        cand.fill_serial(n, |i, buf| buf.extend((i + 1..n).filter(|j| (i + j) % 3 != 0).map(|j| j as u32)))
+            .unwrap();
+        let mut p = p;
+        p[1][17] = f32::NAN;
+        let pr = [&p[0][..], &p[1][..], &p[2][..]];
+        let r2 = 0.6f32 * 0.6;
+        let (mut a, mut b) = (Vec::new(), Vec::new());
+        collect_near(&cand, pr, n, r2, false, &mut a);
+        collect_near(&cand, pr, n, r2, true, &mut b);
+        assert_eq!(a, b);
+        let want: Vec<(u32, u32)> = cand
+            .pairs()
+            .filter(|&(i, j)| {
+                let (i, j) = (i as usize, j as usize);
+                let d2: f32 = (0..3).map(|k| (p[k][i] - p[k][j]) * (p[k][i] - p[k][j])).sum();
+                d2 < r2 || d2.is_nan()
+            })
+            .collect();
+        assert_eq!(a, want);
+        assert!(a.len() > 100 && a.len() < cand.total(), "{} of {}", a.len(), cand.total());
+        assert!(a.iter().any(|&(i, j)| i == 17 || j == 17), "NaN pairs are kept");
+    }
+
+    #[test]
+    fn block_displacement_simd_equals_scalar_and_flags_nan() {
+        let mut rng = signed(9);
+        let n = 8 * 9 + 3; // the last block is partial
+        let p: [Vec<f32>; 3] = std::array::from_fn(|_| (0..n).map(|_| rng()).collect());
+        let blocks = [0u32, 2, 3, 7, 9];
+        let mut at: [Vec<f32>; 3] = std::array::from_fn(|_| vec![0.0; blocks.len() * LANES]);
+        for (k, &b) in blocks.iter().enumerate() {
+            for l in 0..LANES {
+                let i = b as usize * LANES + l;
+                for a in 0..3 {
+                    at[a][k * LANES + l] = p[a].get(i).map_or(0.0, |v| v + 0.01 * rng());
+                }
+            }
+        }
+        let pr = [&p[0][..], &p[1][..], &p[2][..]];
+        let ar = [&at[0][..], &at[1][..], &at[2][..]];
+        let s = max_disp2_blocks(pr, ar, &blocks, false);
+        assert_eq!(s.to_bits(), max_disp2_blocks(pr, ar, &blocks, true).to_bits());
+        // The largest over the listed particles only (block 1 is left out and moved far).
+        let mut want = 0.0f32;
+        for (k, &b) in blocks.iter().enumerate() {
+            for l in 0..LANES {
+                let i = b as usize * LANES + l;
+                if i < n {
+                    let d2: f32 = (0..3).map(|a| (p[a][i] - at[a][k * LANES + l]).powi(2)).sum();
+                    want = want.max(d2);
+                }
+            }
+        }
+        assert!(s > 0.0 && (s - want).abs() <= 1e-6 * want, "{s} {want}");
+        let mut q = p.clone();
+        q[0][8 + 1] = 50.0;
+        let qr = [&q[0][..], &q[1][..], &q[2][..]];
+        assert_eq!(
+            max_disp2_blocks(qr, ar, &blocks, true).to_bits(),
+            s.to_bits(),
+            "block 1 is not checked"
+        );
+        q[2][3 * 8 + 5] = f32::NAN;
+        for simd in [false, true] {
+            let qr = [&q[0][..], &q[1][..], &q[2][..]];
+            assert_eq!(max_disp2_blocks(qr, ar, &blocks, simd), f32::INFINITY);
+        }
     }
 }
