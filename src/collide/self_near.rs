@@ -24,6 +24,8 @@ pub(crate) struct NearList {
     subs_since: u32,
     /// Builds so far.
     pub(crate) rebuilds: u64,
+    /// Scratch: the positions of the build as `[x, y, z, 0]` (one load per candidate).
+    xyz: Vec<[f32; 4]>,
 }
 
 impl NearList {
@@ -60,11 +62,27 @@ impl NearList {
             }
         }
         let r = d + self.skin;
-        collect_near(cand, p, n, r * r, simd, &mut self.pairs);
+        collect_near(cand, p, n, r * r, simd, &mut self.xyz, &mut self.pairs);
         self.valid = true;
         self.subs_since = 0;
         self.rebuilds += 1;
     }
+}
+
+/// Eight indices `f(0) .. f(7)` as `usize`, written out (array `map` and `from_fn` can be
+/// compiled to out-of-line calls in these loops, measured).
+#[inline(always)]
+pub(crate) fn idx8(f: impl Fn(usize) -> u32) -> [usize; LANES] {
+    [
+        f(0) as usize,
+        f(1) as usize,
+        f(2) as usize,
+        f(3) as usize,
+        f(4) as usize,
+        f(5) as usize,
+        f(6) as usize,
+        f(7) as usize,
+    ]
 }
 
 /// Eight entries of `a` (indices `idx`, bounds-checked) in one vector, built in registers:
@@ -73,7 +91,10 @@ impl NearList {
 /// candidate test twice as slow, measured). Pure data movement: no result bit depends on it.
 #[inline(always)]
 pub(crate) fn gather8(a: &[f32], idx: [usize; LANES]) -> F32s {
-    let v = idx.map(|i| a[i]);
+    // Written out: `idx.map(..)` was compiled to an out-of-line call (measured).
+    let v = [
+        a[idx[0]], a[idx[1]], a[idx[2]], a[idx[3]], a[idx[4]], a[idx[5]], a[idx[6]], a[idx[7]],
+    ];
     #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
     {
         use std::arch::x86_64::{__m256, _mm256_set_ps};
@@ -125,12 +146,27 @@ pub(crate) fn max_disp2_blocks(p: [&[f32]; 3], at: [&[f32]; 3], blocks: &[u32], 
 
 /// Replaces `out` with the candidate pairs `(i, j)` of `cand` (first `n` lists) closer than
 /// `sqrt(r2)` at `p`, or with a NaN distance (the exact test rejects those later, as the fresh
-/// path does), in list order. With `simd`, eight candidates of one particle at a time
-/// (`f32x8` on gathered positions, the same operations as the scalar twin, so the same list).
-pub(crate) fn collect_near(cand: &Neighbours, p: [&[f32]; 3], n: usize, r2: f32, simd: bool, out: &mut Vec<(u32, u32)>) {
+/// path does), in list order. With `simd`, eight candidates of one particle at a time: their
+/// positions come from `xyz`, a copy of `p` as `[x, y, z, 0]` made here (one 16-byte load a
+/// candidate instead of three scattered ones, transposed to `f32x8` in registers by
+/// [`gather_xyz8`]); the same operations as the scalar twin, so the same list.
+pub(crate) fn collect_near(
+    cand: &Neighbours,
+    p: [&[f32]; 3],
+    n: usize,
+    r2: f32,
+    simd: bool,
+    xyz: &mut Vec<[f32; 4]>,
+    out: &mut Vec<(u32, u32)>,
+) {
     out.clear();
+    let n = n.min(cand.len()).min(p[0].len()).min(p[1].len()).min(p[2].len());
+    if simd {
+        xyz.clear();
+        xyz.extend((0..n).map(|i| [p[0][i], p[1][i], p[2][i], 0.0]));
+    }
     let r2v = F32s::splat(r2);
-    for i in 0..n.min(cand.len()) {
+    for i in 0..n {
         let list = cand.of(i);
         if list.is_empty() {
             continue;
@@ -141,9 +177,9 @@ pub(crate) fn collect_near(cand: &Neighbours, p: [&[f32]; 3], n: usize, r2: f32,
             let piv = pi.map(F32s::splat);
             while k + LANES <= list.len() {
                 let js = &list[k..k + LANES];
-                let idx = std::array::from_fn(|l| js[l] as usize);
-                let g = |a: &[f32]| gather8(a, idx);
-                let v = [piv[0] - g(p[0]), piv[1] - g(p[1]), piv[2] - g(p[2])];
+                let idx = idx8(|l| js[l]);
+                let q = gather_xyz8(xyz, idx);
+                let v = [piv[0] - q[0], piv[1] - q[1], piv[2] - q[2]];
                 let d2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
                 let mut bits = (d2.simd_lt(r2v) | d2.is_nan()).to_bitmask();
                 while bits != 0 {
@@ -161,6 +197,44 @@ pub(crate) fn collect_near(cand: &Neighbours, p: [&[f32]; 3], n: usize, r2: f32,
                 out.push((i as u32, j));
             }
         }
+    }
+}
+
+/// The x, y and z of eight entries of `xyz` (indices `idx`, bounds-checked) as three vectors,
+/// lane `l` from entry `idx[l]`. On AVX: eight 16-byte loads and an 8x4 transpose in
+/// registers (unpack and shuffle); elsewhere a portable array version. Pure data movement.
+#[inline(always)]
+pub(crate) fn gather_xyz8(xyz: &[[f32; 4]], idx: [usize; LANES]) -> [F32s; 3] {
+    #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
+    {
+        use std::arch::x86_64::{__m128, __m256, _mm256_set_m128, _mm256_shuffle_ps, _mm256_unpackhi_ps, _mm256_unpacklo_ps};
+        // Written out (no array `map`, which can end up as an out-of-line call).
+        let row = |l: usize| -> __m128 { bytemuck::cast(xyz[idx[l]]) };
+        let r = [row(0), row(1), row(2), row(3), row(4), row(5), row(6), row(7)];
+        // SAFETY: the cfg guarantees AVX at compile time; register-only intrinsics.
+        let (x, y, z) = unsafe {
+            // Low halves hold rows 0..4, high halves rows 4..8.
+            let a = _mm256_set_m128(r[4], r[0]);
+            let b = _mm256_set_m128(r[5], r[1]);
+            let c = _mm256_set_m128(r[6], r[2]);
+            let d = _mm256_set_m128(r[7], r[3]);
+            let t0 = _mm256_unpacklo_ps(a, b); // x0 x1 y0 y1 | x4 x5 y4 y5
+            let t1 = _mm256_unpacklo_ps(c, d); // x2 x3 y2 y3 | x6 x7 y6 y7
+            let t2 = _mm256_unpackhi_ps(a, b); // z0 z1 w0 w1 | z4 z5 w4 w5
+            let t3 = _mm256_unpackhi_ps(c, d); // z2 z3 w2 w3 | z6 z7 w6 w7
+            (
+                _mm256_shuffle_ps::<0x44>(t0, t1),
+                _mm256_shuffle_ps::<0xEE>(t0, t1),
+                _mm256_shuffle_ps::<0x44>(t2, t3),
+            )
+        };
+        let c = |v: __m256| -> F32s { bytemuck::cast(v) };
+        [c(x), c(y), c(z)]
+    }
+    #[cfg(not(all(target_arch = "x86_64", target_feature = "avx")))]
+    {
+        let rows: [[f32; 4]; LANES] = std::array::from_fn(|l| xyz[idx[l]]);
+        [0, 1, 2].map(|a| F32s::from(rows.map(|r| r[a])))
     }
 }
 
@@ -182,8 +256,8 @@ mod tests {
         let pr = [&p[0][..], &p[1][..], &p[2][..]];
         let r2 = 0.6f32 * 0.6;
         let (mut a, mut b) = (Vec::new(), Vec::new());
-        collect_near(&cand, pr, n, r2, false, &mut a);
-        collect_near(&cand, pr, n, r2, true, &mut b);
+        collect_near(&cand, pr, n, r2, false, &mut Vec::new(), &mut a);
+        collect_near(&cand, pr, n, r2, true, &mut Vec::new(), &mut b);
         assert_eq!(a, b);
         let want: Vec<(u32, u32)> = cand
             .pairs()
@@ -241,6 +315,18 @@ mod tests {
         for simd in [false, true] {
             let qr = [&q[0][..], &q[1][..], &q[2][..]];
             assert_eq!(max_disp2_blocks(qr, ar, &blocks, simd), f32::INFINITY);
+        }
+    }
+
+    #[test]
+    fn gather_xyz8_puts_entry_l_in_lane_l() {
+        let xyz: Vec<[f32; 4]> = (0..40).map(|i| [i as f32, 100.0 + i as f32, 200.0 + i as f32, -1.0]).collect();
+        let idx = [3usize, 39, 0, 17, 17, 8, 25, 1];
+        let [x, y, z] = gather_xyz8(&xyz, idx);
+        for (l, &i) in idx.iter().enumerate() {
+            assert_eq!(x.to_array()[l], i as f32);
+            assert_eq!(y.to_array()[l], 100.0 + i as f32);
+            assert_eq!(z.to_array()[l], 200.0 + i as f32);
         }
     }
 }

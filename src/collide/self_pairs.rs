@@ -4,7 +4,7 @@
 use super::neighbours::within;
 #[cfg(test)]
 use super::neighbours::Neighbours;
-use super::self_near::gather8;
+use super::self_near::{gather8, idx8};
 use crate::lanes::{F32s, Vec3x8, LANES};
 
 /// Everything the pair pass reads.
@@ -39,8 +39,8 @@ impl PairCtx<'_> {
         if simd {
             let limv = F32s::splat(lim);
             while k + LANES <= pairs.len() {
-                let ii = std::array::from_fn(|l| pairs[k + l].0 as usize);
-                let jj = std::array::from_fn(|l| pairs[k + l].1 as usize);
+                let ii = idx8(|l| pairs[k + l].0);
+                let jj = idx8(|l| pairs[k + l].1);
                 let g = |a: &[f32], side: usize| gather8(a, if side == 0 { ii } else { jj });
                 let v = Vec3x8 {
                     x: g(self.p[0], 0) - g(self.p[0], 1),
