@@ -14,6 +14,13 @@
 //! Every block is computed independently (a Jacobi pass: a particle writes only its own
 //! sums and position), so the result is the same serially, in parallel and on any number of
 //! threads; parallel work is split into fixed groups of blocks.
+//!
+//! Per substep the pass computes each contact once for both of its particles
+//! ([`super::self_pairs::PairCtx::pair_contact`], the same bits as one computation per end;
+//! the compact-step test holds it to the per-particle form), and writes and later zeroes only
+//! the sums of the particles that received a contact (a folded cloth: ~200 contacts spread
+//! over ~170 blocks, whose whole-block zeroing and storing cost four times the contacts,
+//! measured). The correction runs on the touched blocks, consecutive ones in one kernel call.
 
 use rayon::prelude::*;
 
