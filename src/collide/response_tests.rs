@@ -158,3 +158,29 @@ fn vccpbd_puts_a_far_moved_particle_back_to_its_box_centre() {
     });
     assert_eq!(p.px[0], 0.25);
 }
+
+/// The mean velocity: the same bits serial, parallel on one and two threads, and within f32
+/// rounding of an f64 running sum over the free particles (pinned ones left out), for sizes
+/// around the accumulator width and the chunk size.
+#[test]
+fn mean_velocity_is_deterministic_and_averages_the_free_particles() {
+    for n in [0usize, 1, 3, 5, 4095, 4097, 9001] {
+        let p = cloud(n, n as u64 + 3);
+        let v = [&p.vx[..], &p.vy[..], &p.vz[..]];
+        let serial = mean_velocity(v, &p.w, n, false);
+        for threads in [1, 2] {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            let par = pool.install(|| mean_velocity(v, &p.w, n, true));
+            assert_eq!(serial.map(f32::to_bits), par.map(f32::to_bits), "n {n}, {threads} threads");
+        }
+        let free: Vec<usize> = (0..n).filter(|&i| p.w[i] > 0.0).collect();
+        for (a, got) in serial.iter().enumerate() {
+            let want = if free.is_empty() {
+                0.0
+            } else {
+                free.iter().map(|&i| v[a][i] as f64).sum::<f64>() / free.len() as f64
+            };
+            assert!((*got as f64 - want).abs() <= 1e-6 * want.abs().max(1e-3), "n {n}: {got} vs {want}");
+        }
+    }
+}

@@ -7,9 +7,35 @@
 //! every particle of the active blocks stays within `0.49 s₂` of `y`, a pair in contact is in
 //! it. The substeps test only the near pairs, and a pair also has to be within `q` at the
 //! step's start (in the lists of the step), exactly as the fresh path requires.
+//!
+//! # Cost (issue #5, `examples/self_collision_timeline.rs`, basic VcCPBD 100x100, 1 thread)
+//! Measured per substep, averaged over the 1500 substeps, with timers around the parts
+//! (loaded shared machine, so roughly): the near-list update 36 µs (274 rebuilds, ~180 µs
+//! each over ~180 000 candidate pairs once folded, plus the displacement check), the
+//! candidate test of the near pairs 15 µs (~5 600 near pairs), zeroing and storing the sums
+//! 16 µs, the ~205 contacts themselves 4 µs. What changed, and why:
+//! * the displacement check and the copy of the build positions cover only the active
+//!   blocks ([`max_disp2_blocks`]): every near pair has both ends in them, and while the
+//!   cloth falls they are a few of the 1 250 blocks (the check ran over all 10 000
+//!   particles every substep);
+//! * the rebuild ([`collect_near`]) tests eight candidates of a particle at a time from a
+//!   `[x, y, z, 0]` copy of the positions (one 16-byte load a candidate, transposed in
+//!   registers) instead of three scattered loads; measured within the noise of the shared
+//!   machine (the rebuild stays bound by its ~1 ns a candidate), kept because it is not
+//!   slower and the scalar twin is the same list;
+//! * the eight-lane gathers are written out ([`gather8`], [`idx8`]): with `array::map`
+//!   the compiler once emitted an out-of-line call per gather in the pair pass's candidate
+//!   test, which made that test twice as slow (perf annotate).
+//!
+//! The skin rule is unchanged: a larger cap than `d` makes the near list approach the
+//! candidate lists (radius `3 d` against `4 d`), and a cap of `d / 2` (tried: fewer near
+//! pairs, more rebuilds) measured no faster (CPU of these phases over the distance solve's,
+//! 0.68-0.75 against 0.64-0.70, three runs each); the remaining cost is the folding phase (steps ~40-100), where the
+//! cloth moves `~d / 10` a substep and the list is rebuilt every 4-10 substeps.
 
 use super::neighbours::Neighbours;
-use super::self_verlet::{max_disp2, SAFE};
+use super::self_verlet::SAFE;
+use crate::lanes::{load, F32s, LANES};
 
 /// Near pairs of the candidate lists for the substeps (see the module docs).
 #[derive(Clone, Debug, Default)]
@@ -23,6 +49,8 @@ pub(crate) struct NearList {
     subs_since: u32,
     /// Builds so far.
     pub(crate) rebuilds: u64,
+    /// Scratch: the positions of the build as `[x, y, z, 0]` (one load per candidate).
+    xyz: Vec<[f32; 4]>,
 }
 
 impl NearList {
@@ -31,14 +59,15 @@ impl NearList {
         self.valid = false;
     }
 
-    /// Makes the list hold for the predicted positions `p` (`len` entries checked: the
-    /// particles of the active blocks are among them): kept if no particle moved more than
-    /// `0.49 s₂` since the build, else rebuilt from `cand` with a new skin.
-    pub(crate) fn update(&mut self, cand: &Neighbours, p: [&[f32]; 3], len: usize, n: usize, d: f32, simd: bool) {
-        let len = len.min(p[0].len());
-        if self.valid && self.at[0].len() >= len {
+    /// Makes the list hold for the predicted positions `p`: kept if no particle of the active
+    /// `blocks` (ascending; every near pair has both ends in them) moved more than `0.49 s₂`
+    /// since the build, else rebuilt from `cand` (first `n` lists) with a new skin. Only the
+    /// active blocks are checked and copied: before the fold they are a few, and the
+    /// particles outside them have no candidate.
+    pub(crate) fn update(&mut self, cand: &Neighbours, p: [&[f32]; 3], blocks: &[u32], n: usize, d: f32, simd: bool) {
+        if self.valid && self.at[0].len() == blocks.len() * LANES {
             let at = [&self.at[0][..], &self.at[1][..], &self.at[2][..]];
-            let m2 = max_disp2(p, at, len, simd);
+            let m2 = max_disp2_blocks(p, at, blocks, simd);
             let lim = 0.5 * SAFE * self.skin;
             self.subs_since += 1;
             if m2 <= lim * lim {
@@ -52,25 +81,277 @@ impl NearList {
         }
         for (a, src) in self.at.iter_mut().zip(p) {
             a.clear();
-            a.extend_from_slice(&src[..len]);
-        }
-        let r = d + self.skin;
-        let r2 = r * r;
-        self.pairs.clear();
-        for i in 0..n.min(cand.len()) {
-            let pi = [p[0][i], p[1][i], p[2][i]];
-            for &j in cand.of(i) {
-                let j = j as usize;
-                let v = [pi[0] - p[0][j], pi[1] - p[1][j], pi[2] - p[2][j]];
-                let d2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
-                // NaN passes: the exact test rejects it later, as the fresh path does.
-                if d2 < r2 || d2.is_nan() {
-                    self.pairs.push((i as u32, j as u32));
-                }
+            for &b in blocks {
+                let g = b as usize * LANES;
+                a.extend((g..g + LANES).map(|i| src.get(i).copied().unwrap_or(0.0)));
             }
         }
+        let r = d + self.skin;
+        collect_near(cand, p, n, r * r, simd, &mut self.xyz, &mut self.pairs);
         self.valid = true;
         self.subs_since = 0;
         self.rebuilds += 1;
+    }
+}
+
+/// Eight indices `f(0) .. f(7)` as `usize`, written out (array `map` and `from_fn` can be
+/// compiled to out-of-line calls in these loops, measured).
+#[inline(always)]
+pub(crate) fn idx8(f: impl Fn(usize) -> u32) -> [usize; LANES] {
+    [
+        f(0) as usize,
+        f(1) as usize,
+        f(2) as usize,
+        f(3) as usize,
+        f(4) as usize,
+        f(5) as usize,
+        f(6) as usize,
+        f(7) as usize,
+    ]
+}
+
+/// Eight entries of `a` (indices `idx`, bounds-checked) in one vector, built in registers:
+/// on AVX, `_mm256_set_ps` of eight scalar loads (the compiler otherwise sometimes builds the
+/// array on the stack and reloads it, a store-forwarding stall that made the pair pass's
+/// candidate test twice as slow, measured). Pure data movement: no result bit depends on it.
+#[inline(always)]
+pub(crate) fn gather8(a: &[f32], idx: [usize; LANES]) -> F32s {
+    // Written out: `idx.map(..)` was compiled to an out-of-line call (measured).
+    let v = [
+        a[idx[0]], a[idx[1]], a[idx[2]], a[idx[3]], a[idx[4]], a[idx[5]], a[idx[6]], a[idx[7]],
+    ];
+    #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
+    {
+        use std::arch::x86_64::{__m256, _mm256_set_ps};
+        // SAFETY: the cfg guarantees AVX at compile time; register-only intrinsic.
+        let r: __m256 = unsafe { _mm256_set_ps(v[7], v[6], v[5], v[4], v[3], v[2], v[1], v[0]) };
+        bytemuck::cast(r)
+    }
+    #[cfg(not(all(target_arch = "x86_64", target_feature = "avx")))]
+    {
+        F32s::from(v)
+    }
+}
+
+/// Largest squared distance between `p_i` and its compact copy `at` over the particles of
+/// `blocks` (block `blocks[k]` at `at[8 k..8 k + 8]`), or infinity when one is NaN: one block
+/// at a time (`f32x8`) when `simd`, else one particle at a time (the twin; same value: `max`
+/// does not round).
+pub(crate) fn max_disp2_blocks(p: [&[f32]; 3], at: [&[f32]; 3], blocks: &[u32], simd: bool) -> f32 {
+    let mut m = 0.0f32;
+    let mut nan = false;
+    let len = p[0].len().min(p[1].len()).min(p[2].len());
+    let mut mv = F32s::splat(0.0);
+    let mut bad = F32s::splat(0.0);
+    for (k, &b) in blocks.iter().enumerate() {
+        let g = b as usize * LANES;
+        let c = k * LANES;
+        if simd && g + LANES <= len {
+            let v = [0, 1, 2].map(|a| load(p[a], g) - load(at[a], c));
+            let d2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+            bad |= d2.is_nan();
+            mv = mv.max(d2);
+            continue;
+        }
+        for l in 0..LANES.min(len.saturating_sub(g)) {
+            let v = [0, 1, 2].map(|a| p[a][g + l] - at[a][c + l]);
+            let d2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+            nan |= d2.is_nan();
+            m = m.max(d2);
+        }
+    }
+    nan |= bad.any();
+    m = mv.to_array().into_iter().fold(m, f32::max);
+    if nan {
+        f32::INFINITY
+    } else {
+        m
+    }
+}
+
+/// Replaces `out` with the candidate pairs `(i, j)` of `cand` (first `n` lists) closer than
+/// `sqrt(r2)` at `p`, or with a NaN distance (the exact test rejects those later, as the fresh
+/// path does), in list order. With `simd`, eight candidates of one particle at a time: their
+/// positions come from `xyz`, a copy of `p` as `[x, y, z, 0]` made here (one 16-byte load a
+/// candidate instead of three scattered ones, transposed to `f32x8` in registers by
+/// [`gather_xyz8`]); the same operations as the scalar twin, so the same list.
+pub(crate) fn collect_near(
+    cand: &Neighbours,
+    p: [&[f32]; 3],
+    n: usize,
+    r2: f32,
+    simd: bool,
+    xyz: &mut Vec<[f32; 4]>,
+    out: &mut Vec<(u32, u32)>,
+) {
+    out.clear();
+    let n = n.min(cand.len()).min(p[0].len()).min(p[1].len()).min(p[2].len());
+    if simd {
+        xyz.clear();
+        xyz.extend((0..n).map(|i| [p[0][i], p[1][i], p[2][i], 0.0]));
+    }
+    let r2v = F32s::splat(r2);
+    for i in 0..n {
+        let list = cand.of(i);
+        if list.is_empty() {
+            continue;
+        }
+        let pi = [p[0][i], p[1][i], p[2][i]];
+        let mut k = 0;
+        if simd {
+            let piv = pi.map(F32s::splat);
+            while k + LANES <= list.len() {
+                let js = &list[k..k + LANES];
+                let idx = idx8(|l| js[l]);
+                let q = gather_xyz8(xyz, idx);
+                let v = [piv[0] - q[0], piv[1] - q[1], piv[2] - q[2]];
+                let d2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+                let mut bits = (d2.simd_lt(r2v) | d2.is_nan()).to_bitmask();
+                while bits != 0 {
+                    out.push((i as u32, js[bits.trailing_zeros() as usize]));
+                    bits &= bits - 1;
+                }
+                k += LANES;
+            }
+        }
+        for &j in &list[k..] {
+            let ju = j as usize;
+            let v = [pi[0] - p[0][ju], pi[1] - p[1][ju], pi[2] - p[2][ju]];
+            let d2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+            if d2 < r2 || d2.is_nan() {
+                out.push((i as u32, j));
+            }
+        }
+    }
+}
+
+/// The x, y and z of eight entries of `xyz` (indices `idx`, bounds-checked) as three vectors,
+/// lane `l` from entry `idx[l]`. On AVX: eight 16-byte loads and an 8x4 transpose in
+/// registers (unpack and shuffle); elsewhere a portable array version. Pure data movement.
+#[inline(always)]
+pub(crate) fn gather_xyz8(xyz: &[[f32; 4]], idx: [usize; LANES]) -> [F32s; 3] {
+    #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
+    {
+        use std::arch::x86_64::{__m128, __m256, _mm256_set_m128, _mm256_shuffle_ps, _mm256_unpackhi_ps, _mm256_unpacklo_ps};
+        // Written out (no array `map`, which can end up as an out-of-line call).
+        let row = |l: usize| -> __m128 { bytemuck::cast(xyz[idx[l]]) };
+        let r = [row(0), row(1), row(2), row(3), row(4), row(5), row(6), row(7)];
+        // SAFETY: the cfg guarantees AVX at compile time; register-only intrinsics.
+        let (x, y, z) = unsafe {
+            // Low halves hold rows 0..4, high halves rows 4..8.
+            let a = _mm256_set_m128(r[4], r[0]);
+            let b = _mm256_set_m128(r[5], r[1]);
+            let c = _mm256_set_m128(r[6], r[2]);
+            let d = _mm256_set_m128(r[7], r[3]);
+            let t0 = _mm256_unpacklo_ps(a, b); // x0 x1 y0 y1 | x4 x5 y4 y5
+            let t1 = _mm256_unpacklo_ps(c, d); // x2 x3 y2 y3 | x6 x7 y6 y7
+            let t2 = _mm256_unpackhi_ps(a, b); // z0 z1 w0 w1 | z4 z5 w4 w5
+            let t3 = _mm256_unpackhi_ps(c, d); // z2 z3 w2 w3 | z6 z7 w6 w7
+            (
+                _mm256_shuffle_ps::<0x44>(t0, t1),
+                _mm256_shuffle_ps::<0xEE>(t0, t1),
+                _mm256_shuffle_ps::<0x44>(t2, t3),
+            )
+        };
+        let c = |v: __m256| -> F32s { bytemuck::cast(v) };
+        [c(x), c(y), c(z)]
+    }
+    #[cfg(not(all(target_arch = "x86_64", target_feature = "avx")))]
+    {
+        let rows: [[f32; 4]; LANES] = std::array::from_fn(|l| xyz[idx[l]]);
+        [0, 1, 2].map(|a| F32s::from(rows.map(|r| r[a])))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::test_rng::signed;
+
+    #[test]
+    fn simd_near_list_equals_scalar_and_brute_force() {
+        let mut rng = signed(5);
+        let n = 301;
+        let p: [Vec<f32>; 3] = std::array::from_fn(|_| (0..n).map(|_| rng()).collect());
+        let mut cand = Neighbours::new();
+        cand.fill_serial(n, |i, buf| buf.extend((i + 1..n).filter(|j| (i + j) % 3 != 0).map(|j| j as u32)))
+            .unwrap();
+        let mut p = p;
+        p[1][17] = f32::NAN;
+        let pr = [&p[0][..], &p[1][..], &p[2][..]];
+        let r2 = 0.6f32 * 0.6;
+        let (mut a, mut b) = (Vec::new(), Vec::new());
+        collect_near(&cand, pr, n, r2, false, &mut Vec::new(), &mut a);
+        collect_near(&cand, pr, n, r2, true, &mut Vec::new(), &mut b);
+        assert_eq!(a, b);
+        let want: Vec<(u32, u32)> = cand
+            .pairs()
+            .filter(|&(i, j)| {
+                let (i, j) = (i as usize, j as usize);
+                let d2: f32 = (0..3).map(|k| (p[k][i] - p[k][j]) * (p[k][i] - p[k][j])).sum();
+                d2 < r2 || d2.is_nan()
+            })
+            .collect();
+        assert_eq!(a, want);
+        assert!(a.len() > 100 && a.len() < cand.total(), "{} of {}", a.len(), cand.total());
+        assert!(a.iter().any(|&(i, j)| i == 17 || j == 17), "NaN pairs are kept");
+    }
+
+    #[test]
+    fn block_displacement_simd_equals_scalar_and_flags_nan() {
+        let mut rng = signed(9);
+        let n = 8 * 9 + 3; // the last block is partial
+        let p: [Vec<f32>; 3] = std::array::from_fn(|_| (0..n).map(|_| rng()).collect());
+        let blocks = [0u32, 2, 3, 7, 9];
+        let mut at: [Vec<f32>; 3] = std::array::from_fn(|_| vec![0.0; blocks.len() * LANES]);
+        for (k, &b) in blocks.iter().enumerate() {
+            for l in 0..LANES {
+                let i = b as usize * LANES + l;
+                for a in 0..3 {
+                    at[a][k * LANES + l] = p[a].get(i).map_or(0.0, |v| v + 0.01 * rng());
+                }
+            }
+        }
+        let pr = [&p[0][..], &p[1][..], &p[2][..]];
+        let ar = [&at[0][..], &at[1][..], &at[2][..]];
+        let s = max_disp2_blocks(pr, ar, &blocks, false);
+        assert_eq!(s.to_bits(), max_disp2_blocks(pr, ar, &blocks, true).to_bits());
+        // The largest over the listed particles only (block 1 is left out and moved far).
+        let mut want = 0.0f32;
+        for (k, &b) in blocks.iter().enumerate() {
+            for l in 0..LANES {
+                let i = b as usize * LANES + l;
+                if i < n {
+                    let d2: f32 = (0..3).map(|a| (p[a][i] - at[a][k * LANES + l]).powi(2)).sum();
+                    want = want.max(d2);
+                }
+            }
+        }
+        assert!(s > 0.0 && (s - want).abs() <= 1e-6 * want, "{s} {want}");
+        let mut q = p.clone();
+        q[0][8 + 1] = 50.0;
+        let qr = [&q[0][..], &q[1][..], &q[2][..]];
+        assert_eq!(
+            max_disp2_blocks(qr, ar, &blocks, true).to_bits(),
+            s.to_bits(),
+            "block 1 is not checked"
+        );
+        q[2][3 * 8 + 5] = f32::NAN;
+        for simd in [false, true] {
+            let qr = [&q[0][..], &q[1][..], &q[2][..]];
+            assert_eq!(max_disp2_blocks(qr, ar, &blocks, simd), f32::INFINITY);
+        }
+    }
+
+    #[test]
+    fn gather_xyz8_puts_entry_l_in_lane_l() {
+        let xyz: Vec<[f32; 4]> = (0..40).map(|i| [i as f32, 100.0 + i as f32, 200.0 + i as f32, -1.0]).collect();
+        let idx = [3usize, 39, 0, 17, 17, 8, 25, 1];
+        let [x, y, z] = gather_xyz8(&xyz, idx);
+        for (l, &i) in idx.iter().enumerate() {
+            assert_eq!(x.to_array()[l], i as f32);
+            assert_eq!(y.to_array()[l], 100.0 + i as f32);
+            assert_eq!(z.to_array()[l], 200.0 + i as f32);
+        }
     }
 }

@@ -4,6 +4,7 @@
 use super::neighbours::within;
 #[cfg(test)]
 use super::neighbours::Neighbours;
+use super::self_near::{gather8, idx8};
 use crate::lanes::{F32s, Vec3x8, LANES};
 
 /// Everything the pair pass reads.
@@ -38,12 +39,9 @@ impl PairCtx<'_> {
         if simd {
             let limv = F32s::splat(lim);
             while k + LANES <= pairs.len() {
-                let g = |a: &[f32], side: usize| {
-                    F32s::from(std::array::from_fn::<f32, LANES, _>(|l| {
-                        let (i, j) = pairs[k + l];
-                        a[if side == 0 { i } else { j } as usize]
-                    }))
-                };
+                let ii = idx8(|l| pairs[k + l].0);
+                let jj = idx8(|l| pairs[k + l].1);
+                let g = |a: &[f32], side: usize| gather8(a, if side == 0 { ii } else { jj });
                 let v = Vec3x8 {
                     x: g(self.p[0], 0) - g(self.p[0], 1),
                     y: g(self.p[1], 0) - g(self.p[1], 1),
@@ -74,8 +72,9 @@ impl PairCtx<'_> {
     }
 
     /// Adds the contact of `i` with `j` to `i`'s sums `out` (`[c(3), f(3), n(3), gap, count]`
-    /// and the approaching count), if `i` is free and the pair is in contact.
-    #[inline]
+    /// and the approaching count), if `i` is free and the pair is in contact (one-sided: the
+    /// reference of the pair form).
+    #[cfg(test)]
     pub(crate) fn add_contact(&self, i: usize, j: usize, out: &mut [f32; 11], approaching: &mut f32) {
         if self.w[i] <= 0.0 {
             return;
@@ -111,7 +110,9 @@ impl PairCtx<'_> {
         out
     }
 
-    /// Adds the contact of `i` with `j`, if any, to `out`.
+    /// Adds the contact of `i` with `j`, if any, to `out` (the one-sided form, kept as the
+    /// tests' reference for [`PairCtx::pair_contact`]).
+    #[cfg(test)]
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
     fn contact(&self, i: usize, j: usize, pi: [f32; 3], di: [f32; 3], d2: f32, out: &mut [f32; 11], approaching: &mut f32) {
@@ -177,5 +178,127 @@ impl PairCtx<'_> {
             out[9] += dist - md;
             out[10] += 1.0;
         }
+    }
+
+    /// The contact of the pair `(i, j)`, computed once for both particles, or `None` when the
+    /// pair is not in contact or neither particle is free. Adding its two sides
+    /// ([`PairContact::add_to`]) gives the same bits as [`PairCtx::add_contact`] run from each
+    /// end: the geometry of `(j, i)` is that of `(i, j)` negated (IEEE subtraction and division
+    /// are exact under negation; a zero can only change sign, which no sum sees, see
+    /// [`PairContact`]), the squared distances and the mass sum `w_i + w_j` are the same.
+    #[inline]
+    pub(crate) fn pair_contact(&self, i: usize, j: usize) -> Option<PairContact> {
+        let (wi, wj) = (self.w[i], self.w[j]);
+        if wi <= 0.0 && wj <= 0.0 {
+            return None;
+        }
+        let pi = [self.p[0][i], self.p[1][i], self.p[2][i]];
+        let v = [pi[0] - self.p[0][j], pi[1] - self.p[1][j], pi[2] - self.p[2][j]];
+        let dist2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+        let d2 = self.d * self.d;
+        // min_dist <= d: most listed pairs end here, before the rest data is read.
+        if dist2.is_nan() || dist2 >= d2 {
+            return None;
+        }
+        let same = self.cloth_of[i] == self.cloth_of[j];
+        let r = [
+            self.rest[0][i] - self.rest[0][j],
+            self.rest[1][i] - self.rest[1][j],
+            self.rest[2][i] - self.rest[2][j],
+        ];
+        let rest2 = if same {
+            r[0] * r[0] + r[1] * r[1] + r[2] * r[2]
+        } else {
+            f32::INFINITY
+        };
+        if dist2 > rest2 {
+            return None;
+        }
+        let md = if rest2 < d2 { rest2.sqrt() } else { self.d };
+        if dist2 >= md * md {
+            return None;
+        }
+        let dist = dist2.sqrt();
+        let nrm = if dist2 > 0.0 {
+            v.map(|c| c / dist)
+        } else if same && rest2 > 0.0 {
+            let rl = rest2.sqrt();
+            r.map(|c| c / rl)
+        } else {
+            // `i < j` here (the near list's order); the reverse side gets the negation.
+            let s = if i < j { 1.0 } else { -1.0 };
+            COINCIDENT.map(|c| c * s)
+        };
+        let wsum = wi + wj;
+        let share = [wi / wsum, wj / wsum];
+        let di = [pi[0] - self.x[0][i], pi[1] - self.x[1][i], pi[2] - self.x[2][i]];
+        let dj = [
+            self.p[0][j] - self.x[0][j],
+            self.p[1][j] - self.x[1][j],
+            self.p[2][j] - self.x[2][j],
+        ];
+        let (amount, approaching) = if self.movement {
+            let vn = (di[0] - dj[0]) * nrm[0] + (di[1] - dj[1]) * nrm[1] + (di[2] - dj[2]) * nrm[2];
+            if vn < 0.0 {
+                ([-vn * share[0], -vn * share[1]], true)
+            } else {
+                ([0.0; 2], false)
+            }
+        } else {
+            ([(md - dist) * share[0], (md - dist) * share[1]], false)
+        };
+        Some(PairContact {
+            nrm,
+            amount,
+            free: [wi > 0.0, wj > 0.0],
+            disp: [di, dj],
+            gap: dist - md,
+            approaching,
+        })
+    }
+}
+
+/// One contact as seen from both of its particles (from [`PairCtx::pair_contact`]).
+///
+/// Side 0 is `i`, side 1 is `j`; side 1's normal is side 0's negated. The sums start at `+0`
+/// and never become `-0`, so adding `-0` or `+0` for a zero component gives the same bits: the
+/// only difference from the one-sided computation (a zero coordinate difference is `+0` from
+/// both ends) is invisible.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct PairContact {
+    nrm: [f32; 3],
+    amount: [f32; 2],
+    free: [bool; 2],
+    disp: [[f32; 3]; 2],
+    gap: f32,
+    approaching: bool,
+}
+
+impl PairContact {
+    /// Adds the contact to side `side`'s sums `[c(3), f(3), n(3), gap, count]` and
+    /// approaching count, if that particle is free (the order of operations of
+    /// [`PairCtx::add_contact`]).
+    /// Returns whether anything was added.
+    #[inline]
+    pub(crate) fn add_to(&self, side: usize, out: &mut [f32; 11], approaching: &mut f32) -> bool {
+        if !self.free[side] {
+            return false;
+        }
+        let sign = if side == 0 { 1.0f32 } else { -1.0 };
+        let amount = self.amount[side];
+        // The partner's displacement.
+        let f = self.disp[1 - side];
+        if self.approaching {
+            *approaching += 1.0;
+        }
+        for a in 0..3 {
+            let n = self.nrm[a] * sign;
+            out[a] += n * amount;
+            out[3 + a] += f[a];
+            out[6 + a] += n;
+        }
+        out[9] += self.gap;
+        out[10] += 1.0;
+        true
     }
 }
