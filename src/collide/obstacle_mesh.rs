@@ -124,7 +124,7 @@ pub(crate) fn best_contact(
 ) -> Option<Contact> {
     let mut best: Option<Contact> = None;
     for &f in faces {
-        if (f as usize) < mesh.face_count() && mesh.face_overlaps(f, lo, hi) {
+        if mesh.face_overlaps(f, lo, hi) {
             if let Some(c) = face_contact(mesh, f, x, p, reach) {
                 if best.as_ref().is_none_or(|b| better(&c, b, p)) {
                     best = Some(c);
