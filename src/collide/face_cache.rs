@@ -116,7 +116,7 @@ impl CacheBlock {
     }
 
     /// The lanes (bit `l`) whose gathered box contains the query box `[lo[k][l], hi[k][l]]`
-    /// and whose list is empty: their step has no contact ([`contact_in`](Self::contact_in)
+    /// and whose list is empty: their step has no contact ([`step_contact`](Self::step_contact)
     /// returns `None` without reading anything else). Scalar.
     pub fn held_empty(&self, lo: [[f32; LANES]; 3], hi: [[f32; LANES]; 3]) -> u32 {
         (0..LANES).fold(0, |m, l| {

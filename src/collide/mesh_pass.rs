@@ -11,9 +11,11 @@
 //!    This is the paper's first test ("is the particle inside the box around the object at
 //!    all?") taken per particle. A NaN coordinate never counts as far: such a particle goes
 //!    the full way, which finds no contact either.
-//! 2. **Kept list** ([`CachedFaces`]): the faces gathered for a box around an earlier path
+//! 2. **Kept list** ([`CacheBlock`]): the faces gathered for a box around an earlier path
 //!    still cover `Q`, so the narrowphase tests them; when the box was empty of faces there
-//!    is nothing to test.
+//!    is nothing to test. That last case is found with case 1, for the eight lanes at once
+//!    from the block's gathered boxes and list lengths ([`CacheBlock::held_empty_simd`]),
+//!    so such a particle costs no scalar work at all (finite inputs only, as in case 1).
 //! 3. **Gather**: the broadphase is asked again (and the list kept for the coming steps).
 //!
 //! With the paper's face memory every live particle runs the memory rule around cases 2-3

@@ -152,7 +152,7 @@ pub fn step_contact_remembered<B: FaceBroadphase + ?Sized>(
 }
 
 /// The face-memory rule around any full search `search` of the step (which must return
-/// [`step_contact`]'s answer, e.g. from a [`CachedFaces`](super::face_cache::CachedFaces)).
+/// [`step_contact`]'s answer, e.g. from a [`CacheBlock`](super::face_cache::CacheBlock)).
 pub(crate) fn remembered_with(
     mesh: &TriMesh,
     memory: &mut u32,
