@@ -14,14 +14,33 @@
 //!
 //! The margin bounds the motion of the coming steps: [`margin`] is `MARGIN_REACH` reaches plus
 //! [`MARGIN_STEPS`] times the step's largest coordinate change, so a particle moving steadily
-//! gathers at most every few steps and a resting one keeps its list. A mesh that moves (a new
+//! gathers at most every few steps and a resting one keeps its list. Measured (callgrind,
+//! instructions of the contact pass over `weft reproduce landovsky --only "4800 grid 15x30x15"`,
+//! both rows with warm-up): margins of `0.5` reach `+ 4` steps cost the same as `1 + 4`
+//! (-0.3%: 1.4x the gathers for 7% less narrowphase), `0.25 + 2` cost 6.6% more (2.6x the
+//! gathers for 12% less narrowphase); the lists stay long (about 15 faces) whatever the
+//! margin, set by the size of the faces' boxes, so the margin stays `1 + 4`. A mesh that
+//! moves (a new
 //! [`TriMesh::stamp`]) empties every list ([`FaceCache::sync`]). A particle owns its entry,
 //! so the cache changes nothing about thread-count independence.
+//!
+//! **Layout (hot and cold).** The lists are kept per block of eight particles
+//! ([`CacheBlock`]): the gathered boxes and list lengths of the eight particles sit together
+//! as eight-lane arrays (the hot part, 224 bytes, read for every particle near the mesh), and
+//! the face ids in a separate heap block (the cold part, read only when a list is not empty).
+//! The first layout kept one 104-byte entry per particle (box, length and ids together); a
+//! profile of `weft reproduce landovsky` showed the load of that entry's box as the costliest
+//! instruction of the contact pass (the entries of 32 500 particles, 3.4 MB, streamed through
+//! the caches every substep, most of them for particles whose list was empty). With the split
+//! the common "kept box, no face" case reads 28 bytes per particle, and the contact pass
+//! tests it for eight particles at once ([`CacheBlock::held_empty`],
+//! `mesh_pass::skip_lanes_simd`).
 
 use super::face_broadphase::FaceBroadphase;
 use super::mesh::TriMesh;
 use super::narrow::{query_box, Contact};
 use super::obstacle_mesh::best_contact;
+use crate::lanes::LANES;
 
 /// The gathered box reaches this many contact reaches beyond the query box.
 pub const MARGIN_REACH: f32 = 1.0;
@@ -35,80 +54,121 @@ pub fn margin(x: [f32; 3], p: [f32; 3], reach: f32) -> f32 {
     MARGIN_REACH * reach + MARGIN_STEPS * d
 }
 
-/// Faces a list keeps inline (in the entry itself, so the entries of neighbouring particles
-/// share cache lines); longer lists live in the entry's own heap vector.
+/// Faces a list keeps inline (in the cold block itself); longer lists live in their own heap
+/// vector.
 pub const INLINE_FACES: usize = 12;
 
-/// One particle's gathered box and the faces whose box overlaps it.
-#[derive(Debug, Clone)]
-pub struct CachedFaces {
-    lo: [f32; 3],
-    hi: [f32; 3],
-    len: u32,
+/// One particle's face ids (the cold part of its entry).
+#[derive(Debug, Clone, Default)]
+pub struct FaceList {
     inline: [u32; INLINE_FACES],
     spill: Vec<u32>,
 }
 
-impl Default for CachedFaces {
-    /// An empty entry: its box contains nothing, so the first query gathers.
+/// The kept lists of one block of eight particles (module doc): gathered boxes and list
+/// lengths lane by lane, the face ids in a separate heap block.
+#[derive(Debug, Clone)]
+pub struct CacheBlock {
+    lo: [[f32; LANES]; 3],
+    hi: [[f32; LANES]; 3],
+    len: [u32; LANES],
+    lists: Box<[FaceList; LANES]>,
+}
+
+impl Default for CacheBlock {
+    /// Empty entries: their boxes contain nothing, so the first query of each lane gathers.
     fn default() -> Self {
-        CachedFaces {
-            lo: [f32::INFINITY; 3],
-            hi: [f32::NEG_INFINITY; 3],
-            len: 0,
-            inline: [0; INLINE_FACES],
-            spill: Vec::new(),
+        CacheBlock {
+            lo: [[f32::INFINITY; LANES]; 3],
+            hi: [[f32::NEG_INFINITY; LANES]; 3],
+            len: [0; LANES],
+            lists: Box::default(),
         }
     }
 }
 
-impl CachedFaces {
-    /// Forgets the list (keeps its storage).
-    pub fn clear(&mut self) {
-        self.lo = [f32::INFINITY; 3];
-        self.hi = [f32::NEG_INFINITY; 3];
-        self.len = 0;
-        self.spill.clear();
+impl CacheBlock {
+    /// Forgets lane `l`'s list (keeps its storage).
+    pub fn clear(&mut self, l: usize) {
+        for k in 0..3 {
+            self.lo[k][l] = f32::INFINITY;
+            self.hi[k][l] = f32::NEG_INFINITY;
+        }
+        self.len[l] = 0;
+        self.lists[l].spill.clear();
     }
 
-    /// Does the gathered box contain `[lo, hi]`?
+    /// Forgets every lane's list.
+    pub fn clear_all(&mut self) {
+        (0..LANES).for_each(|l| self.clear(l));
+    }
+
+    /// Does lane `l`'s gathered box contain `[lo, hi]`?
     #[inline]
-    fn holds(&self, lo: [f32; 3], hi: [f32; 3]) -> bool {
+    fn holds(&self, l: usize, lo: [f32; 3], hi: [f32; 3]) -> bool {
         // `&` rather than `&&`: one branch for the six comparisons
-        (self.lo[0] <= lo[0])
-            & (self.lo[1] <= lo[1])
-            & (self.lo[2] <= lo[2])
-            & (hi[0] <= self.hi[0])
-            & (hi[1] <= self.hi[1])
-            & (hi[2] <= self.hi[2])
+        (self.lo[0][l] <= lo[0])
+            & (self.lo[1][l] <= lo[1])
+            & (self.lo[2][l] <= lo[2])
+            & (hi[0] <= self.hi[0][l])
+            & (hi[1] <= self.hi[1][l])
+            & (hi[2] <= self.hi[2][l])
     }
 
-    /// The faces gathered (at least every face overlapping the gathered box).
-    pub fn faces(&self) -> &[u32] {
-        match self.len as usize {
-            n if n <= INLINE_FACES => &self.inline[..n],
-            _ => &self.spill,
+    /// The lanes (bit `l`) whose gathered box contains the query box `[lo[k][l], hi[k][l]]`
+    /// and whose list is empty: their step has no contact ([`step_contact`](Self::step_contact)
+    /// returns `None` without reading anything else). Scalar.
+    pub fn held_empty(&self, lo: [[f32; LANES]; 3], hi: [[f32; LANES]; 3]) -> u32 {
+        (0..LANES).fold(0, |m, l| {
+            let q = |a: [[f32; LANES]; 3]| [a[0][l], a[1][l], a[2][l]];
+            m | (((self.len[l] == 0) & self.holds(l, q(lo), q(hi))) as u32) << l
+        })
+    }
+
+    /// [`held_empty`](Self::held_empty) with the query boxes in SIMD lanes: the same six
+    /// exact comparisons per lane, so the same bits.
+    pub fn held_empty_simd(&self, lo: crate::lanes::Vec3x8, hi: crate::lanes::Vec3x8) -> u32 {
+        use crate::lanes::F32s;
+        let g = |a: [f32; LANES]| F32s::from(a);
+        let held = g(self.lo[0]).simd_le(lo.x)
+            & g(self.lo[1]).simd_le(lo.y)
+            & g(self.lo[2]).simd_le(lo.z)
+            & hi.x.simd_le(g(self.hi[0]))
+            & hi.y.simd_le(g(self.hi[1]))
+            & hi.z.simd_le(g(self.hi[2]));
+        let empty = (0..LANES).fold(0u32, |m, l| m | ((self.len[l] == 0) as u32) << l);
+        held.to_bitmask() & empty
+    }
+
+    /// The faces gathered for lane `l` (at least every face overlapping its gathered box).
+    pub fn faces(&self, l: usize) -> &[u32] {
+        let list = &self.lists[l];
+        match self.len[l] as usize {
+            n if n <= INLINE_FACES => &list.inline[..n],
+            _ => &list.spill,
         }
     }
 
-    /// Keeps `faces` as the list.
-    fn store(&mut self, faces: &[u32]) {
-        self.len = faces.len() as u32;
-        self.spill.clear();
+    /// Keeps `faces` as lane `l`'s list.
+    fn store(&mut self, l: usize, faces: &[u32]) {
+        self.len[l] = faces.len() as u32;
+        let list = &mut self.lists[l];
+        list.spill.clear();
         if faces.len() <= INLINE_FACES {
-            self.inline[..faces.len()].copy_from_slice(faces);
+            list.inline[..faces.len()].copy_from_slice(faces);
         } else {
-            self.spill.extend_from_slice(faces);
+            list.spill.extend_from_slice(faces);
         }
     }
 
-    /// The contact of the step `x -> p` within `reach`: exactly
+    /// The contact of lane `l`'s step `x -> p` within `reach`: exactly
     /// [`step_contact`](super::obstacle_mesh::step_contact), using and refreshing the list
     /// (module doc). A new gathering grows the query box by [`margin`] when `keep`, by
     /// nothing otherwise (a fresh search every step, the reference).
     #[allow(clippy::too_many_arguments)]
     pub fn step_contact<B: FaceBroadphase + ?Sized>(
         &mut self,
+        l: usize,
         mesh: &TriMesh,
         bp: &B,
         x: [f32; 3],
@@ -117,7 +177,7 @@ impl CachedFaces {
         keep: bool,
         scratch: &mut Vec<u32>,
     ) -> Option<Contact> {
-        self.contact_in(mesh, bp, x, p, reach, query_box(x, p, reach), keep, scratch)
+        self.contact_in(l, mesh, bp, x, p, reach, query_box(x, p, reach), keep, scratch)
     }
 
     /// [`step_contact`](Self::step_contact) given the step's query box `q`
@@ -126,6 +186,7 @@ impl CachedFaces {
     #[inline]
     pub(crate) fn contact_in<B: FaceBroadphase + ?Sized>(
         &mut self,
+        l: usize,
         mesh: &TriMesh,
         bp: &B,
         x: [f32; 3],
@@ -135,13 +196,13 @@ impl CachedFaces {
         keep: bool,
         scratch: &mut Vec<u32>,
     ) -> Option<Contact> {
-        if keep && self.holds(lo, hi) {
-            return match self.len {
+        if keep && self.holds(l, lo, hi) {
+            return match self.len[l] {
                 0 => None,
-                _ => best_contact(mesh, self.faces(), x, p, reach, lo, hi),
+                _ => best_contact(mesh, self.faces(l), x, p, reach, lo, hi),
             };
         }
-        self.gather(mesh, bp, x, p, reach, (lo, hi), keep, scratch)
+        self.gather(l, mesh, bp, x, p, reach, (lo, hi), keep, scratch)
     }
 
     /// [`contact_in`](Self::contact_in) when the list does not cover the query box (or is
@@ -150,6 +211,7 @@ impl CachedFaces {
     #[allow(clippy::too_many_arguments)]
     fn gather<B: FaceBroadphase + ?Sized>(
         &mut self,
+        l: usize,
         mesh: &TriMesh,
         bp: &B,
         x: [f32; 3],
@@ -165,189 +227,44 @@ impl CachedFaces {
         // A NaN or a margin lost to rounding leaves a box that does not hold the query: then
         // this step uses the fresh candidates and keeps nothing (so does a fresh search).
         if !(keep && margin >= 0.0 && (0..3).all(|k| glo[k] <= lo[k] && hi[k] <= ghi[k])) {
-            self.clear();
+            self.clear(l);
             return best_contact(mesh, scratch, x, p, reach, lo, hi);
         }
-        let n = mesh.face_count();
-        scratch.retain(|&f| (f as usize) < n && mesh.face_overlaps(f, glo, ghi));
-        self.store(scratch);
-        (self.lo, self.hi) = (glo, ghi);
-        best_contact(mesh, self.faces(), x, p, reach, lo, hi)
+        scratch.retain(|&f| mesh.face_overlaps(f, glo, ghi));
+        self.store(l, scratch);
+        for k in 0..3 {
+            (self.lo[k][l], self.hi[k][l]) = (glo[k], ghi[k]);
+        }
+        best_contact(mesh, self.faces(l), x, p, reach, lo, hi)
     }
 }
 
-/// The candidate lists of every particle against one mesh obstacle.
+/// The candidate lists of every particle against one mesh obstacle, one [`CacheBlock`] per
+/// block of eight particles.
 #[derive(Debug, Clone, Default)]
 pub struct FaceCache {
     stamp: u64,
-    entries: Vec<CachedFaces>,
+    blocks: Vec<CacheBlock>,
 }
 
 impl FaceCache {
-    /// Sizes the cache to `n` particles and empties every list if the mesh state (`stamp`)
-    /// or the particle count changed.
+    /// Sizes the cache to `n` particles (rounded up to whole blocks) and empties every list
+    /// if the mesh state (`stamp`) or the particle count changed.
     pub fn sync(&mut self, n: usize, stamp: u64) {
-        if self.entries.len() != n {
-            self.entries = vec![CachedFaces::default(); n];
+        let blocks = n.div_ceil(LANES);
+        if self.blocks.len() != blocks {
+            self.blocks = vec![CacheBlock::default(); blocks];
         } else if self.stamp != stamp {
-            self.entries.iter_mut().for_each(CachedFaces::clear);
+            self.blocks.iter_mut().for_each(CacheBlock::clear_all);
         }
         self.stamp = stamp;
     }
 
-    /// The per-particle entries.
-    pub fn entries_mut(&mut self) -> &mut [CachedFaces] {
-        &mut self.entries
+    /// The blocks (block `b` holds particles `8 b .. 8 b + 8`).
+    pub fn blocks_mut(&mut self) -> &mut [CacheBlock] {
+        &mut self.blocks
     }
 }
-
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::collide::dressform::dress_form;
-    use crate::collide::face_broadphase::BruteForce;
-    use crate::collide::obstacle_mesh::step_contact;
-
-    #[test]
-    fn cached_contacts_equal_the_uncached_search_along_random_walks() {
-        let m = dress_form(1200).unwrap();
-        let bp = BruteForce::new(&m);
-        let (lo, hi) = m.bounds();
-        let mut rng = crate::test_rng::unit(7);
-        let mut scratch = Vec::new();
-        let (mut hits, mut kept) = (0, 0);
-        for _ in 0..60 {
-            let mut c = CachedFaces::default();
-            let mut x = [0, 1, 2].map(|k| lo[k] + (hi[k] - lo[k]) * rng());
-            for _ in 0..80 {
-                let d = [0; 3].map(|_| (rng() - 0.5) * 0.006);
-                let p = [0, 1, 2].map(|k| x[k] + d[k]);
-                let before = c.faces().len();
-                let got = c.step_contact(&m, &bp, x, p, 0.004, true, &mut scratch);
-                let want = step_contact(&m, &bp, x, p, 0.004, &mut Vec::new());
-                assert_eq!(got, want, "x {x:?} p {p:?}");
-                hits += got.is_some() as usize;
-                kept += (before == c.faces().len()) as usize;
-                x = p;
-            }
-        }
-        assert!(hits > 100, "the walks must meet the surface: {hits}");
-        assert!(kept > 1000, "the lists must be reused: {kept}");
-    }
-
-    #[test]
-    fn sync_empties_on_a_new_stamp_and_nan_gives_the_uncached_answer() {
-        let m = dress_form(600).unwrap();
-        let bp = BruteForce::new(&m);
-        let mut cache = FaceCache::default();
-        cache.sync(2, m.stamp());
-        let e = &mut cache.entries_mut()[0];
-        let top = [0.0, crate::collide::dressform::HEIGHT + 0.001, 0.0];
-        e.step_contact(&m, &bp, top, top, 0.004, true, &mut Vec::new());
-        assert!(!e.faces().is_empty());
-        cache.sync(2, m.stamp());
-        assert!(!cache.entries_mut()[0].faces().is_empty());
-        cache.sync(2, m.stamp() + 1);
-        assert!(cache.entries_mut()[0].faces().is_empty());
-        let e = &mut cache.entries_mut()[1];
-        for (x, p) in [([f32::NAN; 3], top), (top, [f32::NAN; 3]), (top, top)] {
-            let got = e.step_contact(&m, &bp, x, p, 0.004, true, &mut Vec::new());
-            assert_eq!(got, step_contact(&m, &bp, x, p, 0.004, &mut Vec::new()));
-        }
-    }
-
-    /// A cloth draped on a form gives bitwise the same run with the kept lists (and the
-    /// particles skipped as far from the mesh, `mesh_pass.rs`) as with a fresh broadphase search for every particle every
-    /// substep (on one thread against two), for every broadphase, with and without face
-    /// memory.
-    #[test]
-    fn a_draping_world_runs_bitwise_alike_with_and_without_the_cache() {
-        use crate::collide::obstacles::{BroadphaseKind, Obstacle};
-        use crate::SolverParams;
-        let run = |kind, memory, fresh| {
-            let params = SolverParams {
-                dt: 1.0 / 400.0,
-                substeps: 2,
-                iterations: 1,
-                // the reference runs on one thread, the fast path on two
-                threads: if fresh { 1 } else { 2 },
-                ..SolverParams::default()
-            };
-            // wider than the form: blocks at the row ends lie outside the mesh box
-            let mut w = sheet_over_form(params, [24, 48], 0.012, [-0.282, -0.138]);
-            w.add_obstacle(Obstacle::mesh(dress_form(600).unwrap(), kind, memory).unwrap())
-                .unwrap();
-            w.obstacles.set_fresh_search(fresh);
-            let mut touched = 0;
-            for _ in 0..120 {
-                w.step(1.0 / 400.0).unwrap();
-                touched = touched.max(w.obstacle_contacts());
-            }
-            let mut pos = Vec::new();
-            w.positions_interleaved(&mut pos);
-            (pos, touched)
-        };
-        for kind in [BroadphaseKind::Grid(Some([5, 9, 5])), BroadphaseKind::Bvh, BroadphaseKind::Hash] {
-            for memory in [false, true] {
-                let (kept, touched) = run(kind, memory, false);
-                assert!(touched > 50, "the cloth must land on the form: {touched}");
-                let (fresh, _) = run(kind, memory, true);
-                assert!(
-                    kept.iter().zip(&fresh).all(|(a, b)| a.map(f32::to_bits) == b.map(f32::to_bits)),
-                    "{kind:?} memory {memory}"
-                );
-            }
-        }
-    }
-
-    /// A horizontal cotton sheet of `rows x cols` released 5 mm above the dress form's top,
-    /// its corner at `(x, z)`, friction 0.3; the caller adds the form.
-    fn sheet_over_form(params: crate::SolverParams, [rows, cols]: [u32; 2], spacing: f32, [x, z]: [f32; 2]) -> crate::World {
-        use crate::{ClothDesc, Effects, Fabric, World};
-        let mut w = World::new(params, Effects::gravity()).unwrap();
-        w.add_cloth(&ClothDesc {
-            rows,
-            cols,
-            spacing,
-            origin: [x, crate::collide::dressform::HEIGHT + 0.005, z],
-            u: [1.0, 0.0, 0.0],
-            v: [0.0, 0.0, 1.0],
-            fabric: Fabric::preset("cotton").unwrap(),
-            ..ClothDesc::default()
-        })
-        .unwrap();
-        w.set_friction(0.3).unwrap();
-        w
-    }
-
-    /// `weft reproduce landovsky` counts one step of `h` with one substep as one iteration
-    /// and says the physics is bit for bit that of steps of `4 h` with four substeps: the
-    /// obstacle stages (and their kept lists) see the same substeps either way.
-    #[test]
-    fn steps_of_one_substep_equal_a_quarter_of_steps_of_four() {
-        use crate::collide::obstacles::{BroadphaseKind, Obstacle};
-        use crate::SolverParams;
-        let run = |dt: f32, substeps: u32, steps: usize| {
-            let params = SolverParams {
-                dt,
-                substeps,
-                iterations: 1,
-                ..SolverParams::default()
-            };
-            let mut w = sheet_over_form(params, [40, 30], 0.009, [-0.13, -0.18]);
-            let form = Obstacle::mesh(dress_form(4800).unwrap(), BroadphaseKind::Grid(Some([15, 30, 15])), false);
-            w.add_obstacle(form.unwrap()).unwrap();
-            for _ in 0..steps {
-                w.step(dt).unwrap();
-            }
-            let mut pos = Vec::new();
-            w.positions_interleaved(&mut pos);
-            (pos, w.obstacle_contacts())
-        };
-        let (four, touched) = run(1.0 / 200.0, 4, 40);
-        let (one, touched_one) = run(1.0 / 800.0, 1, 160);
-        assert!(touched > 20, "the sheet must land on the form: {touched}");
-        assert_eq!(touched, touched_one);
-        assert!(four.iter().zip(&one).all(|(a, b)| a.map(f32::to_bits) == b.map(f32::to_bits)));
-    }
-}
+#[path = "face_cache_tests.rs"]
+mod tests;

@@ -88,8 +88,9 @@ pub struct TriMesh {
     faces: Vec<[u32; 3]>,
     normals: Vec<[f32; 3]>,
     planes: Vec<FacePlane>,
-    face_lo: Vec<[f32; 3]>,
-    face_hi: Vec<[f32; 3]>,
+    /// Each face's box `[lo, hi]`, the two corners side by side (one cache line per face for
+    /// the narrowphase's box filter, which reads faces in no particular order).
+    face_box: Vec<[[f32; 3]; 2]>,
     lo: [f32; 3],
     hi: [f32; 3],
     stamp: u64,
@@ -198,8 +199,7 @@ impl TriMesh {
             faces: kept,
             normals: Vec::new(),
             planes: Vec::new(),
-            face_lo: Vec::new(),
-            face_hi: Vec::new(),
+            face_box: Vec::new(),
             lo: [0.0; 3],
             hi: [0.0; 3],
             stamp: 0,
@@ -240,8 +240,7 @@ impl TriMesh {
         let n = self.faces.len();
         self.normals = Vec::with_capacity(n);
         self.planes = Vec::with_capacity(n);
-        self.face_lo = Vec::with_capacity(n);
-        self.face_hi = Vec::with_capacity(n);
+        self.face_box = Vec::with_capacity(n);
         self.lo = [f32::INFINITY; 3];
         self.hi = [f32::NEG_INFINITY; 3];
         for f in &self.faces {
@@ -257,8 +256,7 @@ impl TriMesh {
                 self.lo[k] = self.lo[k].min(lo[k]);
                 self.hi[k] = self.hi[k].max(hi[k]);
             }
-            self.face_lo.push(lo);
-            self.face_hi.push(hi);
+            self.face_box.push([lo, hi]);
         }
         self.stamp = fresh_stamp();
     }
@@ -290,11 +288,11 @@ impl TriMesh {
     }
     /// Lower corner of face `f`'s box.
     pub fn face_lo(&self, f: u32) -> [f32; 3] {
-        self.face_lo[f as usize]
+        self.face_box[f as usize][0]
     }
     /// Upper corner of face `f`'s box.
     pub fn face_hi(&self, f: u32) -> [f32; 3] {
-        self.face_hi[f as usize]
+        self.face_box[f as usize][1]
     }
     /// The whole mesh's box `(lo, hi)`.
     pub fn bounds(&self) -> ([f32; 3], [f32; 3]) {
@@ -304,12 +302,15 @@ impl TriMesh {
     pub fn stamp(&self) -> u64 {
         self.stamp
     }
-    /// Does face `f`'s box overlap the box `[lo, hi]` (closed intervals)?
+    /// Does face `f`'s box overlap the box `[lo, hi]` (closed intervals)? `false` for a face
+    /// index out of range.
     #[inline]
     pub fn face_overlaps(&self, f: u32, lo: [f32; 3], hi: [f32; 3]) -> bool {
-        let (a, b) = (&self.face_lo[f as usize], &self.face_hi[f as usize]);
-        // `&` rather than `&&`: one branch for the six comparisons
-        (a[0] <= hi[0]) & (a[1] <= hi[1]) & (a[2] <= hi[2]) & (lo[0] <= b[0]) & (lo[1] <= b[1]) & (lo[2] <= b[2])
+        match self.face_box.get(f as usize) {
+            // `&` rather than `&&`: one branch for the six comparisons
+            Some([a, b]) => (a[0] <= hi[0]) & (a[1] <= hi[1]) & (a[2] <= hi[2]) & (lo[0] <= b[0]) & (lo[1] <= b[1]) & (lo[2] <= b[2]),
+            None => false,
+        }
     }
     /// For a closed, consistently wound mesh (a solid): `+1.0` if the face normals point out
     /// (positive [`signed_volume`](Self::signed_volume)), `-1.0` if they point in. `None` for

@@ -11,9 +11,11 @@
 //!    This is the paper's first test ("is the particle inside the box around the object at
 //!    all?") taken per particle. A NaN coordinate never counts as far: such a particle goes
 //!    the full way, which finds no contact either.
-//! 2. **Kept list** ([`CachedFaces`]): the faces gathered for a box around an earlier path
+//! 2. **Kept list** ([`CacheBlock`]): the faces gathered for a box around an earlier path
 //!    still cover `Q`, so the narrowphase tests them; when the box was empty of faces there
-//!    is nothing to test.
+//!    is nothing to test. That last case is found with case 1, for the eight lanes at once
+//!    from the block's gathered boxes and list lengths ([`CacheBlock::held_empty_simd`]),
+//!    so such a particle costs no scalar work at all (finite inputs only, as in case 1).
 //! 3. **Gather**: the broadphase is asked again (and the list kept for the coming steps).
 //!
 //! With the paper's face memory every live particle runs the memory rule around cases 2-3
@@ -27,7 +29,7 @@
 //! speeds are filled only when some lane holds a contact (a block without contact has all
 //! approach speeds `0`, as [`fill_approach`](k::fill_approach) would write).
 
-use super::face_cache::CachedFaces;
+use super::face_cache::CacheBlock;
 use super::mesh::TriMesh;
 use super::narrow::query_box;
 use super::obstacle_kernels::{self as k, GenInput};
@@ -61,11 +63,14 @@ fn lanes(a: &[f32], b: usize) -> [f32; LANES] {
     std::array::from_fn(|l| s[l])
 }
 
-/// The lanes of block `b` the pass skips, bit `l` for particle `8 b + l`: not live, or (with
-/// `far`) every input finite and the query box missing the box `[lo, hi]` on some axis. The
-/// scalar twin of [`skip_lanes_simd`], built on [`query_box`] itself.
-pub(crate) fn skip_lanes(g: &GenInput, b: usize, lo: [f32; 3], hi: [f32; 3], far: bool) -> u32 {
-    let mut skip = 0;
+/// The lanes of block `b` the pass skips, bit `l` for particle `8 b + l`: not live, or every
+/// input finite and (with `far`) the query box missing the box `[lo, hi]` on some axis or
+/// (with `kept`) the lane's kept list empty with a gathered box holding the query box
+/// ([`CacheBlock::held_empty`]). The scalar twin of [`skip_lanes_simd`], built on
+/// [`query_box`] itself.
+pub(crate) fn skip_lanes(g: &GenInput, b: usize, lo: [f32; 3], hi: [f32; 3], far: bool, kept: Option<&CacheBlock>) -> u32 {
+    let (mut skip, mut finite_bits) = (0, 0);
+    let (mut qlo, mut qhi) = ([[0.0; LANES]; 3], [[0.0; LANES]; 3]);
     for l in 0..LANES {
         let i = b * LANES + l;
         let live = i < g.n && g.w[i] > 0.0;
@@ -73,19 +78,23 @@ pub(crate) fn skip_lanes(g: &GenInput, b: usize, lo: [f32; 3], hi: [f32; 3], far
         let p = [g.p[0][i], g.p[1][i], g.p[2][i]];
         let finite = x.iter().chain(&p).all(|v| v.is_finite()) && g.reach[i].is_finite();
         let (ql, qh) = query_box(x, p, g.reach[i]);
+        for k in 0..3 {
+            (qlo[k][l], qhi[k][l]) = (ql[k], qh[k]);
+        }
         let miss = (0..3).any(|k| qh[k] < lo[k] || ql[k] > hi[k]);
         if !live || (far && finite && miss) {
             skip |= 1 << l;
         }
+        finite_bits |= (finite as u32) << l;
     }
-    skip
+    skip | kept.map_or(0, |c| c.held_empty(qlo, qhi) & finite_bits)
 }
 
 /// [`skip_lanes`] eight lanes at once. For finite inputs the boxes are those of
 /// [`query_box`] (the same operations in the same order; maxima and minima of finite values
-/// are exact), so the masks agree bit for bit; lanes with a non-finite input are never
-/// called far.
-pub(crate) fn skip_lanes_simd(g: &GenInput, b: usize, lo: [f32; 3], hi: [f32; 3], far: bool) -> u32 {
+/// are exact, and the comparisons do not see the sign of a zero), so the masks agree bit for
+/// bit; lanes with a non-finite input are never skipped as far or as held empty.
+pub(crate) fn skip_lanes_simd(g: &GenInput, b: usize, lo: [f32; 3], hi: [f32; 3], far: bool, kept: Option<&CacheBlock>) -> u32 {
     let i = b * LANES;
     let x = Vec3x8::load(g.x[0], g.x[1], g.x[2], i) - Vec3x8::splat(g.shift);
     let p = Vec3x8::load(g.p[0], g.p[1], g.p[2], i);
@@ -95,7 +104,7 @@ pub(crate) fn skip_lanes_simd(g: &GenInput, b: usize, lo: [f32; 3], hi: [f32; 3]
     let real = index.simd_lt(F32s::splat(g.n.saturating_sub(i).min(LANES) as f32));
     let live = real & load(g.w, i).simd_gt(zero);
     let mut skip = !live.to_bitmask() & 0xff;
-    if far {
+    if far || kept.is_some() {
         let big = zero
             .max(x.x.abs())
             .max(x.y.abs())
@@ -106,10 +115,24 @@ pub(crate) fn skip_lanes_simd(g: &GenInput, b: usize, lo: [f32; 3], hi: [f32; 3]
         let grow = reach + F32s::splat(super::narrow::QUERY_PAD) * (F32s::splat(1.0) + big);
         let finite =
             x.x.is_finite() & x.y.is_finite() & x.z.is_finite() & p.x.is_finite() & p.y.is_finite() & p.z.is_finite() & reach.is_finite();
-        let axis =
-            |a: F32s, c: F32s, k: usize| (a.max(c) + grow).simd_lt(F32s::splat(lo[k])) | (a.min(c) - grow).simd_gt(F32s::splat(hi[k]));
-        let miss = axis(x.x, p.x, 0) | axis(x.y, p.y, 1) | axis(x.z, p.z, 2);
-        skip |= (finite & miss).to_bitmask();
+        let qlo = Vec3x8 {
+            x: x.x.min(p.x) - grow,
+            y: x.y.min(p.y) - grow,
+            z: x.z.min(p.z) - grow,
+        };
+        let qhi = Vec3x8 {
+            x: x.x.max(p.x) + grow,
+            y: x.y.max(p.y) + grow,
+            z: x.z.max(p.z) + grow,
+        };
+        if far {
+            let axis = |l: F32s, h: F32s, k: usize| h.simd_lt(F32s::splat(lo[k])) | l.simd_gt(F32s::splat(hi[k]));
+            let miss = axis(qlo.x, qhi.x, 0) | axis(qlo.y, qhi.y, 1) | axis(qlo.z, qhi.z, 2);
+            skip |= (finite & miss).to_bitmask();
+        }
+        if let Some(c) = kept {
+            skip |= c.held_empty_simd(qlo, qhi) & finite.to_bitmask();
+        }
     }
     skip
 }
@@ -123,16 +146,17 @@ impl MeshPass<'_> {
         out: &mut [f32],
         was: bool,
         mem: &mut [u32],
-        cache: &mut [CachedFaces],
+        cache: &mut CacheBlock,
         scratch: &mut Vec<u32>,
     ) -> bool {
         let g = &self.input;
         let (mlo, mhi) = self.mesh.bounds();
         let skip_far = !self.remember && !self.fresh;
+        let kept = skip_far.then_some(&*cache);
         let skip = if self.simd {
-            skip_lanes_simd(g, b, mlo, mhi, skip_far)
+            skip_lanes_simd(g, b, mlo, mhi, skip_far, kept)
         } else {
-            skip_lanes(g, b, mlo, mhi, skip_far)
+            skip_lanes(g, b, mlo, mhi, skip_far, kept)
         };
         // `was`: the block held a contact before this pass (else it is all +0.0 already).
         if was {
@@ -153,8 +177,7 @@ impl MeshPass<'_> {
             let xl = [x[0][l] - sh[0], x[1][l] - sh[1], x[2][l] - sh[2]];
             let pl = [p[0][l], p[1][l], p[2][l]];
             let (lo, hi) = query_box(xl, pl, reach[l]);
-            let entry = &mut cache[l];
-            let mut search = || entry.contact_in(self.mesh, self.bp, xl, pl, reach[l], (lo, hi), !self.fresh, scratch);
+            let mut search = || cache.contact_in(l, self.mesh, self.bp, xl, pl, reach[l], (lo, hi), !self.fresh, scratch);
             let c = if self.remember {
                 remembered_with(self.mesh, &mut mem[l], xl, pl, reach[l], 2.0 * reach[l], search)
             } else {
@@ -177,19 +200,27 @@ impl MeshPass<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::collide::face_broadphase::BruteForce;
+    use crate::collide::obstacle_mesh::step_contact;
 
     /// The SIMD lane mask equals its scalar twin on random blocks with non-finite values,
-    /// pinned particles and padding, and a lane called far has no face of a mesh inside
-    /// `[lo, hi]` within reach.
+    /// pinned particles, padding and kept lists (gathered for the lane's own path on some
+    /// lanes, never on others); a lane called far has no face of a mesh inside `[lo, hi]`
+    /// within reach, and a lane skipped as held empty has no contact in a fresh search.
     #[test]
-    fn skip_masks_agree_and_far_lanes_touch_nothing() {
+    fn skip_masks_agree_and_skipped_lanes_touch_nothing() {
         let mesh = crate::collide::dressform::dress_form(600).unwrap();
+        let bp = BruteForce::new(&mesh);
         let (lo, hi) = mesh.bounds();
         let mut r = crate::test_rng::unit(5);
         let len = 64 * LANES;
         let mut v = |scale: f32| -> Vec<f32> { (0..len).map(|_| (r() - 0.3) * scale).collect() };
-        let (mut x, y, z, mut px, py, pz) = (v(3.0), v(3.0), v(3.0), v(3.0), v(3.0), v(3.0));
-        let (mut w, reach) = (v(1.0), v(0.02));
+        let (mut x, y, z) = (v(1.0), v(2.0), v(1.0));
+        // short paths (so that kept boxes stay small) and positive reaches
+        let (dx, dy, dz) = (v(0.02), v(0.02), v(0.02));
+        let step = |a: &[f32], d: &[f32]| -> Vec<f32> { a.iter().zip(d).map(|(a, d)| a + d).collect() };
+        let (mut px, py, pz) = (step(&x, &dx), step(&y, &dy), step(&z, &dz));
+        let (mut w, reach) = (v(1.0), v(0.01).iter().map(|r| r + 0.005).collect::<Vec<f32>>());
         for (i, special) in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY, -0.0, 0.0, f32::MAX]
             .into_iter()
             .enumerate()
@@ -199,7 +230,7 @@ mod tests {
             w[13 * i + 1] = special;
         }
         let th = vec![0.001; len];
-        let (mut far, mut kept) = (0, 0);
+        let (mut far, mut empty, mut kept) = (0, 0, 0);
         for n in [len, len - 3] {
             let g = GenInput {
                 x: [&x, &y, &z],
@@ -211,23 +242,36 @@ mod tests {
                 shift: [0.01, -0.02, 0.0],
             };
             for b in 0..len / LANES {
+                let mut cache = CacheBlock::default();
+                for l in (0..LANES).filter(|l| (b + l) % 3 != 0) {
+                    let (xl, pl) = g.path(b * LANES + l);
+                    cache.step_contact(l, &mesh, &bp, xl, pl, reach[b * LANES + l], true, &mut Vec::new());
+                }
                 for check in [false, true] {
-                    let s = skip_lanes(&g, b, lo, hi, check);
-                    assert_eq!(s, skip_lanes_simd(&g, b, lo, hi, check), "block {b} far {check}");
-                    for l in 0..LANES {
-                        let i = b * LANES + l;
-                        if s & (1 << l) != 0 && i < n && w[i] > 0.0 {
-                            far += 1;
+                    for c in [None, Some(&cache)] {
+                        let s = skip_lanes(&g, b, lo, hi, check, c);
+                        assert_eq!(s, skip_lanes_simd(&g, b, lo, hi, check, c), "block {b} far {check}");
+                        let far_only = skip_lanes(&g, b, lo, hi, check, None);
+                        for l in 0..LANES {
+                            let i = b * LANES + l;
+                            if s & (1 << l) == 0 || !g.live(i) {
+                                kept += 1;
+                                continue;
+                            }
                             let (xl, pl) = g.path(i);
                             let (ql, qh) = query_box(xl, pl, reach[i]);
-                            assert!((0..mesh.face_count() as u32).all(|f| !mesh.face_overlaps(f, ql, qh)));
-                        } else {
-                            kept += 1;
+                            if far_only & (1 << l) != 0 {
+                                far += 1;
+                                assert!((0..mesh.face_count() as u32).all(|f| !mesh.face_overlaps(f, ql, qh)));
+                            } else {
+                                empty += 1;
+                                assert_eq!(step_contact(&mesh, &bp, xl, pl, reach[i], &mut Vec::new()), None);
+                            }
                         }
                     }
                 }
             }
         }
-        assert!(far > 100 && kept > 100, "{far} {kept}");
+        assert!(far > 100 && empty > 100 && kept > 100, "{far} {empty} {kept}");
     }
 }

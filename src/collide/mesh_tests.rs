@@ -69,6 +69,10 @@ fn translate_moves_boxes_and_changes_stamp() {
     assert_ne!(m.stamp(), s);
     assert_eq!(m.bounds(), ([1.0, 2.0, 3.0], [2.0, 3.0, 4.0]));
     assert_eq!(m.face_lo(3), [1.0, 2.0, 3.0]);
+    // the box filter: every face overlaps all of space, an index out of range overlaps nothing
+    let all = ([f32::NEG_INFINITY; 3], [f32::INFINITY; 3]);
+    assert!((0..4).all(|f| m.face_overlaps(f, all.0, all.1)));
+    assert!(!m.face_overlaps(4, all.0, all.1) && !m.face_overlaps(u32::MAX, all.0, all.1));
     assert!(m.translate([f32::NAN, 0.0, 0.0]).is_err());
     assert!(m.translate([f32::MAX, 0.0, 0.0]).is_err());
 }

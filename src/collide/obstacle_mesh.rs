@@ -124,7 +124,7 @@ pub(crate) fn best_contact(
 ) -> Option<Contact> {
     let mut best: Option<Contact> = None;
     for &f in faces {
-        if (f as usize) < mesh.face_count() && mesh.face_overlaps(f, lo, hi) {
+        if mesh.face_overlaps(f, lo, hi) {
             if let Some(c) = face_contact(mesh, f, x, p, reach) {
                 if best.as_ref().is_none_or(|b| better(&c, b, p)) {
                     best = Some(c);
@@ -152,7 +152,7 @@ pub fn step_contact_remembered<B: FaceBroadphase + ?Sized>(
 }
 
 /// The face-memory rule around any full search `search` of the step (which must return
-/// [`step_contact`]'s answer, e.g. from a [`CachedFaces`](super::face_cache::CachedFaces)).
+/// [`step_contact`]'s answer, e.g. from a [`CacheBlock`](super::face_cache::CacheBlock)).
 pub(crate) fn remembered_with(
     mesh: &TriMesh,
     memory: &mut u32,

@@ -35,7 +35,7 @@
 
 use rayon::prelude::*;
 
-use super::face_cache::CachedFaces;
+use super::face_cache::CacheBlock;
 use super::face_memory::NO_FACE;
 use super::mesh_pass::MeshPass;
 use super::obstacle::displacement;
@@ -180,9 +180,14 @@ impl ObstacleSet {
                     for_blocks(
                         slots,
                         &mut m.memory,
-                        m.cache.entries_mut(),
+                        m.cache.blocks_mut(),
                         parallel,
-                        |b, out, was, mem, cache, scratch| pass.block(b, out, was, mem, cache, scratch),
+                        |b, out, was, mem, cache, scratch| match cache.first_mut() {
+                            Some(cache) => pass.block(b, out, was, mem, cache, scratch),
+                            // the cache is synced to every block above; were one missing, a
+                            // list of its own (gathers every substep) gives the same contacts
+                            None => pass.block(b, out, was, mem, &mut CacheBlock::default(), scratch),
+                        },
                     );
                 }
             }
@@ -251,19 +256,20 @@ impl ObstacleSet {
 /// of the block, scratch)` over every block of eight particles, in parallel tasks of
 /// [`BLOCKS_PER_TASK`] blocks or serially, and sets the block's flag to what `f` returns (`f`
 /// returns [`k::block_nonzero`] of the block, or `false` for a block it leaves or makes empty).
-/// `memory` and `cache` are each empty or one entry per particle.
-fn for_blocks<F>(slots: &mut Slots, memory: &mut [u32], cache: &mut [CachedFaces], parallel: bool, f: F)
+/// `memory` is empty or one entry per particle, `cache` empty or one [`CacheBlock`] per block
+/// (handed to `f` as a slice of one).
+fn for_blocks<F>(slots: &mut Slots, memory: &mut [u32], cache: &mut [CacheBlock], parallel: bool, f: F)
 where
-    F: Fn(usize, &mut [f32], bool, &mut [u32], &mut [CachedFaces], &mut Vec<u32>) -> bool + Sync + Send,
+    F: Fn(usize, &mut [f32], bool, &mut [u32], &mut [CacheBlock], &mut Vec<u32>) -> bool + Sync + Send,
 {
     let task = SLOT_BLOCK * BLOCKS_PER_TASK;
     let per_task = LANES * BLOCKS_PER_TASK;
     let tasks = slots.data.len().div_ceil(task);
-    let run = |t: usize, chunk: &mut [f32], flags: &mut [bool], mem: &mut [u32], cache: &mut [CachedFaces], scratch: &mut Vec<u32>| {
+    let run = |t: usize, chunk: &mut [f32], flags: &mut [bool], mem: &mut [u32], cache: &mut [CacheBlock], scratch: &mut Vec<u32>| {
         for (j, (out, flag)) in chunk.chunks_mut(SLOT_BLOCK).zip(flags.iter_mut()).enumerate() {
             let lanes = j * LANES..(j + 1) * LANES;
             let m = if mem.is_empty() { &mut [][..] } else { &mut mem[lanes.clone()] };
-            let c = if cache.is_empty() { &mut [][..] } else { &mut cache[lanes] };
+            let c = if cache.is_empty() { &mut [][..] } else { &mut cache[j..j + 1] };
             *flag = f(t * BLOCKS_PER_TASK + j, out, *flag, m, c, scratch);
         }
     };
@@ -275,7 +281,7 @@ where
         }
     }
     let mut mems = split(memory, per_task, tasks);
-    let mut caches = split(cache, per_task, tasks);
+    let mut caches = split(cache, BLOCKS_PER_TASK, tasks);
     let Slots { data, touched } = slots;
     if parallel {
         data.par_chunks_mut(task)
