@@ -18,7 +18,12 @@
 //! a step on one thread, 7.9-9.9 ms on two). With the reuse (candidate lists kept across
 //! steps, near lists across substeps) a re-check on a loaded machine (load 5-8) gave 1.8-2.9
 //! ms collision wall a step on two threads against 2.5-5.2 on one, within the noise of that
-//! load; one thread stays the default until an idle machine says otherwise. The results are
+//! load. With the rest-neighbour lanes in the hash query, the wider skin and the cheaper
+//! substep passes (2026-11-23, idle machine, the 12 hash rows of `--size 100`): 1.13-1.56
+//! ms collision a step on one thread (16.4-27.9x the paper), 0.94-1.18 ms on two
+//! (20.5-38.9x); the query gains from the second thread, the substep passes do not. One thread
+//! stays the default so the table compares like with like (the paper's program used one);
+//! `--threads 2` prints the other figure. The results are
 //! the same bits on any thread count.
 //!
 //! A second table splits the collision time by phase (hash build, query, the rest of the step
