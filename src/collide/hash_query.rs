@@ -23,6 +23,19 @@ impl SpatialHash {
         }
     }
 
+    /// Checks a query distance (finite, not negative, at most the spacing); returns its square.
+    pub(super) fn check_reach(&self, max_dist: f32) -> Result<f32> {
+        let md2 = check_max_dist(max_dist)?;
+        if max_dist > self.spacing {
+            return Err(WeftError::param(
+                "max_dist",
+                max_dist,
+                format!("must not exceed the hash spacing ({})", self.spacing),
+            ));
+        }
+        Ok(md2)
+    }
+
     /// Checks query inputs against the build; returns `max_dist²`. `same` is whether the
     /// positions are those of the build (computed by the caller, in parallel or not).
     pub(super) fn check_query(&self, x: &[f32], y: &[f32], z: &[f32], n: usize, max_dist: f32, same: impl FnOnce() -> bool) -> Result<f32> {
@@ -34,14 +47,7 @@ impl SpatialHash {
                 format!("must equal the particle count of the last build ({})", self.n),
             ));
         }
-        let md2 = check_max_dist(max_dist)?;
-        if max_dist > self.spacing {
-            return Err(WeftError::param(
-                "max_dist",
-                max_dist,
-                format!("must not exceed the hash spacing ({})", self.spacing),
-            ));
-        }
+        let md2 = self.check_reach(max_dist)?;
         if !same() {
             return Err(WeftError::param(
                 "x, y, z",

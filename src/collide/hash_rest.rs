@@ -36,7 +36,7 @@
 //! cells a particle), and the skin policy (`self_verlet`) decides how often it runs.
 
 use super::{SpatialHash, NO_BUCKET};
-use crate::collide::neighbours::{check_max_dist, search_radius, sort_dedup_tail, within, Neighbours};
+use crate::collide::neighbours::{search_radius, sort_dedup_tail, within, Neighbours};
 use crate::lanes::{load_idx, F32s, Vec3x8, LANES};
 use crate::{Result, WeftError};
 use wide::u32x8;
@@ -127,14 +127,7 @@ impl SpatialHash {
     /// Checks the arguments; returns `max_dist²` and `skip²`.
     fn check_rest_query(&self, max_dist: f32, skip: f32) -> Result<(f32, f32)> {
         crate::error::non_negative("skip", skip)?;
-        let md2 = check_max_dist(max_dist)?;
-        if max_dist > self.spacing {
-            return Err(WeftError::param(
-                "max_dist",
-                max_dist,
-                format!("must not exceed the hash spacing ({})", self.spacing),
-            ));
-        }
+        let md2 = self.check_reach(max_dist)?;
         if !self.rest.valid {
             return Err(WeftError::param(
                 "rest",
