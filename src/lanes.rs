@@ -136,14 +136,32 @@ pub fn load_idx(s: &[u32], i: usize) -> Idx8 {
     s[i..i + LANES].try_into().expect("slice of lane width")
 }
 
-/// Gathers eight values of a read-only array (bounds-checked).
+/// Eight indices `f(0) .. f(7)`, written out (array `map` and `from_fn` can be compiled to
+/// out-of-line calls in hot loops, measured in the self-collision pair pass).
+#[inline(always)]
+pub fn idx8(f: impl Fn(usize) -> u32) -> Idx8 {
+    [f(0), f(1), f(2), f(3), f(4), f(5), f(6), f(7)]
+}
+
+/// Gathers eight values of a read-only array (bounds-checked), built in registers: on AVX,
+/// `_mm256_set_ps` of eight scalar loads (an array on the stack, reloaded as a vector, cost
+/// a store-forwarding stall that made the self-collision candidate test twice as slow,
+/// measured). Pure data movement: no result bit depends on it.
 #[inline(always)]
 pub fn gather1(s: &[f32], idx: &Idx8) -> F32s {
-    let mut v = [0.0f32; LANES];
-    for l in 0..LANES {
-        v[l] = s[idx[l] as usize];
+    let g = |l: usize| s[idx[l] as usize];
+    let v = [g(0), g(1), g(2), g(3), g(4), g(5), g(6), g(7)];
+    #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
+    {
+        use std::arch::x86_64::{__m256, _mm256_set_ps};
+        // SAFETY: the cfg guarantees AVX at compile time; register-only intrinsic.
+        let r: __m256 = unsafe { _mm256_set_ps(v[7], v[6], v[5], v[4], v[3], v[2], v[1], v[0]) };
+        bytemuck::cast(r)
     }
-    F32s::from(v)
+    #[cfg(not(all(target_arch = "x86_64", target_feature = "avx")))]
+    {
+        F32s::from(v)
+    }
 }
 
 /// Lane positions in a window of two lane groups: entry `l` (0..16) names element `l % 8` of
@@ -340,56 +358,5 @@ impl SharedVec3 {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn round_up_pads_to_lanes() {
-        assert_eq!(round_up(0), 0);
-        assert_eq!(round_up(1), 8);
-        assert_eq!(round_up(8), 8);
-        assert_eq!(round_up(9), 16);
-    }
-
-    #[test]
-    fn pick16_reads_the_named_window_element() {
-        let lo = F32s::from([0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0]);
-        let hi = F32s::from([8.0, 9.0, 10.0, 11.0, 12.0, 13.0, 14.0, 15.0]);
-        let pos: Pos8 = [15, 0, 9, 7, 8, 3, 12, 1];
-        let want: Vec<f32> = pos.iter().map(|&q| q as f32).collect();
-        assert_eq!(pick16(lo, hi, &pos).to_array().to_vec(), want);
-    }
-
-    #[test]
-    fn run_load_store_roundtrip() {
-        let mut x: Vec<f32> = (0..20).map(|i| i as f32).collect();
-        let mut y = x.clone();
-        let mut z = x.clone();
-        let s = SharedVec3::new(&mut x, &mut y, &mut z);
-        // SAFETY: single thread, 3 + 8 <= 20.
-        let v = unsafe { s.load_run(3) };
-        assert_eq!(v.y.to_array(), [3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0, 10.0]);
-        // SAFETY: as above.
-        unsafe { s.store_run(3, v + Vec3x8::splat([1.0, 2.0, 3.0])) };
-        assert_eq!((x[2], x[3], y[10], z[11]), (2.0, 4.0, 12.0, 11.0));
-    }
-
-    #[test]
-    fn gather_scatter_roundtrip() {
-        let mut x: Vec<f32> = (0..16).map(|i| i as f32).collect();
-        let mut y: Vec<f32> = (0..16).map(|i| 100.0 + i as f32).collect();
-        let mut z: Vec<f32> = (0..16).map(|i| -(i as f32)).collect();
-        let s = SharedVec3::new(&mut x, &mut y, &mut z);
-        let idx: Idx8 = [15, 3, 7, 0, 9, 1, 2, 11];
-        // SAFETY: single thread, indices in range.
-        let v = unsafe { s.gather(&idx) };
-        assert_eq!(v.x.to_array(), [15.0, 3.0, 7.0, 0.0, 9.0, 1.0, 2.0, 11.0]);
-        let w = v + Vec3x8::splat([1.0, 1.0, 1.0]);
-        // SAFETY: as above.
-        unsafe { s.scatter(&idx, w) };
-        assert_eq!(x[15], 16.0);
-        assert_eq!(y[0], 101.0);
-        assert_eq!(z[11], -10.0);
-        assert_eq!(x[4], 4.0);
-    }
-}
+#[path = "lanes_tests.rs"]
+mod tests;

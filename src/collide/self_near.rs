@@ -23,19 +23,20 @@
 //!   registers) instead of three scattered loads; measured within the noise of the shared
 //!   machine (the rebuild stays bound by its ~1 ns a candidate), kept because it is not
 //!   slower and the scalar twin is the same list;
-//! * the eight-lane gathers are written out ([`gather8`], [`idx8`]): with `array::map`
-//!   the compiler once emitted an out-of-line call per gather in the pair pass's candidate
-//!   test, which made that test twice as slow (perf annotate).
+//! * the eight-lane gathers are written out ([`crate::lanes::gather1`],
+//!   [`crate::lanes::idx8`]): with `array::map` the compiler once emitted an out-of-line call
+//!   per gather in the pair pass's candidate test, which made that test twice as slow (perf
+//!   annotate).
 //!
 //! The skin rule is unchanged: a larger cap than `d` makes the near list approach the
 //! candidate lists (radius `3 d` against `4 d`), and a cap of `d / 2` (tried: fewer near
 //! pairs, more rebuilds) measured no faster (CPU of these phases over the distance solve's,
-//! 0.68-0.75 against 0.64-0.70, three runs each); the remaining cost is the folding phase (steps ~40-100), where the
-//! cloth moves `~d / 10` a substep and the list is rebuilt every 4-10 substeps.
+//! 0.68-0.75 against 0.64-0.70, three runs each); the remaining cost is the
+//! folding phase (steps ~40-100), where the cloth moves `~d / 10` a substep and the list is rebuilt every 4-10 substeps.
 
 use super::neighbours::Neighbours;
 use super::self_verlet::SAFE;
-use crate::lanes::{load, F32s, LANES};
+use crate::lanes::{idx8, load, F32s, Idx8, LANES};
 
 /// Near pairs of the candidate lists for the substeps (see the module docs).
 #[derive(Clone, Debug, Default)]
@@ -91,45 +92,6 @@ impl NearList {
         self.valid = true;
         self.subs_since = 0;
         self.rebuilds += 1;
-    }
-}
-
-/// Eight indices `f(0) .. f(7)` as `usize`, written out (array `map` and `from_fn` can be
-/// compiled to out-of-line calls in these loops, measured).
-#[inline(always)]
-pub(crate) fn idx8(f: impl Fn(usize) -> u32) -> [usize; LANES] {
-    [
-        f(0) as usize,
-        f(1) as usize,
-        f(2) as usize,
-        f(3) as usize,
-        f(4) as usize,
-        f(5) as usize,
-        f(6) as usize,
-        f(7) as usize,
-    ]
-}
-
-/// Eight entries of `a` (indices `idx`, bounds-checked) in one vector, built in registers:
-/// on AVX, `_mm256_set_ps` of eight scalar loads (the compiler otherwise sometimes builds the
-/// array on the stack and reloads it, a store-forwarding stall that made the pair pass's
-/// candidate test twice as slow, measured). Pure data movement: no result bit depends on it.
-#[inline(always)]
-pub(crate) fn gather8(a: &[f32], idx: [usize; LANES]) -> F32s {
-    // Written out: `idx.map(..)` was compiled to an out-of-line call (measured).
-    let v = [
-        a[idx[0]], a[idx[1]], a[idx[2]], a[idx[3]], a[idx[4]], a[idx[5]], a[idx[6]], a[idx[7]],
-    ];
-    #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
-    {
-        use std::arch::x86_64::{__m256, _mm256_set_ps};
-        // SAFETY: the cfg guarantees AVX at compile time; register-only intrinsic.
-        let r: __m256 = unsafe { _mm256_set_ps(v[7], v[6], v[5], v[4], v[3], v[2], v[1], v[0]) };
-        bytemuck::cast(r)
-    }
-    #[cfg(not(all(target_arch = "x86_64", target_feature = "avx")))]
-    {
-        F32s::from(v)
     }
 }
 
@@ -203,7 +165,7 @@ pub(crate) fn collect_near(
             while k + LANES <= list.len() {
                 let js = &list[k..k + LANES];
                 let idx = idx8(|l| js[l]);
-                let q = gather_xyz8(xyz, idx);
+                let q = gather_xyz8(xyz, &idx);
                 let v = [piv[0] - q[0], piv[1] - q[1], piv[2] - q[2]];
                 let d2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
                 let mut bits = (d2.simd_lt(r2v) | d2.is_nan()).to_bitmask();
@@ -229,12 +191,12 @@ pub(crate) fn collect_near(
 /// lane `l` from entry `idx[l]`. On AVX: eight 16-byte loads and an 8x4 transpose in
 /// registers (unpack and shuffle); elsewhere a portable array version. Pure data movement.
 #[inline(always)]
-pub(crate) fn gather_xyz8(xyz: &[[f32; 4]], idx: [usize; LANES]) -> [F32s; 3] {
+pub(crate) fn gather_xyz8(xyz: &[[f32; 4]], idx: &Idx8) -> [F32s; 3] {
     #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
     {
         use std::arch::x86_64::{__m128, __m256, _mm256_set_m128, _mm256_shuffle_ps, _mm256_unpackhi_ps, _mm256_unpacklo_ps};
         // Written out (no array `map`, which can end up as an out-of-line call).
-        let row = |l: usize| -> __m128 { bytemuck::cast(xyz[idx[l]]) };
+        let row = |l: usize| -> __m128 { bytemuck::cast(xyz[idx[l] as usize]) };
         let r = [row(0), row(1), row(2), row(3), row(4), row(5), row(6), row(7)];
         // SAFETY: the cfg guarantees AVX at compile time; register-only intrinsics.
         let (x, y, z) = unsafe {
@@ -258,7 +220,7 @@ pub(crate) fn gather_xyz8(xyz: &[[f32; 4]], idx: [usize; LANES]) -> [F32s; 3] {
     }
     #[cfg(not(all(target_arch = "x86_64", target_feature = "avx")))]
     {
-        let rows: [[f32; 4]; LANES] = std::array::from_fn(|l| xyz[idx[l]]);
+        let rows: [[f32; 4]; LANES] = std::array::from_fn(|l| xyz[idx[l] as usize]);
         [0, 1, 2].map(|a| F32s::from(rows.map(|r| r[a])))
     }
 }
@@ -346,8 +308,8 @@ mod tests {
     #[test]
     fn gather_xyz8_puts_entry_l_in_lane_l() {
         let xyz: Vec<[f32; 4]> = (0..40).map(|i| [i as f32, 100.0 + i as f32, 200.0 + i as f32, -1.0]).collect();
-        let idx = [3usize, 39, 0, 17, 17, 8, 25, 1];
-        let [x, y, z] = gather_xyz8(&xyz, idx);
+        let idx: Idx8 = [3, 39, 0, 17, 17, 8, 25, 1];
+        let [x, y, z] = gather_xyz8(&xyz, &idx);
         for (l, &i) in idx.iter().enumerate() {
             assert_eq!(x.to_array()[l], i as f32);
             assert_eq!(y.to_array()[l], 100.0 + i as f32);

@@ -4,8 +4,7 @@
 use super::neighbours::within;
 #[cfg(test)]
 use super::neighbours::Neighbours;
-use super::self_near::{gather8, idx8};
-use crate::lanes::{F32s, Vec3x8, LANES};
+use crate::lanes::{gather1, idx8, F32s, Vec3x8, LANES};
 
 /// Everything the pair pass reads.
 pub(crate) struct PairCtx<'a> {
@@ -41,7 +40,7 @@ impl PairCtx<'_> {
             while k + LANES <= pairs.len() {
                 let ii = idx8(|l| pairs[k + l].0);
                 let jj = idx8(|l| pairs[k + l].1);
-                let g = |a: &[f32], side: usize| gather8(a, if side == 0 { ii } else { jj });
+                let g = |a: &[f32], side: usize| gather1(a, if side == 0 { &ii } else { &jj });
                 let v = Vec3x8 {
                     x: g(self.p[0], 0) - g(self.p[0], 1),
                     y: g(self.p[1], 0) - g(self.p[1], 1),

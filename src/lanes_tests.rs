@@ -1,0 +1,59 @@
+use super::*;
+
+#[test]
+fn round_up_pads_to_lanes() {
+    assert_eq!(round_up(0), 0);
+    assert_eq!(round_up(1), 8);
+    assert_eq!(round_up(8), 8);
+    assert_eq!(round_up(9), 16);
+}
+
+#[test]
+fn gather1_puts_entry_idx_l_in_lane_l() {
+    let s: Vec<f32> = (0..40).map(|i| 0.5 + i as f32).collect();
+    let idx = idx8(|l| [3, 39, 0, 17, 17, 8, 25, 1][l]);
+    let want: Vec<f32> = idx.iter().map(|&i| s[i as usize]).collect();
+    assert_eq!(gather1(&s, &idx).to_array().to_vec(), want);
+}
+
+#[test]
+fn pick16_reads_the_named_window_element() {
+    let lo = F32s::from([0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0]);
+    let hi = F32s::from([8.0, 9.0, 10.0, 11.0, 12.0, 13.0, 14.0, 15.0]);
+    let pos: Pos8 = [15, 0, 9, 7, 8, 3, 12, 1];
+    let want: Vec<f32> = pos.iter().map(|&q| q as f32).collect();
+    assert_eq!(pick16(lo, hi, &pos).to_array().to_vec(), want);
+}
+
+#[test]
+fn run_load_store_roundtrip() {
+    let mut x: Vec<f32> = (0..20).map(|i| i as f32).collect();
+    let mut y = x.clone();
+    let mut z = x.clone();
+    let s = SharedVec3::new(&mut x, &mut y, &mut z);
+    // SAFETY: single thread, 3 + 8 <= 20.
+    let v = unsafe { s.load_run(3) };
+    assert_eq!(v.y.to_array(), [3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0, 10.0]);
+    // SAFETY: as above.
+    unsafe { s.store_run(3, v + Vec3x8::splat([1.0, 2.0, 3.0])) };
+    assert_eq!((x[2], x[3], y[10], z[11]), (2.0, 4.0, 12.0, 11.0));
+}
+
+#[test]
+fn gather_scatter_roundtrip() {
+    let mut x: Vec<f32> = (0..16).map(|i| i as f32).collect();
+    let mut y: Vec<f32> = (0..16).map(|i| 100.0 + i as f32).collect();
+    let mut z: Vec<f32> = (0..16).map(|i| -(i as f32)).collect();
+    let s = SharedVec3::new(&mut x, &mut y, &mut z);
+    let idx: Idx8 = [15, 3, 7, 0, 9, 1, 2, 11];
+    // SAFETY: single thread, indices in range.
+    let v = unsafe { s.gather(&idx) };
+    assert_eq!(v.x.to_array(), [15.0, 3.0, 7.0, 0.0, 9.0, 1.0, 2.0, 11.0]);
+    let w = v + Vec3x8::splat([1.0, 1.0, 1.0]);
+    // SAFETY: as above.
+    unsafe { s.scatter(&idx, w) };
+    assert_eq!(x[15], 16.0);
+    assert_eq!(y[0], 101.0);
+    assert_eq!(z[11], -10.0);
+    assert_eq!(x[4], 4.0);
+}
