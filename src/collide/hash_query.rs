@@ -84,10 +84,7 @@ impl SpatialHash {
     where
         K: Fn(usize, u32) -> bool + Sync,
     {
-        let same = || (0..n).into_par_iter().all(|i| self.unchanged(x, y, z, i));
-        let md2 = self.check_query(x, y, z, n, max_dist, same)?;
-        let r = search_radius(max_dist);
-        out.fill_parallel(n, |i, buf| self.scan::<true, false, K>(x, y, z, n, i, md2, r, keep, buf))
+        self.query_parallel::<false, K>(x, y, z, n, max_dist, keep, out)
     }
 
     /// Serial, scalar twin of [`SpatialHash::query_filtered`]; produces identical lists.
@@ -105,10 +102,7 @@ impl SpatialHash {
     where
         K: Fn(usize, u32) -> bool,
     {
-        let same = || (0..n).all(|i| self.unchanged(x, y, z, i));
-        let md2 = self.check_query(x, y, z, n, max_dist, same)?;
-        let r = search_radius(max_dist);
-        out.fill_serial(n, |i, buf| self.scan::<false, false, K>(x, y, z, n, i, md2, r, keep, buf))
+        self.query_serial::<false, K>(x, y, z, n, max_dist, keep, out)
     }
 
     /// [`SpatialHash::query_filtered`] listing each pair once, in the list of its smaller id
@@ -128,10 +122,7 @@ impl SpatialHash {
     where
         K: Fn(usize, u32) -> bool + Sync,
     {
-        let same = || (0..n).into_par_iter().all(|i| self.unchanged(x, y, z, i));
-        let md2 = self.check_query(x, y, z, n, max_dist, same)?;
-        let r = search_radius(max_dist);
-        out.fill_parallel(n, |i, buf| self.scan::<true, true, K>(x, y, z, n, i, md2, r, keep, buf))
+        self.query_parallel::<true, K>(x, y, z, n, max_dist, keep, out)
     }
 
     /// Serial, scalar twin of [`SpatialHash::query_upper_filtered`]; produces identical lists.
@@ -149,10 +140,50 @@ impl SpatialHash {
     where
         K: Fn(usize, u32) -> bool,
     {
+        self.query_serial::<true, K>(x, y, z, n, max_dist, keep, out)
+    }
+
+    /// The parallel queries: the build's positions checked in parallel, then the lanes scan
+    /// of every particle (each pair once when `UPPER`).
+    #[allow(clippy::too_many_arguments)]
+    fn query_parallel<const UPPER: bool, K>(
+        &self,
+        x: &[f32],
+        y: &[f32],
+        z: &[f32],
+        n: usize,
+        max_dist: f32,
+        keep: &K,
+        out: &mut Neighbours,
+    ) -> Result<()>
+    where
+        K: Fn(usize, u32) -> bool + Sync,
+    {
+        let same = || (0..n).into_par_iter().all(|i| self.unchanged(x, y, z, i));
+        let md2 = self.check_query(x, y, z, n, max_dist, same)?;
+        let r = search_radius(max_dist);
+        out.fill_parallel(n, |i, buf| self.scan::<true, UPPER, K>(x, y, z, n, i, md2, r, keep, buf))
+    }
+
+    /// The serial scalar twins of [`SpatialHash::query_parallel`].
+    #[allow(clippy::too_many_arguments)]
+    fn query_serial<const UPPER: bool, K>(
+        &self,
+        x: &[f32],
+        y: &[f32],
+        z: &[f32],
+        n: usize,
+        max_dist: f32,
+        keep: &K,
+        out: &mut Neighbours,
+    ) -> Result<()>
+    where
+        K: Fn(usize, u32) -> bool,
+    {
         let same = || (0..n).all(|i| self.unchanged(x, y, z, i));
         let md2 = self.check_query(x, y, z, n, max_dist, same)?;
         let r = search_radius(max_dist);
-        out.fill_serial(n, |i, buf| self.scan::<false, true, K>(x, y, z, n, i, md2, r, keep, buf))
+        out.fill_serial(n, |i, buf| self.scan::<false, UPPER, K>(x, y, z, n, i, md2, r, keep, buf))
     }
 
     /// Appends the sorted neighbours `j` of particle `i` with `keep(i, j)` to `buf`.
