@@ -2,12 +2,18 @@ use super::*;
 use proptest::prelude::*;
 
 fn input<'a>(v: &'a [Vec<f32>; 8], n: usize, shift: [f32; 3]) -> GenInput<'a> {
+    input_reach(v, 7, n, shift)
+}
+
+/// The contact search's input from arrays `x`, `y`, `z`, `px`, `py`, `pz`, `w`, `th` (indices
+/// 0 to 7), the reach being array `reach`.
+fn input_reach(v: &[Vec<f32>], reach: usize, n: usize, shift: [f32; 3]) -> GenInput<'_> {
     GenInput {
         x: [&v[0], &v[1], &v[2]],
         p: [&v[3], &v[4], &v[5]],
         w: &v[6],
         th: &v[7],
-        reach: &v[7],
+        reach: &v[reach],
         n,
         shift,
     }
@@ -337,15 +343,7 @@ proptest! {
             v[7][i] = th;
             v[8][i] = th + extra;
         }
-        let g = GenInput {
-            x: [&v[0], &v[1], &v[2]],
-            p: [&v[3], &v[4], &v[5]],
-            w: &v[6],
-            th: &v[7],
-            reach: &v[8],
-            n: lanes.len(),
-            shift: [shift.0, shift.1, shift.2],
-        };
+        let g = input_reach(&v, 8, lanes.len(), [shift.0, shift.1, shift.2]);
         let sphere = Shape::Sphere { center, radius: r };
         for b in 0..len / LANES {
             let may = shape_may_touch_simd(&sphere, &g, b);
@@ -379,15 +377,7 @@ fn sphere_pretest_rejects_far_blocks_only() {
         v[0][i] = 1e-3 * i as f32;
         v[3][i] = 1e-3 * i as f32;
     }
-    let g = GenInput {
-        x: [&v[0], &v[1], &v[2]],
-        p: [&v[3], &v[4], &v[5]],
-        w: &v[6],
-        th: &v[7],
-        reach: &v[8],
-        n: len,
-        shift: [0.0; 3],
-    };
+    let g = input_reach(&v, 8, len, [0.0; 3]);
     let sphere = Shape::Sphere {
         center: [0.0; 3],
         radius: 1.0,
