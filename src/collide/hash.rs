@@ -284,3 +284,6 @@ mod query;
 
 #[path = "hash_rest.rs"]
 mod rest;
+
+#[path = "hash_cells.rs"]
+mod cells;

@@ -45,11 +45,11 @@ use wide::u32x8;
 /// lane loads never leave the arrays and padding lanes are never kept.
 #[derive(Debug, Clone, Default)]
 pub(super) struct RestCopy {
-    x: Vec<f32>,
-    y: Vec<f32>,
-    z: Vec<f32>,
-    cloth: Vec<u32>,
-    ids: Vec<u32>,
+    pub(super) x: Vec<f32>,
+    pub(super) y: Vec<f32>,
+    pub(super) z: Vec<f32>,
+    pub(super) cloth: Vec<u32>,
+    pub(super) ids: Vec<u32>,
     /// Whether the copy belongs to the current build (cleared by every build).
     pub(super) valid: bool,
 }
@@ -125,7 +125,7 @@ impl SpatialHash {
     }
 
     /// Checks the arguments; returns `max_dist²` and `skip²`.
-    fn check_rest_query(&self, max_dist: f32, skip: f32) -> Result<(f32, f32)> {
+    pub(super) fn check_rest_query(&self, max_dist: f32, skip: f32) -> Result<(f32, f32)> {
         crate::error::non_negative("skip", skip)?;
         let md2 = self.check_reach(max_dist)?;
         if !self.rest.valid {

@@ -383,6 +383,9 @@ pub(crate) fn check_positions(x: &[f32], y: &[f32], z: &[f32], n: usize) -> Resu
     Ok(())
 }
 
+#[path = "neighbours_pairs.rs"]
+mod pairs;
+
 #[cfg(test)]
 #[path = "neighbours_tests.rs"]
 mod tests;

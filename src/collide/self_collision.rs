@@ -35,8 +35,10 @@
 //!   steps, up to 4 d of travel a step) every step still runs the query, which is now the
 //!   largest phase. The skin is `2 d` only when the cloth moved at most `d` a step since the
 //!   last build (otherwise zero: a wider reach would cost more than the reuse saves; the
-//!   measurements are in `self_verlet`). The hash query tests `j > i` and the rest-neighbour
-//!   rule in its eight-lane mask (the `hash_rest` module), so only kept pairs leave the lanes.
+//!   measurements are in `self_verlet`). The hash query tests the rest-neighbour rule in its
+//!   eight-lane mask (the `hash_rest` module), so only kept pairs leave the lanes, and walks
+//!   the cells over a half shell (the `hash_cells` module: each pair tested once, the rows
+//!   looked up once a cell; a falling step's query 1.45-1.84 ms before, 0.81-0.92 after).
 //! * **After predict** (each substep): the speed clamp ([`super::response`]) limits a free
 //!   particle's velocity relative to the mean velocity of the free particles to `T / substeps`
 //!   a substep, so two particles close in by at most `2T` in a step: any pair that touches
@@ -290,7 +292,9 @@ impl SelfCollisionData {
                     (Some(t), SelfBroadphase::AabbTree) => t
                         .query_all(x[0], x[1], x[2], n, reach, &mut st.verlet.cand)
                         .map(|_| st.verlet.cand.retain(keep)),
-                    _ => st.hash.query_upper_unskipped(reach, REST_SKIP_FACTOR * a.d, &mut st.verlet.cand),
+                    _ => st
+                        .hash
+                        .query_upper_unskipped_cells(reach, REST_SKIP_FACTOR * a.d, &mut st.verlet.cand),
                 });
                 let ph = &mut self.stats.phases;
                 ph.build_s += t1.duration_since(t0).as_secs_f64();

@@ -1,0 +1,121 @@
+//! Tests of the half-shell cell query: equal to the particle query and to the brute force.
+
+use super::*;
+use crate::test_rng::signed;
+
+type Scene = ([Vec<f32>; 3], [Vec<f32>; 3], Vec<u32>);
+
+/// Brute force over all pairs with the rule of `hash_rest` (upper lists).
+fn brute(p: &[Vec<f32>; 3], rest: &[Vec<f32>; 3], cloth: &[u32], reach: f32, skip: f32) -> Neighbours {
+    let n = cloth.len();
+    let mut nb = Neighbours::new();
+    nb.fill_serial(n, |i, buf| {
+        for j in i + 1..n {
+            let d = |k: usize| rest[k][i] - rest[k][j];
+            let skipped = cloth[i] == cloth[j] && d(0) * d(0) + d(1) * d(1) + d(2) * d(2) <= skip * skip;
+            if within(p[0][i], p[1][i], p[2][i], p[0][j], p[1][j], p[2][j], reach * reach) && !skipped {
+                buf.push(j as u32);
+            }
+        }
+    })
+    .unwrap();
+    nb
+}
+
+/// Two `side x side` lattices of rest spacing `h`, the second lifted by `lift h`, positions
+/// displaced by `noise h` (zero noise: particles exactly on cell faces).
+fn lattices(side: usize, h: f32, noise: f32, lift: f32, seed: u64) -> Scene {
+    let mut rng = signed(seed);
+    let (mut p, mut rest): ([Vec<f32>; 3], [Vec<f32>; 3]) = Default::default();
+    let mut cloth = Vec::new();
+    for c in 0..2u32 {
+        for a in 0..side {
+            for b in 0..side {
+                let r = [a as f32 * h, b as f32 * h, 0.0];
+                for k in 0..3 {
+                    rest[k].push(r[k]);
+                    let up = if k == 2 { lift * h * c as f32 } else { 0.0 };
+                    p[k].push(r[k] + noise * h * rng() + up);
+                }
+                cloth.push(c);
+            }
+        }
+    }
+    (p, rest, cloth)
+}
+
+/// Every query of the scene (cells parallel on 1 and 2 threads, cells serial, the particle
+/// query) equals the brute force; returns the number of kept pairs.
+fn check(s: &Scene, spacing: f32, reach: f32, skip: f32) -> usize {
+    let (p, rest, cloth) = s;
+    let n = cloth.len();
+    let want = brute(p, rest, cloth, reach, skip);
+    let mut h = SpatialHash::new(n);
+    h.build(&p[0], &p[1], &p[2], n, spacing).unwrap();
+    h.attach_rest([&rest[0], &rest[1], &rest[2]], cloth).unwrap();
+    let mut got = Neighbours::new();
+    h.query_upper_unskipped(reach, skip, &mut got).unwrap();
+    assert_eq!(got, want, "particle query");
+    for t in [1, 2] {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(t).build().unwrap();
+        pool.install(|| h.query_upper_unskipped_cells(reach, skip, &mut got)).unwrap();
+        assert_eq!(got, want, "cells, {t} threads, spacing {spacing}, reach {reach}");
+    }
+    h.query_upper_unskipped_cells_serial(reach, skip, &mut got).unwrap();
+    assert_eq!(got, want, "cells serial");
+    want.total()
+}
+
+#[test]
+fn cells_query_equals_particle_query_and_brute_force_on_lattices() {
+    let h = 0.01f32;
+    // Crumpled, partly overlapping, one particle NaN.
+    let mut s = lattices(14, h, 1.0, 0.5, 17);
+    s.0[1][40] = f32::NAN;
+    assert!(check(&s, 3.0 * h, 3.0 * h, 3.003 * h) > 200);
+    assert!(check(&s, 4.5 * h, 3.0 * h, 3.003 * h) > 200, "cells wider than the reach");
+    // Flat lattices one spacing apart, exactly on the cell faces: all boundary particles.
+    let flat = lattices(12, h, 0.0, 1.0, 1);
+    assert!(check(&flat, 3.0 * h, 3.0 * h, 3.003 * h) > 100);
+    assert!(check(&flat, 2.0 * h, 2.0 * h, 1.001 * h) > 100, "skip below the reach");
+    // A zero skip keeps every pair within reach (coincident rest positions excepted).
+    assert!(check(&s, 3.0 * h, 3.0 * h, 0.0) > 1000);
+}
+
+#[test]
+fn cells_query_handles_a_sparse_cloud_far_coordinates_and_the_all_pairs_path() {
+    // A cloud far wider than the cells: about as many occupied cells as particles, so many
+    // buckets hold several cells.
+    let mut rng = signed(23);
+    let n = 1500;
+    let p: [Vec<f32>; 3] = std::array::from_fn(|_| (0..n).map(|_| 0.5 * rng()).collect());
+    let rest: [Vec<f32>; 3] = std::array::from_fn(|k| (0..n).map(|i| ((i * (k + 3)) % 97) as f32 * 0.01).collect());
+    let cloth: Vec<u32> = (0..n as u32).map(|i| i % 3).collect();
+    let mut s = (p, rest, cloth);
+    assert!(check(&s, 0.05, 0.05, 0.2) > 300);
+    // Saturated cell coordinates and a particle at infinity.
+    for (i, v) in [(3usize, 1e30f32), (4, 1e30), (5, -1e30), (6, f32::INFINITY)] {
+        for k in 0..3 {
+            s.0[k][i] = v;
+        }
+    }
+    assert!(check(&s, 0.05, 0.05, 0.2) > 300);
+    // A spacing below the radius's rounding margin: every particle scans all slots.
+    let z = [vec![0.0f32; 6], vec![0.0; 6], vec![0.0; 6]];
+    let rest = [vec![0.0f32, 1.0, 2.0, 3.0, 4.0, 5.0], vec![0.0; 6], vec![0.0; 6]];
+    assert_eq!(check(&(z, rest, vec![0, 0, 0, 1, 1, 1]), 1e-30, 1e-30, 1.0), 11);
+}
+
+#[test]
+fn cells_query_needs_the_rest_data_and_checks_its_arguments() {
+    let s = lattices(4, 0.01, 0.3, 1.0, 3);
+    let n = s.2.len();
+    let mut h = SpatialHash::new(n);
+    h.build(&s.0[0], &s.0[1], &s.0[2], n, 0.03).unwrap();
+    let mut got = Neighbours::new();
+    assert!(h.query_upper_unskipped_cells(0.03, 0.01, &mut got).is_err(), "no rest data");
+    h.attach_rest([&s.1[0], &s.1[1], &s.1[2]], &s.2).unwrap();
+    assert!(h.query_upper_unskipped_cells(0.03, 0.01, &mut got).is_ok());
+    assert!(h.query_upper_unskipped_cells(0.06, 0.01, &mut got).is_err(), "beyond the spacing");
+    assert!(h.query_upper_unskipped_cells_serial(0.03, f32::NAN, &mut got).is_err());
+}
