@@ -45,6 +45,9 @@ pub struct Neighbours {
     pub ids: Vec<u32>,
     /// Per-chunk output buffers of the parallel fill, kept to avoid allocation.
     scratch: Vec<Vec<u32>>,
+    /// Pair assembly (`neighbours_pairs`): list starts by partner, then smaller ids by partner.
+    by_j: Vec<u32>,
+    order: Vec<u32>,
 }
 
 impl Default for Neighbours {
@@ -69,6 +72,8 @@ impl Neighbours {
             first: vec![0],
             ids: Vec::new(),
             scratch: Vec::new(),
+            by_j: Vec::new(),
+            order: Vec::new(),
         }
     }
 

@@ -6,15 +6,21 @@
 //! parallel, a fixed number of tasks, so the split does not depend on the thread count). Then:
 //! 1. count the pairs of each `i` (serial over the buffers) and prefix-sum the counts into
 //!    `first`;
-//! 2. scatter each `j` to the next free place of its list (serial, buffer order);
-//! 3. sort every list (in parallel, fixed chunks of particles) and drop repeated ids, the
-//!    lists being compacted in one serial pass.
+//! 2. group the smaller ids by partner `j` (a stable counting sort on `j`), then walk the
+//!    partners in ascending order, appending each `j` to the lists of its smaller ids (a
+//!    counting sort on `i`): every list comes out ascending with no comparison sort (a radix
+//!    sort of the pairs, least significant key first);
+//! 3. drop repeated ids (adjacent now), the lists being compacted in one serial pass.
+//!
+//! Measured on the folded rebuilds of the 100x100 fold (485 000 pairs, reach 5 d, loaded
+//! machine): scatter then `sort_unstable` of every list 8.8-10.1 ms; the two counting sorts
+//! 1.6-4.3 ms, back to back (the emission of the pairs, 4-5 ms, is now the larger part).
 //!
 //! Sorting and de-duplicating make the lists canonical: they do not depend on the order the
 //! pairs were emitted in, nor on the number of threads, so they equal the lists of any other
 //! upper query (each pair once, in the list of its smaller id).
 
-use super::{prefix_sum, too_many, Neighbours, CHUNK};
+use super::{prefix_sum, Neighbours};
 use crate::Result;
 use rayon::prelude::*;
 
@@ -33,7 +39,7 @@ impl Neighbours {
             buf.clear();
             f(t, buf);
         });
-        self.assemble(n, tasks, true)
+        self.assemble(n, tasks)
     }
 
     /// Serial twin of [`Neighbours::fill_pairs_parallel`]: one task appends every pair.
@@ -46,17 +52,21 @@ impl Neighbours {
         }
         self.scratch[0].clear();
         f(&mut self.scratch[0]);
-        self.assemble(n, 1, false)
+        self.assemble(n, 1)
     }
 
-    /// Counts, scatters, sorts and de-duplicates the pairs of the first `tasks` buffers.
-    fn assemble(&mut self, n: usize, tasks: usize, parallel: bool) -> Result<()> {
+    /// Counts and places the pairs of the first `tasks` buffers (two stable counting sorts,
+    /// by `j` then by `i`, so every list comes out ascending), then drops repeats.
+    fn assemble(&mut self, n: usize, tasks: usize) -> Result<()> {
         let bufs = &self.scratch[..tasks];
         self.first.clear();
         self.first.resize(n + 1, 0);
+        self.by_j.clear();
+        self.by_j.resize(n + 1, 0);
         for b in bufs {
             for p in b.chunks_exact(2) {
                 self.first[p[0] as usize + 1] += 1;
+                self.by_j[p[1] as usize + 1] += 1;
             }
         }
         let total = match prefix_sum(&mut self.first) {
@@ -66,35 +76,39 @@ impl Neighbours {
                 return Err(e);
             }
         };
+        self.ids.clear();
         if total == 0 {
-            self.ids.clear();
             return Ok(());
         }
-        self.ids.clear();
-        self.ids.resize(total, 0);
-        // `first[i]` serves as the cursor of list `i`; afterwards it holds the end of list `i`,
-        // which is the start of list `i + 1`, so shifting by one restores the offsets.
+        // The same total, so no overflow here.
+        prefix_sum(&mut self.by_j)?;
+        // Pass 1: the smaller ids grouped by partner `j` (`by_j[j]` is the cursor of group `j`;
+        // afterwards it holds the group's end, the start of group `j + 1`).
+        self.order.clear();
+        self.order.resize(total, 0);
         for b in bufs {
             for p in b.chunks_exact(2) {
-                let c = &mut self.first[p[0] as usize];
-                self.ids[*c as usize] = p[1];
+                let c = &mut self.by_j[p[1] as usize];
+                self.order[*c as usize] = p[0];
                 *c += 1;
             }
         }
+        // Pass 2: partners in ascending order into the lists (`first[i]` the cursor of list
+        // `i`; afterwards shifted back by one to the offsets).
+        self.ids.resize(total, 0);
+        let mut k = 0usize;
+        for j in 0..n {
+            let end = self.by_j[j] as usize;
+            for &i in &self.order[k..end] {
+                let c = &mut self.first[i as usize];
+                self.ids[*c as usize] = j as u32;
+                *c += 1;
+            }
+            k = end;
+        }
         self.first.copy_within(0..n, 1);
         self.first[0] = 0;
-        if parallel {
-            sort_lists_parallel(&self.first, &mut self.ids, 0, 0, n);
-        } else {
-            for i in 0..n {
-                self.ids[self.first[i] as usize..self.first[i + 1] as usize].sort_unstable();
-            }
-        }
         self.dedup_sorted();
-        if self.ids.len() > u32::MAX as usize {
-            self.clear();
-            return Err(too_many());
-        }
         Ok(())
     }
 
@@ -117,24 +131,6 @@ impl Neighbours {
         }
         self.ids.truncate(w);
     }
-}
-
-/// Sorts the lists of particles `lo..hi` (`ids` starting at list `lo`'s offset `base`),
-/// halving the range with `rayon::join` down to [`CHUNK`] particles.
-fn sort_lists_parallel(first: &[u32], ids: &mut [u32], base: usize, lo: usize, hi: usize) {
-    if hi - lo <= CHUNK {
-        for i in lo..hi {
-            ids[first[i] as usize - base..first[i + 1] as usize - base].sort_unstable();
-        }
-        return;
-    }
-    let mid = lo + (hi - lo) / 2;
-    let cut = first[mid] as usize;
-    let (left, right) = ids.split_at_mut(cut - base);
-    rayon::join(
-        || sort_lists_parallel(first, left, base, lo, mid),
-        || sort_lists_parallel(first, right, cut, mid, hi),
-    );
 }
 
 #[cfg(test)]
