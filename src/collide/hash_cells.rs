@@ -110,10 +110,28 @@ impl SpatialHash {
     }
 
     /// Whether the particle in slot `k` lies in cell `home` with its search box (radius `r`)
-    /// inside the 27 cells around it.
+    /// inside the 27 cells around it. Cell coordinates below `2^22` in magnitude are compared
+    /// as `f32` (integers there are exact, so this equals the integer test), others as `i64`.
     #[inline(always)]
     fn member(&self, k: usize, home: [i32; 3], r: f32) -> bool {
         let p = [self.sx[k], self.sy[k], self.sz[k]];
+        let inv = self.inv_spacing;
+        let mut ok = true;
+        for a in 0..3 {
+            let c = (p[a] * inv).floor();
+            if c.is_nan() || c.abs() >= 4_194_304.0 {
+                return self.member_wide(p, home, r);
+            }
+            let lo = ((p[a] - r) * inv).floor();
+            let hi = ((p[a] + r) * inv).floor();
+            ok &= c as i32 == home[a] && lo >= c - 1.0 && hi <= c + 1.0;
+        }
+        ok
+    }
+
+    /// [`SpatialHash::member`] for far coordinates, on saturated integer cells.
+    #[cold]
+    fn member_wide(&self, p: [f32; 3], home: [i32; 3], r: f32) -> bool {
         (0..3).all(|a| {
             let c = i64::from(home[a]);
             let lo = i64::from(self.coord((p[a] - r).max(-f32::MAX)));
@@ -142,21 +160,30 @@ impl SpatialHash {
             return;
         }
         let home = self.cell_of_slot(s);
-        let mut any = false;
+        let mut ranges = [(0usize, 0usize); 9];
+        let mut nr = 0;
         for slot in s..e {
-            if self.member(slot, home, k.r) {
-                any = true;
-            } else {
+            if !self.member(slot, home, k.r) {
                 self.full_box::<SIMD>(slot, k, buf);
+                continue;
+            }
+            if nr == 0 {
+                nr = self.half_shell(b, home, &mut ranges);
+            }
+            let q = self.probe_of(slot);
+            self.pair_scan::<SIMD>(&q, k, slot + 1, e, buf);
+            for &(rs, re) in &ranges[..nr] {
+                self.pair_scan::<SIMD>(&q, k, rs, re, buf);
             }
         }
-        if !any {
-            return;
-        }
+    }
+
+    /// The slot ranges of the half shell of cell `home` (bucket `b`) other than its own
+    /// bucket: the next cell of the own row (the next bucket), then each other row's three
+    /// buckets (two ranges when they wrap past the table's end). Returns how many.
+    fn half_shell(&self, b: usize, home: [i32; 3], ranges: &mut [(usize, usize); 9]) -> usize {
         let ts = self.table_size;
         let mask = ts - 1;
-        // The next cell of the own row is the next bucket; each other row is three buckets.
-        let mut ranges = [(0usize, 0usize); 9];
         let nb = (b + 1) & mask;
         ranges[0] = (self.cell_start[nb] as usize, self.cell_start[nb + 1] as usize);
         let mut nr = 1;
@@ -173,16 +200,7 @@ impl SpatialHash {
                 nr += 2;
             }
         }
-        for slot in s..e {
-            if !self.member(slot, home, k.r) {
-                continue;
-            }
-            let q = self.probe_of(slot);
-            self.pair_scan::<SIMD>(&q, k, slot + 1, e, buf);
-            for &(rs, re) in &ranges[..nr] {
-                self.pair_scan::<SIMD>(&q, k, rs, re, buf);
-            }
-        }
+        nr
     }
 
     /// Scans the whole search box of the particle in slot `k` (a non-member).
