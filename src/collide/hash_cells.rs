@@ -34,8 +34,20 @@
 //! load 5 on two cores, the particle query and this one run alternately, two rounds), ms a
 //! step: hash query averaged over the run 0.625 / 0.904 before, 0.423 / 0.460 after; a falling
 //! step's query (steps 0-45, averaged) 1.45 / 1.84 before, 0.81 / 0.92 after. The folded
-//! rebuilds at reach 5 d (steps 46 and 49) stay at 8-10 ms: there the cost is the kept pairs
-//! (tens per particle), not the look-ups.
+//! rebuilds at reach 5 d (steps 46 and 49) stayed at 8-10 ms: there the cost is the kept
+//! pairs (48 a particle), whose assembly the two counting sorts of `neighbours_pairs` cut.
+//!
+//! `examples/self_query_bench` (same build, both queries alternately, 150 repetitions, min;
+//! the VM's speed varies 2x between runs, so compare within a line): step 20 (falling, reach
+//! 3 d) particle query 0.66-1.34 ms, cell query 0.27-0.54 (0.41x); step 46 (folded, reach
+//! 5 d, 485 103 pairs) 4.4-8.7 ms against 3.4-5.3 (0.6-0.8x).
+//!
+//! Tried and not kept: cells wider than the reach (1.25 and 1.5 times; the half shell needs
+//! at least the reach): step 20 cell query 0.64 and 0.96 ms against 0.40-0.54 at 1.0, more
+//! candidates a member for the same look-ups. Computing every mask of a block without the
+//! branch on the distance mask (the branch is taken about half the time while falling):
+//! cell / particle ratio 0.37-0.41 against 0.41-0.42, within the noise, so the simpler
+//! branching kernel stays.
 
 use super::SpatialHash;
 use crate::collide::neighbours::{search_radius, within, Neighbours};
