@@ -1,10 +1,11 @@
 //! Times the self-collision hash queries on snapshots of the 100x100 `weft reproduce vccpbd`
-//! fold (basic fabric, VcCPBD, one thread): a falling step (reach 3 d) and a folded one (reach
+//! fold (basic fabric, VcCPBD): a falling step (reach 3 d) and a folded one (reach
 //! 5 d, the skin's rebuild), the particle query and the cell query on the same build, many
-//! repetitions, min and median (the min is robust to a loaded machine).
+//! repetitions on a pool of `threads` (1 unless given), min and median (the min is robust to
+//! a loaded machine).
 //!
 //! ```text
-//! cargo run --release --example self_query_bench [fall_step] [folded_step] [reps] [cell %]
+//! cargo run --release --example self_query_bench [fall_step] [folded_step] [reps] [cell %] [threads]
 //! ```
 
 use std::time::Instant;
@@ -19,6 +20,12 @@ fn main() -> weft::Result<()> {
     let reps = args.next().flatten().unwrap_or(200);
     // Hash cell side over the reach, in percent (100: the stage's `CELL_FACTOR`).
     let cell = args.next().flatten().unwrap_or(100) as f32 / 100.0;
+    // Threads of the queries (the world itself steps on one).
+    let query_threads = args.next().flatten().unwrap_or(1);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(query_threads)
+        .build()
+        .map_err(|e| weft::WeftError::param("threads", query_threads, e.to_string()))?;
     let threads = 1;
     let size = 100u32;
     let spacing = 1.0 / (size - 1) as f32;
@@ -72,18 +79,21 @@ fn main() -> weft::Result<()> {
         let mut h = SpatialHash::new(n);
         let mut out = Neighbours::new();
         let (mut tb, mut tp, mut tc) = (Vec::new(), Vec::new(), Vec::new());
-        for _ in 0..reps {
-            let t0 = Instant::now();
-            h.build(x[0], x[1], x[2], n, reach * cell)?;
-            h.attach_rest([&rest[0], &rest[1], &rest[2]], &cloth)?;
-            tb.push(t0.elapsed().as_secs_f64() * 1e3);
-            let t0 = Instant::now();
-            h.query_upper_unskipped(reach, 3.003 * d, &mut out)?;
-            tp.push(t0.elapsed().as_secs_f64() * 1e3);
-            let t0 = Instant::now();
-            h.query_upper_unskipped_cells(reach, 3.003 * d, &mut out)?;
-            tc.push(t0.elapsed().as_secs_f64() * 1e3);
-        }
+        pool.install(|| -> weft::Result<()> {
+            for _ in 0..reps {
+                let t0 = Instant::now();
+                h.build(x[0], x[1], x[2], n, reach * cell)?;
+                h.attach_rest([&rest[0], &rest[1], &rest[2]], &cloth)?;
+                tb.push(t0.elapsed().as_secs_f64() * 1e3);
+                let t0 = Instant::now();
+                h.query_upper_unskipped(reach, 3.003 * d, &mut out)?;
+                tp.push(t0.elapsed().as_secs_f64() * 1e3);
+                let t0 = Instant::now();
+                h.query_upper_unskipped_cells(reach, 3.003 * d, &mut out)?;
+                tc.push(t0.elapsed().as_secs_f64() * 1e3);
+            }
+            Ok(())
+        })?;
         let st = |v: &mut Vec<f64>| {
             v.sort_by(f64::total_cmp);
             format!("min {:.3} median {:.3}", v[0], v[v.len() / 2])
