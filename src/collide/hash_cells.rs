@@ -183,8 +183,12 @@ impl SpatialHash {
                 nr = self.half_shell(b, home, &mut ranges);
             }
             let q = self.probe_of(slot);
-            self.pair_scan::<SIMD>(&q, k, slot + 1, e, buf);
-            for &(rs, re) in &ranges[..nr] {
+            // Bucket `b + 1` (the next cell of the row) follows bucket `b` in the slots unless
+            // the row wraps past the table's end: then one range covers both.
+            let merged = b + 1 < self.table_size;
+            let own_end = if merged { self.cell_start[b + 2] as usize } else { e };
+            self.pair_scan::<SIMD>(&q, k, slot + 1, own_end, buf);
+            for &(rs, re) in &ranges[usize::from(merged)..nr] {
                 self.pair_scan::<SIMD>(&q, k, rs, re, buf);
             }
         }
