@@ -98,9 +98,12 @@ fn main() -> weft::Result<()> {
             v.sort_by(f64::total_cmp);
             format!("min {:.3} median {:.3}", v[0], v[v.len() / 2])
         };
+        let cs = h.cell_start();
+        let occupied = cs.windows(2).filter(|w| w[1] > w[0]).count();
         println!(
-            "step {stop} reach {:.0} d, {} pairs: build+attach {} | particle query {} | cell query {} (ms)",
+            "step {stop} reach {:.0} d, {} particles a bucket, {} pairs: build+attach {} | particle query {} | cell query {} (ms)",
             reach / d,
+            format!("{:.1}", n as f64 / occupied.max(1) as f64),
             out.total(),
             st(&mut tb),
             st(&mut tp),

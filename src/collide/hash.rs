@@ -24,6 +24,9 @@
 //! (`f32x8`, the predicate computed operation for operation like the scalar one, no FMA), and
 //! queries run in parallel over particles; the lists are canonical, so the output is bitwise
 //! the same for any thread count, equal to the scalar serial twin and to the brute force.
+//! The self-collision stage uses a cell-centric form of the query instead (module
+//! `hash_cells`: occupied buckets walked over a half shell, each pair tested once, the same
+//! lists).
 //!
 //! # Choices
 //! * `table_size` is the smallest power of two `>= 2n` (at least 16): the paper's "about twice
