@@ -101,9 +101,9 @@ fn main() -> weft::Result<()> {
         let cs = h.cell_start();
         let occupied = cs.windows(2).filter(|w| w[1] > w[0]).count();
         println!(
-            "step {stop} reach {:.0} d, {} particles a bucket, {} pairs: build+attach {} | particle query {} | cell query {} (ms)",
+            "step {stop} reach {:.0} d, {:.1} particles a bucket, {} pairs: build+attach {} | particle query {} | cell query {} (ms)",
             reach / d,
-            format!("{:.1}", n as f64 / occupied.max(1) as f64),
+            n as f64 / occupied.max(1) as f64,
             out.total(),
             st(&mut tb),
             st(&mut tp),
