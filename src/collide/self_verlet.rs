@@ -34,6 +34,15 @@
 //! from the candidate lists, so a wider skin costs there: 2 d is kept as the balance (3 d saves
 //! another ~0.05 ms of broadphase and costs more in the pairs phase).
 //!
+//! With the cell query (`hash_cells`, fifth session; same timeline, load 7-8, three alternate
+//! runs): skin 2 d build + query + start 0.44-0.51 ms a step, pairs 0.71-0.91, 49 rebuilds;
+//! skin d 0.68-0.74, pairs 0.63-0.68, 58 rebuilds (stage total 1.40-1.77 against 1.62-1.73).
+//! The cheaper rebuilds do not make a narrower skin pay for the broadphase, so 2 d stays.
+//! A bound on the displacement relative to the mean displacement (exact too: the lists hold
+//! while `|(x_i - x⁰_i) - t| <= 0.49 s` for one common `t`) was tried with `t` the mean: 49
+//! rebuilds either way (the cloth hangs from a pinned row, so it does not translate as a
+//! whole), broadphase 0.55-0.59 against 0.48-0.53, not kept.
+//!
 //! A wider skin makes each rebuild's reach (`q + s`) and candidate count larger but lets the
 //! folding cloth (steps ~42-75, 4.5-9.7 ms of queries a step before) keep its lists for
 //! several steps; allowing the skin for faster motion (`SLOW_FACTOR` 2) makes the falling
