@@ -28,6 +28,15 @@
 //!   per gather in the pair pass's candidate test, which made that test twice as slow (perf
 //!   annotate).
 //!
+//! * session 5: the displacement check loads its three coordinates written out (with
+//!   `[0, 1, 2].map(..)` each coordinate was an out-of-line `try_map` call: ~140 million
+//!   instructions of the pair phase over the 1 500 substeps), a build copies the positions
+//!   of a block with one slice copy and the `[x, y, z, 0]` copy without bounds checks.
+//!   Callgrind over the pair phase (`self_collision_pairs_pass`, timeline example, 150 steps,
+//!   1 thread): 1 600 to 1 292 million instructions, same bits; wall time of the pairs
+//!   column 0.809 / 0.770 / 0.616 ms a step before against 1.235 / 0.658 / 0.586 after,
+//!   alternate runs at load ~6 on two cores (noise larger than the change).
+//!
 //! The skin rule is unchanged: a larger cap than `d` makes the near list approach the
 //! candidate lists (radius `3 d` against `4 d`), and a cap of `d / 2` (tried: fewer near
 //! pairs, more rebuilds) measured no faster (CPU of these phases over the distance solve's,
@@ -84,7 +93,10 @@ impl NearList {
             a.clear();
             for &b in blocks {
                 let g = b as usize * LANES;
-                a.extend((g..g + LANES).map(|i| src.get(i).copied().unwrap_or(0.0)));
+                match src.get(g..g + LANES) {
+                    Some(s) => a.extend_from_slice(s),
+                    None => a.extend((g..g + LANES).map(|i| src.get(i).copied().unwrap_or(0.0))),
+                }
             }
         }
         let r = d + self.skin;
@@ -109,15 +121,19 @@ pub(crate) fn max_disp2_blocks(p: [&[f32]; 3], at: [&[f32]; 3], blocks: &[u32], 
         let g = b as usize * LANES;
         let c = k * LANES;
         if simd && g + LANES <= len {
-            let v = [0, 1, 2].map(|a| load(p[a], g) - load(at[a], c));
-            let d2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+            // Written out: `[0, 1, 2].map(..)` compiled to an out-of-line call per coordinate
+            // here (callgrind: ~110 of the ~1600 million instructions of the pair phase).
+            let vx = load(p[0], g) - load(at[0], c);
+            let vy = load(p[1], g) - load(at[1], c);
+            let vz = load(p[2], g) - load(at[2], c);
+            let d2 = vx * vx + vy * vy + vz * vz;
             bad |= d2.is_nan();
             mv = mv.max(d2);
             continue;
         }
         for l in 0..LANES.min(len.saturating_sub(g)) {
-            let v = [0, 1, 2].map(|a| p[a][g + l] - at[a][c + l]);
-            let d2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+            let (vx, vy, vz) = (p[0][g + l] - at[0][c + l], p[1][g + l] - at[1][c + l], p[2][g + l] - at[2][c + l]);
+            let d2 = vx * vx + vy * vy + vz * vz;
             nan |= d2.is_nan();
             m = m.max(d2);
         }
@@ -150,7 +166,8 @@ pub(crate) fn collect_near(
     let n = n.min(cand.len()).min(p[0].len()).min(p[1].len()).min(p[2].len());
     if simd {
         xyz.clear();
-        xyz.extend((0..n).map(|i| [p[0][i], p[1][i], p[2][i], 0.0]));
+        let (x, y, z) = (&p[0][..n], &p[1][..n], &p[2][..n]);
+        xyz.extend(x.iter().zip(y).zip(z).map(|((&x, &y), &z)| [x, y, z, 0.0]));
     }
     let r2v = F32s::splat(r2);
     for i in 0..n {
@@ -161,7 +178,7 @@ pub(crate) fn collect_near(
         let pi = [p[0][i], p[1][i], p[2][i]];
         let mut k = 0;
         if simd {
-            let piv = pi.map(F32s::splat);
+            let piv = [F32s::splat(pi[0]), F32s::splat(pi[1]), F32s::splat(pi[2])];
             while k + LANES <= list.len() {
                 let js = &list[k..k + LANES];
                 let idx = idx8(|l| js[l]);
