@@ -37,6 +37,26 @@
 //!   column 0.809 / 0.770 / 0.616 ms a step before against 1.235 / 0.658 / 0.586 after,
 //!   alternate runs at load ~6 on two cores (noise larger than the change).
 //!
+//! Tried in session 5 and not kept (callgrind over the pair phase, same scene, against
+//! 1 600 million instructions before the change above):
+//! * **per-block references** (a block whose particle passed `0.49 s₂` takes new references
+//!   alone; the owner blocks of the pairs touching it, found through a block adjacency built
+//!   with the list, are tested again; the list stays exact: tested against the full build
+//!   and every contact): with a fixed skin `d / 2`, 1 637 million (the partial retests cost
+//!   less than the rebuilds, but the fixed skin lists ~10 000 near pairs against ~6 400 for
+//!   the adaptive one, and the pair test runs every substep); with a skin per block
+//!   (adapted like the global one, pair radius `d + s_i / 2 + s_j / 2`): 2 170 million with
+//!   skins reset at each candidate rebuild, 2 525 million when kept across them (blocks
+//!   keep the wide skins of the fall). A block that moves retests ~4 owner blocks, so the
+//!   partial updates walked ~60% of the candidates the global rebuilds walk, at ~2.5 times
+//!   the instructions a candidate (short per-block loops, the per-pair radius);
+//! * the partial last group of a particle's candidates in the eight-lane test (masked)
+//!   instead of the scalar tail: 1 230 to 1 384 million (the clamped indices slow every
+//!   group);
+//! * the pair pass's candidate test loading `[x, y, z, 0]` copies of the predicted
+//!   positions (two transposed gathers instead of six lane gathers): 1 230 to 1 221
+//!   million, the per-substep copy eats the gain; not worth its buffer.
+//!
 //! The skin rule is unchanged: a larger cap than `d` makes the near list approach the
 //! candidate lists (radius `3 d` against `4 d`), and a cap of `d / 2` (tried: fewer near
 //! pairs, more rebuilds) measured no faster (CPU of these phases over the distance solve's,
