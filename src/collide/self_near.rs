@@ -55,7 +55,11 @@
 //!   group);
 //! * the pair pass's candidate test loading `[x, y, z, 0]` copies of the predicted
 //!   positions (two transposed gathers instead of six lane gathers): 1 230 to 1 221
-//!   million, the per-substep copy eats the gain; not worth its buffer.
+//!   million, the per-substep copy eats the gain; not worth its buffer;
+//! * the rebuild in parallel over fixed chunks of 2 048 particles (per-chunk buffers joined
+//!   in order: the same list): on two threads the pairs column measured 0.421-0.649 ms a
+//!   step before against 0.433-0.647 after (seven alternate runs each, load 3.3-3.5: the
+//!   second core was busy), no measurable gain on the shared machine.
 //!
 //! The skin rule is unchanged: a larger cap than `d` makes the near list approach the
 //! candidate lists (radius `3 d` against `4 d`), and a cap of `d / 2` (tried: fewer near
