@@ -31,6 +31,7 @@
 //!   kinematic pins land exactly on their targets                     [embed::kinematic]
 //! ```
 
+use crate::collide::response::MeanParts;
 use crate::collide::response::{clamp_speed, ClampParams};
 use crate::collide::self_collision::{mean_velocity, Active, TRAVEL_FACTOR};
 use crate::error::{positive, Result, WeftError};
@@ -192,6 +193,11 @@ impl World {
         // while it is in cache: the same bits as two passes, one sweep over 1M particles fewer
         // a substep.
         let fuse_next = self.fuse_predict && !check && self.effects.wind.is_none() && self.wind.is_none();
+        // The speed clamp's mean velocity, summed by the predict pass chunk by chunk while the
+        // velocities are in cache (the same sums as `mean_velocity`); obstacles change
+        // velocities between predict and the clamp, so they keep the separate pass.
+        let mean_parts = (sc.is_some() && self.fuse_predict && !check && !has_obstacles).then(|| MeanParts::new(n));
+        let mean_sink = mean_parts.as_ref();
         let mut predicted_ahead = false;
         for s in 0..n_sub {
             let t = self.time + (s as f64) * (h as f64);
@@ -212,14 +218,18 @@ impl World {
                 if predicted_ahead {
                     // done by the previous substep's update pass
                 } else if fused_guard && s == 0 {
-                    self.particles.for_chunks_saving(parallel, &mut self.backup, |c, saved| {
+                    self.particles.for_chunks_saving(parallel, &mut self.backup, |mut c, saved| {
                         for (dst, src) in saved.into_iter().zip(c.state()) {
                             dst.copy_from_slice(src);
                         }
-                        predict(c, &pp, simd)
+                        predict(c.reborrow(), &pp, simd);
+                        add_mean(mean_sink, &c, n);
                     });
                 } else {
-                    self.particles.for_chunks(parallel, |c| predict(c, &pp, simd));
+                    self.particles.for_chunks(parallel, |mut c| {
+                        predict(c.reborrow(), &pp, simd);
+                        add_mean(mean_sink, &c, n);
+                    });
                 }
             }
             {
@@ -239,7 +249,8 @@ impl World {
             }
             if let Some(a) = sc {
                 let t0 = std::time::Instant::now();
-                self.self_collision_clamp(a, n_sub, h, parallel, simd);
+                let mean = mean_parts.as_ref().map(MeanParts::mean);
+                self.self_collision_clamp(a, n_sub, h, parallel, simd, mean);
                 sc_time += t0.elapsed();
                 let p = &self.particles;
                 checkpoint!("self-collision clamp", p.px, p.py, p.pz, p.vx, p.vy, p.vz);
@@ -319,7 +330,8 @@ impl World {
                         }
                     }
                     if ahead {
-                        predict(c, &pp_next, simd);
+                        predict(c.reborrow(), &pp_next, simd);
+                        add_mean(mean_sink, &c, n);
                     }
                 });
                 predicted_ahead = ahead;
@@ -360,10 +372,11 @@ impl World {
 impl World {
     /// The self-collision speed clamp (relative to the mean velocity, at most
     /// `TRAVEL_FACTOR d / substeps` per substep), then the predictions kept as box centres.
-    pub(crate) fn self_collision_clamp(&mut self, a: Active, n_sub: u32, h: f32, parallel: bool, simd: bool) {
+    /// `mean` is the mean velocity when the predict pass summed it already.
+    pub(crate) fn self_collision_clamp(&mut self, a: Active, n_sub: u32, h: f32, parallel: bool, simd: bool, mean: Option<[f32; 3]>) {
         let n = self.particles.count();
         let p = &self.particles;
-        let mean = mean_velocity([&p.vx, &p.vy, &p.vz], &p.w, n, parallel);
+        let mean = mean.unwrap_or_else(|| mean_velocity([&p.vx, &p.vy, &p.vz], &p.w, n, parallel));
         let cp = ClampParams {
             mean,
             limit: TRAVEL_FACTOR * a.d / n_sub as f32,
@@ -384,6 +397,13 @@ impl World {
         let p = &mut self.particles;
         self.selfcol
             .apply([&p.x, &p.y, &p.z], &p.w, [&mut p.px, &mut p.py, &mut p.pz], ap, parallel, simd);
+    }
+}
+
+/// Adds a chunk's predicted velocities to the mean-velocity sums, when they are kept.
+fn add_mean(sink: Option<&MeanParts>, c: &crate::particles::ParticleChunk<'_>, n: usize) {
+    if let Some(m) = sink {
+        m.add(c.start, [&c.vx[..], &c.vy[..], &c.vz[..]], c.w, n);
     }
 }
 

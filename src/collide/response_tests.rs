@@ -184,3 +184,34 @@ fn mean_velocity_is_deterministic_and_averages_the_free_particles() {
         }
     }
 }
+
+/// The mean-velocity sums filled as the step's predict pass fills them (ranges of whole
+/// chunks, in any order, the arrays padded past `n`) give the bits of `mean_velocity`; a
+/// changed velocity in one chunk changes the result (the sums are overwritten, not kept).
+#[test]
+fn mean_parts_filled_by_chunk_ranges_equal_mean_velocity() {
+    for n in [1usize, 4096, 4097, 9001, 12_289] {
+        let mut p = cloud(n, n as u64 + 11);
+        let len = p.vx.len();
+        let want = mean_velocity([&p.vx[..], &p.vy[..], &p.vz[..]], &p.w, n, false);
+        // One range for everything (the serial pass) and single chunks in reverse order.
+        let whole = MeanParts::new(n);
+        whole.add(0, [&p.vx[..], &p.vy[..], &p.vz[..]], &p.w, n);
+        assert_eq!(whole.mean().map(f32::to_bits), want.map(f32::to_bits), "n {n}");
+        let parts = MeanParts::new(n);
+        for lo in (0..len).step_by(MEAN_CHUNK).rev() {
+            let hi = (lo + MEAN_CHUNK).min(len);
+            parts.add(lo, [&p.vx[lo..hi], &p.vy[lo..hi], &p.vz[lo..hi]], &p.w[lo..hi], n);
+        }
+        assert_eq!(parts.mean().map(f32::to_bits), want.map(f32::to_bits), "n {n}");
+        let i = n - 1;
+        p.vx[i] += 1000.0;
+        p.w[i] = 1.0;
+        let lo = i / MEAN_CHUNK * MEAN_CHUNK;
+        let hi = (lo + MEAN_CHUNK).min(len);
+        parts.add(lo, [&p.vx[lo..hi], &p.vy[lo..hi], &p.vz[lo..hi]], &p.w[lo..hi], n);
+        let moved = mean_velocity([&p.vx[..], &p.vy[..], &p.vz[..]], &p.w, n, false);
+        assert_eq!(parts.mean().map(f32::to_bits), moved.map(f32::to_bits), "n {n}");
+        assert_ne!(moved[0], want[0], "n {n}");
+    }
+}

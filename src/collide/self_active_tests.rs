@@ -286,3 +286,45 @@ fn reused_candidate_lists_give_the_fresh_lists_and_the_same_bits() {
         );
     }
 }
+
+/// Consecutive pair passes over different predictions (as the substeps run them): after each
+/// pass the sums are those of a recomputation for its own predictions, so a particle whose
+/// contacts ended has zero sums again, and one still in contact its new sums.
+#[test]
+fn consecutive_pair_passes_leave_no_stale_sums() {
+    let mut rng = signed(13);
+    let (rows, cols, s) = (14, 11, 0.02f32);
+    let (mut data, x0) = folded(rows, cols, s, 1.05 * s, 0.3 * s, &mut rng);
+    data.config = Some(SelfCollision {
+        response: Response::Vccpbd,
+        ..SelfCollision::default()
+    });
+    let n = rows * cols;
+    let x = [padded(&x0[0]), padded(&x0[1]), padded(&x0[2])];
+    let w = padded(&vec![1.0f32; n]);
+    let (mut ended, mut kept) = (0, 0);
+    let mut last: Option<Vec<[f32; 11]>> = None;
+    for pass in 0..6 {
+        // Predictions spread less and less: the contact set changes from pass to pass.
+        let spread = [0.55, 0.1, 0.4, 0.0, 0.3, 0.05][pass] * s;
+        let mut p = x.clone();
+        for c in &mut p {
+            for v in &mut c[..n] {
+                *v += spread * rng();
+            }
+        }
+        let (_, want) = reference(&data, &x, &p, &w, n);
+        for simd in [false, true] {
+            let (_, got) = compact(&mut data, &x, &p, &w, n, false, simd);
+            for i in 0..n {
+                assert_eq!(got[i].map(f32::to_bits), want[i].map(f32::to_bits), "pass {pass} particle {i}");
+            }
+        }
+        if let Some(prev) = &last {
+            ended += (0..n).filter(|&i| prev[i][10] > 0.0 && want[i][10] == 0.0).count();
+            kept += (0..n).filter(|&i| prev[i][10] > 0.0 && want[i][10] > 0.0).count();
+        }
+        last = Some(want);
+    }
+    assert!(ended > 0 && kept > 0, "{ended} ended, {kept} kept contacts");
+}

@@ -28,6 +28,39 @@
 //!   per gather in the pair pass's candidate test, which made that test twice as slow (perf
 //!   annotate).
 //!
+//! * session 5: the displacement check loads its three coordinates written out (with
+//!   `[0, 1, 2].map(..)` each coordinate was an out-of-line `try_map` call: ~140 million
+//!   instructions of the pair phase over the 1 500 substeps), a build copies the positions
+//!   of a block with one slice copy and the `[x, y, z, 0]` copy without bounds checks.
+//!   Callgrind over the pair phase (`self_collision_pairs_pass`, timeline example, 150 steps,
+//!   1 thread): 1 600 to 1 292 million instructions, same bits; wall time of the pairs
+//!   column 0.809 / 0.770 / 0.616 ms a step before against 1.235 / 0.658 / 0.586 after,
+//!   alternate runs at load ~6 on two cores (noise larger than the change).
+//!
+//! Tried in session 5 and not kept (callgrind over the pair phase, same scene, against
+//! 1 600 million instructions before the change above):
+//! * **per-block references** (a block whose particle passed `0.49 s₂` takes new references
+//!   alone; the owner blocks of the pairs touching it, found through a block adjacency built
+//!   with the list, are tested again; the list stays exact: tested against the full build
+//!   and every contact): with a fixed skin `d / 2`, 1 637 million (the partial retests cost
+//!   less than the rebuilds, but the fixed skin lists ~10 000 near pairs against ~6 400 for
+//!   the adaptive one, and the pair test runs every substep); with a skin per block
+//!   (adapted like the global one, pair radius `d + s_i / 2 + s_j / 2`): 2 170 million with
+//!   skins reset at each candidate rebuild, 2 525 million when kept across them (blocks
+//!   keep the wide skins of the fall). A block that moves retests ~4 owner blocks, so the
+//!   partial updates walked ~60% of the candidates the global rebuilds walk, at ~2.5 times
+//!   the instructions a candidate (short per-block loops, the per-pair radius);
+//! * the partial last group of a particle's candidates in the eight-lane test (masked)
+//!   instead of the scalar tail: 1 230 to 1 384 million (the clamped indices slow every
+//!   group);
+//! * the pair pass's candidate test loading `[x, y, z, 0]` copies of the predicted
+//!   positions (two transposed gathers instead of six lane gathers): 1 230 to 1 221
+//!   million, the per-substep copy eats the gain; not worth its buffer;
+//! * the rebuild in parallel over fixed chunks of 2 048 particles (per-chunk buffers joined
+//!   in order: the same list): on two threads the pairs column measured 0.421-0.649 ms a
+//!   step before against 0.433-0.647 after (seven alternate runs each, load 3.3-3.5: the
+//!   second core was busy), no measurable gain on the shared machine.
+//!
 //! The skin rule is unchanged: a larger cap than `d` makes the near list approach the
 //! candidate lists (radius `3 d` against `4 d`), and a cap of `d / 2` (tried: fewer near
 //! pairs, more rebuilds) measured no faster (CPU of these phases over the distance solve's,
@@ -84,7 +117,10 @@ impl NearList {
             a.clear();
             for &b in blocks {
                 let g = b as usize * LANES;
-                a.extend((g..g + LANES).map(|i| src.get(i).copied().unwrap_or(0.0)));
+                match src.get(g..g + LANES) {
+                    Some(s) => a.extend_from_slice(s),
+                    None => a.extend((g..g + LANES).map(|i| src.get(i).copied().unwrap_or(0.0))),
+                }
             }
         }
         let r = d + self.skin;
@@ -109,15 +145,19 @@ pub(crate) fn max_disp2_blocks(p: [&[f32]; 3], at: [&[f32]; 3], blocks: &[u32], 
         let g = b as usize * LANES;
         let c = k * LANES;
         if simd && g + LANES <= len {
-            let v = [0, 1, 2].map(|a| load(p[a], g) - load(at[a], c));
-            let d2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+            // Written out: `[0, 1, 2].map(..)` compiled to an out-of-line call per coordinate
+            // here (callgrind: ~110 of the ~1600 million instructions of the pair phase).
+            let vx = load(p[0], g) - load(at[0], c);
+            let vy = load(p[1], g) - load(at[1], c);
+            let vz = load(p[2], g) - load(at[2], c);
+            let d2 = vx * vx + vy * vy + vz * vz;
             bad |= d2.is_nan();
             mv = mv.max(d2);
             continue;
         }
         for l in 0..LANES.min(len.saturating_sub(g)) {
-            let v = [0, 1, 2].map(|a| p[a][g + l] - at[a][c + l]);
-            let d2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+            let (vx, vy, vz) = (p[0][g + l] - at[0][c + l], p[1][g + l] - at[1][c + l], p[2][g + l] - at[2][c + l]);
+            let d2 = vx * vx + vy * vy + vz * vz;
             nan |= d2.is_nan();
             m = m.max(d2);
         }
@@ -150,7 +190,8 @@ pub(crate) fn collect_near(
     let n = n.min(cand.len()).min(p[0].len()).min(p[1].len()).min(p[2].len());
     if simd {
         xyz.clear();
-        xyz.extend((0..n).map(|i| [p[0][i], p[1][i], p[2][i], 0.0]));
+        let (x, y, z) = (&p[0][..n], &p[1][..n], &p[2][..n]);
+        xyz.extend(x.iter().zip(y).zip(z).map(|((&x, &y), &z)| [x, y, z, 0.0]));
     }
     let r2v = F32s::splat(r2);
     for i in 0..n {
@@ -161,7 +202,7 @@ pub(crate) fn collect_near(
         let pi = [p[0][i], p[1][i], p[2][i]];
         let mut k = 0;
         if simd {
-            let piv = pi.map(F32s::splat);
+            let piv = [F32s::splat(pi[0]), F32s::splat(pi[1]), F32s::splat(pi[2])];
             while k + LANES <= list.len() {
                 let js = &list[k..k + LANES];
                 let idx = idx8(|l| js[l]);

@@ -102,7 +102,7 @@ impl World {
                     dst.extend_from_slice(&src[..n]);
                 }
             }
-            self.self_collision_clamp(a, n_sub, h, parallel, simd);
+            self.self_collision_clamp(a, n_sub, h, parallel, simd, None);
             self.rebase_clamped_predictions(n);
         }
         if c.obstacles {
