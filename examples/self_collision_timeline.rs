@@ -10,45 +10,24 @@
 //! clamp and bookkeeping); `rebuild` is 1 when the step ran the broadphase.
 
 use weft::collide::self_config::{Response, SelfBroadphase, SelfCollision};
-use weft::{ClothDesc, Effects, Fabric, PinSpec, SolverParams, World};
+use weft::{Fabric, SolverParams};
 
 fn main() -> weft::Result<()> {
     let mut args = std::env::args().skip(1).map(|a| a.parse::<usize>().ok());
     let steps = args.next().flatten().unwrap_or(150);
     let threads = args.next().flatten().unwrap_or(1);
-    let size = 100u32;
-    let spacing = 1.0 / (size - 1) as f32;
-    let fabric = Fabric {
-        thickness: spacing,
-        ..Fabric::preset("basic")?
-    };
-    let dt = fabric.dt;
     let params = SolverParams {
-        dt,
         substeps: 10,
         iterations: 1,
         threads,
         ..Default::default()
     };
-    let mut w = World::new(params, Effects::gravity())?;
-    w.add_cloth(&ClothDesc {
-        rows: size,
-        cols: size,
-        spacing,
-        origin: [-0.5, 1.5, -0.5],
-        u: [1.0, 0.0, 0.0],
-        v: [0.0, 0.0, 1.0],
-        fabric,
-        pins: vec![PinSpec::Row(size / 2)],
-        shear: true,
-        bend: true,
-        tethers: None,
-    })?;
-    w.set_self_collision(Some(SelfCollision {
+    let sc = SelfCollision {
         response: Response::Vccpbd,
         broadphase: SelfBroadphase::Hash,
         ..SelfCollision::default()
-    }))?;
+    };
+    let (mut w, dt) = weft::perf::fold_world(100, Fabric::preset("basic")?, params, sc)?;
     println!("step   total   build   query   start   pairs    corr   clamp rebuild");
     let mut last = w.self_collision_stats().clone();
     for s in 0..steps {

@@ -12,7 +12,7 @@ use std::time::Instant;
 use weft::collide::hash::SpatialHash;
 use weft::collide::neighbours::Neighbours;
 use weft::collide::self_config::{Response, SelfBroadphase, SelfCollision};
-use weft::{ClothDesc, Effects, Fabric, PinSpec, SolverParams, World};
+use weft::{Fabric, SolverParams};
 
 fn main() -> weft::Result<()> {
     let mut args = std::env::args().skip(1).map(|a| a.parse::<usize>().ok());
@@ -27,39 +27,19 @@ fn main() -> weft::Result<()> {
         .build()
         .map_err(|e| weft::WeftError::param("threads", query_threads, e.to_string()))?;
     let threads = 1;
-    let size = 100u32;
-    let spacing = 1.0 / (size - 1) as f32;
-    let fabric = Fabric {
-        thickness: spacing,
-        ..Fabric::preset("basic")?
-    };
-    let dt = fabric.dt;
     let params = SolverParams {
-        dt,
         substeps: 10,
         iterations: 1,
         threads,
         ..Default::default()
     };
-    let mut w = World::new(params, Effects::gravity())?;
-    w.add_cloth(&ClothDesc {
-        rows: size,
-        cols: size,
-        spacing,
-        origin: [-0.5, 1.5, -0.5],
-        u: [1.0, 0.0, 0.0],
-        v: [0.0, 0.0, 1.0],
-        fabric,
-        pins: vec![PinSpec::Row(size / 2)],
-        shear: true,
-        bend: true,
-        tethers: None,
-    })?;
-    w.set_self_collision(Some(SelfCollision {
+    let sc = SelfCollision {
         response: Response::Vccpbd,
         broadphase: SelfBroadphase::Hash,
         ..SelfCollision::default()
-    }))?;
+    };
+    let (mut w, dt) = weft::perf::fold_world(100, Fabric::preset("basic")?, params, sc)?;
+    let (size, spacing) = (100u32, 1.0 / 99.0f32);
     let n = w.particle_count();
     // Rest positions of the grid (the cloth's own: row-major, spacing apart) and one cloth.
     let rest: [Vec<f32>; 3] = [

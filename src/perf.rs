@@ -13,9 +13,11 @@
 use std::time::Instant;
 
 use crate::cloth::{ClothDesc, PinSpec};
+use crate::collide::self_config::SelfCollision;
 use crate::constraints::DistanceSet;
 use crate::effects::Effects;
 use crate::error::{Result, WeftError};
+use crate::fabric::Fabric;
 use crate::integrate::{predict, update, PredictParams};
 use crate::lanes::{load, Vec3x8, LANES};
 use crate::params::SolverParams;
@@ -63,6 +65,39 @@ pub fn cloth_world(n: usize, threads: usize) -> Result<World> {
     )?;
     w.add_cloth(&desc)?;
     Ok(w)
+}
+
+/// The fold of `weft reproduce vccpbd` (SEEDS.md section A): a `size x size` cloth of 1 m
+/// in `fabric` with the thickness of its spacing, hung over its middle row 1.5 m up, so that
+/// both halves fall and fold face to face, with `self_collision` on. `params` gives threads,
+/// substeps, iterations and backend; its `dt` is replaced by the fabric's, which is also
+/// returned (the step to use).
+pub fn fold_world(size: u32, fabric: Fabric, params: SolverParams, self_collision: SelfCollision) -> Result<(World, f32)> {
+    if size < 2 {
+        return Err(WeftError::param("size", size, "a fold needs at least 2 x 2 particles"));
+    }
+    let spacing = 1.0 / (size - 1) as f32;
+    let fabric = Fabric {
+        thickness: spacing,
+        ..fabric
+    };
+    let dt = fabric.dt;
+    let mut w = World::new(SolverParams { dt, ..params }, Effects::gravity())?;
+    w.add_cloth(&ClothDesc {
+        rows: size,
+        cols: size,
+        spacing,
+        origin: [-0.5, 1.5, -0.5],
+        u: [1.0, 0.0, 0.0],
+        v: [0.0, 0.0, 1.0],
+        fabric,
+        pins: vec![PinSpec::Row(size / 2)],
+        shear: true,
+        bend: true,
+        tethers: None,
+    })?;
+    w.set_self_collision(Some(self_collision))?;
+    Ok((w, dt))
 }
 
 /// Pass 1 of the stream reference: reads x, v, w and writes v, p (as predict does):

@@ -67,40 +67,18 @@ fn fused_next_predict_equals_separate_passes_bitwise() {
 /// self-collision (VcCPBD): the halves swing under, so the speed clamp acts.
 fn hung(threads: usize, backend: Backend, fuse: bool) -> World {
     use crate::collide::self_config::{Response, SelfCollision};
-    let size = 70;
-    let spacing = 1.0 / (size - 1) as f32;
-    let fabric = Fabric {
-        thickness: spacing,
-        ..Fabric::preset("basic").unwrap()
-    };
     let params = SolverParams {
-        dt: fabric.dt,
         threads,
         substeps: 10,
         iterations: 1,
         backend,
         ..Default::default()
     };
-    let mut w = World::new(params, Effects::gravity()).unwrap();
-    w.add_cloth(&ClothDesc {
-        rows: size,
-        cols: size,
-        spacing,
-        origin: [-0.5, 1.5, -0.5],
-        u: [1.0, 0.0, 0.0],
-        v: [0.0, 0.0, 1.0],
-        fabric,
-        pins: vec![crate::PinSpec::Row(size / 2)],
-        shear: true,
-        bend: true,
-        tethers: None,
-    })
-    .unwrap();
-    w.set_self_collision(Some(SelfCollision {
+    let sc = SelfCollision {
         response: Response::Vccpbd,
         ..SelfCollision::default()
-    }))
-    .unwrap();
+    };
+    let (mut w, _) = crate::perf::fold_world(70, Fabric::preset("basic").unwrap(), params, sc).unwrap();
     w.fuse_predict = fuse;
     w
 }

@@ -206,39 +206,18 @@ fn rest_neighbours_are_never_listed() {
 /// The cloth of `weft reproduce vccpbd` at `size x size`: hung over its middle row, both
 /// halves fall and fold face to face.
 fn hung(size: u32, response: Response, broadphase: SelfBroadphase, threads: usize, fresh: bool) -> (crate::World, f32) {
-    let fab = crate::Fabric {
-        thickness: 1.0 / (size - 1) as f32,
-        ..crate::Fabric::preset("wool").unwrap()
-    };
     let params = crate::SolverParams {
-        dt: fab.dt,
         substeps: 10,
         iterations: 1,
         threads,
         ..Default::default()
     };
-    let dt = fab.dt;
-    let mut w = crate::World::new(params, crate::Effects::gravity()).unwrap();
-    w.add_cloth(&crate::ClothDesc {
-        rows: size,
-        cols: size,
-        spacing: fab.thickness,
-        origin: [-0.5, 1.5, -0.5],
-        u: [1.0, 0.0, 0.0],
-        v: [0.0, 0.0, 1.0],
-        fabric: fab,
-        pins: vec![crate::PinSpec::Row(size / 2)],
-        shear: true,
-        bend: true,
-        tethers: None,
-    })
-    .unwrap();
-    w.set_self_collision(Some(SelfCollision {
+    let sc = SelfCollision {
         response,
         broadphase,
         ..SelfCollision::default()
-    }))
-    .unwrap();
+    };
+    let (mut w, dt) = crate::perf::fold_world(size, crate::Fabric::preset("wool").unwrap(), params, sc).unwrap();
     w.selfcol.fresh_every_step = fresh;
     (w, dt)
 }

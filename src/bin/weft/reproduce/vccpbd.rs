@@ -40,7 +40,7 @@ use std::time::Instant;
 use clap::Args;
 use serde::Serialize;
 use weft::collide::self_config::{Response, SelfBroadphase, SelfCollision};
-use weft::{ClothDesc, Effects, Fabric, PinSpec, SolverParams, WeftError, World};
+use weft::{Fabric, SolverParams, WeftError, World};
 
 /// Options of `weft reproduce vccpbd`.
 #[derive(Args)]
@@ -146,40 +146,18 @@ struct RunCfg {
 }
 
 fn world(size: u32, fabric: &str, response: Response, broadphase: SelfBroadphase, cfg: RunCfg) -> weft::Result<(World, f32)> {
-    let preset = Fabric::preset(fabric)?;
-    let spacing = 1.0 / (size - 1) as f32;
-    let fab = Fabric {
-        thickness: spacing,
-        ..preset
-    };
-    let dt = fab.dt;
     let params = SolverParams {
-        dt,
         substeps: cfg.substeps,
         iterations: 1,
         threads: cfg.threads,
         ..Default::default()
     };
-    let mut w = World::new(params, Effects::gravity())?;
-    w.add_cloth(&ClothDesc {
-        rows: size,
-        cols: size,
-        spacing,
-        origin: [-0.5, 1.5, -0.5],
-        u: [1.0, 0.0, 0.0],
-        v: [0.0, 0.0, 1.0],
-        fabric: fab,
-        pins: vec![PinSpec::Row(size / 2)],
-        shear: true,
-        bend: true,
-        tethers: None,
-    })?;
-    w.set_self_collision(Some(SelfCollision {
+    let sc = SelfCollision {
         response,
         broadphase,
         ..SelfCollision::default()
-    }))?;
-    Ok((w, dt))
+    };
+    weft::perf::fold_world(size, Fabric::preset(fabric)?, params, sc)
 }
 
 fn measure(size: u32, fi: usize, ri: usize, broadphase: SelfBroadphase, cfg: RunCfg) -> weft::Result<Row> {
