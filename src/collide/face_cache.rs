@@ -43,8 +43,10 @@
 //! 0.36 end in a contact. (1) A two-stage SIMD pre-test of the list (the box test eight faces
 //! at a time, then a conservative `f32` plane and edge-distance test on 64-byte per-face
 //! records) cut the exact narrowphase calls from 19.3 M to 8.3 M, but the pass went from
-//! 9.99 G to 11.27 G instructions, last-level misses from 43.2 M to 40.8 M, and the row's
-//! median wall time from 0.748 s (0.628-1.007) to 0.762 s (0.617-1.097): no gain. A
+//! 9.99 G to 11.27 G instructions, last-level misses from 43.2 M to 40.8 M; the row's median
+//! wall time went from 0.748 s (0.628-1.007) to 0.762 s (0.617-1.097) in one series and was
+//! 2.6% lower in another (paired median ratio 0.974, faster in 14 of 20 pairs): within the
+//! run-to-run noise, not worth its ~450 lines (records, transposes, twins). A
 //! one-stage version with 96-byte records cost more misses (63.0 M first-level against 50.7 M).
 //! (2) The eight lists of a block in one pooled array instead of a boxed block of inline
 //! lists: 3.6 M fewer last-level misses (measured with the one-stage test), no measurable time. (3) Prefetching the next block's
