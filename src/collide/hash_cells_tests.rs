@@ -3,7 +3,7 @@
 use super::*;
 use crate::test_rng::signed;
 
-type Scene = ([Vec<f32>; 3], [Vec<f32>; 3], Vec<u32>);
+use super::super::rest::tests::{lattices, Scene};
 
 /// Brute force over all pairs with the rule of `hash_rest` (upper lists).
 fn brute(p: &[Vec<f32>; 3], rest: &[Vec<f32>; 3], cloth: &[u32], reach: f32, skip: f32) -> Neighbours {
@@ -20,28 +20,6 @@ fn brute(p: &[Vec<f32>; 3], rest: &[Vec<f32>; 3], cloth: &[u32], reach: f32, ski
     })
     .unwrap();
     nb
-}
-
-/// Two `side x side` lattices of rest spacing `h`, the second lifted by `lift h`, positions
-/// displaced by `noise h` (zero noise: particles exactly on cell faces).
-fn lattices(side: usize, h: f32, noise: f32, lift: f32, seed: u64) -> Scene {
-    let mut rng = signed(seed);
-    let (mut p, mut rest): ([Vec<f32>; 3], [Vec<f32>; 3]) = Default::default();
-    let mut cloth = Vec::new();
-    for c in 0..2u32 {
-        for a in 0..side {
-            for b in 0..side {
-                let r = [a as f32 * h, b as f32 * h, 0.0];
-                for k in 0..3 {
-                    rest[k].push(r[k]);
-                    let up = if k == 2 { lift * h * c as f32 } else { 0.0 };
-                    p[k].push(r[k] + noise * h * rng() + up);
-                }
-                cloth.push(c);
-            }
-        }
-    }
-    (p, rest, cloth)
 }
 
 /// Every query of the scene (cells parallel on 1 and 2 threads, cells serial, the particle

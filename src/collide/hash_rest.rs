@@ -227,15 +227,17 @@ impl RestCopy {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
     use crate::test_rng::signed;
 
-    /// Two 12x12 lattices (rest spacing `h`, so many rest distances fall exactly on the skip
-    /// radius `3 h`), crumpled by noise of about `h` and partly overlapping, one particle NaN.
-    fn scene() -> ([Vec<f32>; 3], [Vec<f32>; 3], Vec<u32>) {
-        let mut rng = signed(17);
-        let (h, side) = (0.01f32, 12usize);
+    /// Positions, rest positions and cloth ids of a test scene.
+    pub(crate) type Scene = ([Vec<f32>; 3], [Vec<f32>; 3], Vec<u32>);
+
+    /// Two `side x side` lattices of rest spacing `h`, the second lifted by `lift h`,
+    /// positions displaced by `noise h` (zero noise: particles exactly on cell faces).
+    pub(crate) fn lattices(side: usize, h: f32, noise: f32, lift: f32, seed: u64) -> Scene {
+        let mut rng = signed(seed);
         let (mut p, mut rest): ([Vec<f32>; 3], [Vec<f32>; 3]) = Default::default();
         let mut cloth = Vec::new();
         for c in 0..2u32 {
@@ -244,14 +246,22 @@ mod tests {
                     let r = [a as f32 * h, b as f32 * h, 0.0];
                     for k in 0..3 {
                         rest[k].push(r[k]);
-                        p[k].push(r[k] + h * rng() + if k == 2 { 0.5 * h * c as f32 } else { 0.0 });
+                        let up = if k == 2 { lift * h * c as f32 } else { 0.0 };
+                        p[k].push(r[k] + noise * h * rng() + up);
                     }
                     cloth.push(c);
                 }
             }
         }
-        p[1][40] = f32::NAN;
         (p, rest, cloth)
+    }
+
+    /// Two 12x12 lattices (rest spacing `h`, so many rest distances fall exactly on the skip
+    /// radius `3 h`), crumpled by noise of about `h` and partly overlapping, one particle NaN.
+    fn scene() -> Scene {
+        let mut s = lattices(12, 0.01, 1.0, 0.5, 17);
+        s.0[1][40] = f32::NAN;
+        s
     }
 
     #[test]
