@@ -55,6 +55,7 @@
 //! The profile points elsewhere: in the cache model the cloth's distance sweep (twelve colours,
 //! each over the whole 32 500-particle cloth) has 117 M of the run's 230 M last-level misses.
 
+use super::face_ball::Ball;
 use super::face_broadphase::FaceBroadphase;
 use super::mesh::TriMesh;
 use super::narrow::{query_box, Contact};
@@ -82,6 +83,9 @@ pub const INLINE_FACES: usize = 12;
 pub struct FaceList {
     inline: [u32; INLINE_FACES],
     spill: Vec<u32>,
+    /// The list's clearance ball ([`face_ball`](super::face_ball)): its near faces are at
+    /// the front.
+    ball: Ball,
 }
 
 /// The kept lists of one block of eight particles (module doc): gathered boxes and list
@@ -115,6 +119,7 @@ impl CacheBlock {
         }
         self.len[l] = 0;
         self.lists[l].spill.clear();
+        self.lists[l].ball = Ball::default();
     }
 
     /// Forgets every lane's list.
@@ -168,10 +173,27 @@ impl CacheBlock {
         }
     }
 
+    /// Lane `l`'s list, to sort it.
+    fn faces_mut(&mut self, l: usize) -> &mut [u32] {
+        let list = &mut self.lists[l];
+        match self.len[l] as usize {
+            n if n <= INLINE_FACES => &mut list.inline[..n],
+            _ => &mut list.spill,
+        }
+    }
+
+    /// Sorts lane `l`'s list for the clearance ball around `p` (margin `m`).
+    fn sort_ball(&mut self, l: usize, mesh: &TriMesh, p: [f32; 3], reach: f32, m: f32) {
+        let gathered = ([0, 1, 2].map(|k| self.lo[k][l]), [0, 1, 2].map(|k| self.hi[k][l]));
+        let ball = Ball::sort(mesh, self.faces_mut(l), p, reach, m, gathered);
+        self.lists[l].ball = ball;
+    }
+
     /// Keeps `faces` as lane `l`'s list.
     fn store(&mut self, l: usize, faces: &[u32]) {
         self.len[l] = faces.len() as u32;
         let list = &mut self.lists[l];
+        list.ball = Ball::default();
         list.spill.clear();
         if faces.len() <= INLINE_FACES {
             list.inline[..faces.len()].copy_from_slice(faces);
@@ -216,10 +238,15 @@ impl CacheBlock {
         scratch: &mut Vec<u32>,
     ) -> Option<Contact> {
         if keep && self.holds(l, lo, hi) {
-            return match self.len[l] {
-                0 => None,
-                _ => best_contact(mesh, self.faces(l), x, p, reach, lo, hi),
-            };
+            if self.len[l] == 0 {
+                return None;
+            }
+            let ball = self.lists[l].ball;
+            if !ball.holds(x, p, reach) {
+                self.sort_ball(l, mesh, p, reach, super::face_ball::ball_margin(x, p, reach));
+                return best_contact(mesh, self.faces(l), x, p, reach, lo, hi);
+            }
+            return best_contact(mesh, &self.faces(l)[..ball.near()], x, p, reach, lo, hi);
         }
         self.gather(l, mesh, bp, x, p, reach, (lo, hi), keep, scratch)
     }
@@ -254,6 +281,7 @@ impl CacheBlock {
         for k in 0..3 {
             (self.lo[k][l], self.hi[k][l]) = (glo[k], ghi[k]);
         }
+        self.sort_ball(l, mesh, p, reach, super::face_ball::ball_margin(x, p, reach));
         best_contact(mesh, self.faces(l), x, p, reach, lo, hi)
     }
 }

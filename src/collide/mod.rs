@@ -22,6 +22,7 @@
 //! routine has a `_serial` twin, and the results do not depend on the thread count.
 pub mod bvh;
 pub mod dressform;
+pub mod face_ball;
 pub mod face_broadphase;
 pub mod face_cache;
 pub mod face_hash;
