@@ -95,6 +95,10 @@ pub struct CacheBlock {
     lo: [[f32; LANES]; 3],
     hi: [[f32; LANES]; 3],
     len: [u32; LANES],
+    /// Centres and clearances of the lanes' balls that have no near face (clearance `-inf`
+    /// otherwise): the hot copy of [`Ball::empty_part`] for the eight-lane skip test.
+    empty_o: [[f32; LANES]; 3],
+    empty_c: [f32; LANES],
     lists: Box<[FaceList; LANES]>,
 }
 
@@ -105,6 +109,8 @@ impl Default for CacheBlock {
             lo: [[f32::INFINITY; LANES]; 3],
             hi: [[f32::NEG_INFINITY; LANES]; 3],
             len: [0; LANES],
+            empty_o: [[0.0; LANES]; 3],
+            empty_c: [f32::NEG_INFINITY; LANES],
             lists: Box::default(),
         }
     }
@@ -119,7 +125,37 @@ impl CacheBlock {
         }
         self.len[l] = 0;
         self.lists[l].spill.clear();
-        self.lists[l].ball = Ball::default();
+        self.set_ball(l, Ball::default());
+    }
+
+    /// Sets lane `l`'s ball and its hot copy.
+    fn set_ball(&mut self, l: usize, ball: Ball) {
+        self.lists[l].ball = ball;
+        let (o, c) = ball.empty_part();
+        (0..3).for_each(|k| self.empty_o[k][l] = o[k]);
+        self.empty_c[l] = c;
+    }
+
+    /// The lanes (bit `l`) whose ball has no near face and vouches for the step `x -> p` of
+    /// reach `reach` ([`face_ball`](super::face_ball)): their step has no contact. Scalar.
+    pub fn ball_empty(&self, x: [[f32; LANES]; 3], p: [[f32; LANES]; 3], reach: [f32; LANES]) -> u32 {
+        (0..LANES).fold(0, |m, l| {
+            let q = |a: [[f32; LANES]; 3]| [a[0][l], a[1][l], a[2][l]];
+            let o = q(self.empty_o);
+            m | (super::face_ball::vouches(o, self.empty_c[l], q(x), q(p), reach[l]) as u32) << l
+        })
+    }
+
+    /// [`ball_empty`](Self::ball_empty) eight lanes at once (the same bits).
+    pub fn ball_empty_simd(&self, x: crate::lanes::Vec3x8, p: crate::lanes::Vec3x8, reach: crate::lanes::F32s) -> u32 {
+        use crate::lanes::{F32s, Vec3x8};
+        let g = |a: [f32; LANES]| F32s::from(a);
+        let o = Vec3x8 {
+            x: g(self.empty_o[0]),
+            y: g(self.empty_o[1]),
+            z: g(self.empty_o[2]),
+        };
+        super::face_ball::vouches_simd(o, g(self.empty_c), x, p, reach)
     }
 
     /// Forgets every lane's list.
@@ -186,14 +222,14 @@ impl CacheBlock {
     fn sort_ball(&mut self, l: usize, mesh: &TriMesh, p: [f32; 3], reach: f32, m: f32) {
         let gathered = ([0, 1, 2].map(|k| self.lo[k][l]), [0, 1, 2].map(|k| self.hi[k][l]));
         let ball = Ball::sort(mesh, self.faces_mut(l), p, reach, m, gathered);
-        self.lists[l].ball = ball;
+        self.set_ball(l, ball);
     }
 
     /// Keeps `faces` as lane `l`'s list.
     fn store(&mut self, l: usize, faces: &[u32]) {
         self.len[l] = faces.len() as u32;
+        self.set_ball(l, Ball::default());
         let list = &mut self.lists[l];
-        list.ball = Ball::default();
         list.spill.clear();
         if faces.len() <= INLINE_FACES {
             list.inline[..faces.len()].copy_from_slice(faces);

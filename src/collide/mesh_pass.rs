@@ -16,6 +16,9 @@
 //!    is nothing to test. That last case is found with case 1, for the eight lanes at once
 //!    from the block's gathered boxes and list lengths ([`CacheBlock::held_empty_simd`]),
 //!    so such a particle costs no scalar work at all (finite inputs only, as in case 1).
+//!    So is a particle whose list's clearance ball has no near face and vouches for the
+//!    step ([`CacheBlock::ball_empty_simd`], [`face_ball`](super::face_ball)); when the
+//!    ball has near faces, only they are tested.
 //! 3. **Gather**: the broadphase is asked again (and the list kept for the coming steps).
 //!
 //! With the paper's face memory every live particle runs the memory rule around cases 2-3
@@ -66,11 +69,13 @@ fn lanes(a: &[f32], b: usize) -> [f32; LANES] {
 /// The lanes of block `b` the pass skips, bit `l` for particle `8 b + l`: not live, or every
 /// input finite and (with `far`) the query box missing the box `[lo, hi]` on some axis or
 /// (with `kept`) the lane's kept list empty with a gathered box holding the query box
-/// ([`CacheBlock::held_empty`]). The scalar twin of [`skip_lanes_simd`], built on
-/// [`query_box`] itself.
+/// ([`CacheBlock::held_empty`]), or (with `kept`) the lane's ball empty of near faces
+/// and vouching for the step ([`CacheBlock::ball_empty`]). The scalar twin of
+/// [`skip_lanes_simd`], built on [`query_box`] itself.
 pub(crate) fn skip_lanes(g: &GenInput, b: usize, lo: [f32; 3], hi: [f32; 3], far: bool, kept: Option<&CacheBlock>) -> u32 {
     let (mut skip, mut finite_bits) = (0, 0);
     let (mut qlo, mut qhi) = ([[0.0; LANES]; 3], [[0.0; LANES]; 3]);
+    let (mut xs, mut ps, mut reach) = ([[0.0; LANES]; 3], [[0.0; LANES]; 3], [0.0; LANES]);
     for l in 0..LANES {
         let i = b * LANES + l;
         let live = i < g.n && g.w[i] > 0.0;
@@ -86,8 +91,12 @@ pub(crate) fn skip_lanes(g: &GenInput, b: usize, lo: [f32; 3], hi: [f32; 3], far
             skip |= 1 << l;
         }
         finite_bits |= (finite as u32) << l;
+        for k in 0..3 {
+            (xs[k][l], ps[k][l]) = (x[k], p[k]);
+        }
+        reach[l] = g.reach[i];
     }
-    skip | kept.map_or(0, |c| c.held_empty(qlo, qhi) & finite_bits)
+    skip | kept.map_or(0, |c| (c.held_empty(qlo, qhi) & finite_bits) | c.ball_empty(xs, ps, reach))
 }
 
 /// [`skip_lanes`] eight lanes at once. For finite inputs the boxes are those of
@@ -131,7 +140,7 @@ pub(crate) fn skip_lanes_simd(g: &GenInput, b: usize, lo: [f32; 3], hi: [f32; 3]
             skip |= (finite & miss).to_bitmask();
         }
         if let Some(c) = kept {
-            skip |= c.held_empty_simd(qlo, qhi) & finite.to_bitmask();
+            skip |= (c.held_empty_simd(qlo, qhi) & finite.to_bitmask()) | c.ball_empty_simd(x, p, reach);
         }
     }
     skip
@@ -230,7 +239,7 @@ mod tests {
             w[13 * i + 1] = special;
         }
         let th = vec![0.001; len];
-        let (mut far, mut empty, mut kept) = (0, 0, 0);
+        let (mut far, mut empty, mut kept, mut balls) = (0, 0, 0, 0);
         for n in [len, len - 3] {
             let g = GenInput {
                 x: [&x, &y, &z],
@@ -265,6 +274,8 @@ mod tests {
                                 assert!((0..mesh.face_count() as u32).all(|f| !mesh.face_overlaps(f, ql, qh)));
                             } else {
                                 empty += 1;
+                                // skipped with a non-empty list: its ball vouched
+                                balls += c.is_some_and(|c| !c.faces(l).is_empty()) as usize;
                                 assert_eq!(step_contact(&mesh, &bp, xl, pl, reach[i], &mut Vec::new()), None);
                             }
                         }
@@ -272,6 +283,6 @@ mod tests {
                 }
             }
         }
-        assert!(far > 100 && empty > 100 && kept > 100, "{far} {empty} {kept}");
+        assert!(far > 100 && empty > 100 && kept > 100 && balls > 20, "{far} {empty} {kept} {balls}");
     }
 }
