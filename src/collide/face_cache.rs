@@ -11,6 +11,8 @@
 //! `Q` and handed to the same narrowphase with the same total order of contacts. The contacts
 //! are therefore bit for bit those of the uncached search, whatever the broadphase and
 //! whatever the order of the list. When `Q` leaves `G` the particle gathers again.
+//! Each list is also sorted around a clearance ball ([`face_ball`](super::face_ball)): while
+//! the step stays in the ball only the faces at the front of the list are tested.
 //!
 //! The margin bounds the motion of the coming steps: [`margin`] is `MARGIN_REACH` reaches plus
 //! [`MARGIN_STEPS`] times the step's largest coordinate change, so a particle moving steadily
