@@ -25,12 +25,18 @@
 //! several substeps, and zeroing then storing them again cost ~60 of the ~1 290 million
 //! instructions of the fold's pair phase; callgrind, timeline example, 150 steps, 1 thread:
 //! 1 292 to 1 230 million, same bits).
+//!
+//! Session 6: the contact of each candidate pair ([`PairCtx::pair_contact`]: square root,
+//! division, the rest data) is computed in the parallel candidate search, so the serial part
+//! only adds them. Timers around the two parts (timeline example, 150 steps, two threads,
+//! ~205 candidate pairs a substep): the serial part 13.0 -> 8.4 ms over the run, the parallel
+//! part 10.2 -> 10.7 ms.
 
 use rayon::prelude::*;
 
 use super::neighbours::Neighbours;
 use super::response::{apply, ApplyInput, ApplyMode, ContactSums};
-use super::self_pairs::PairCtx;
+use super::self_pairs::{PairContact, PairCtx};
 use crate::lanes::LANES;
 
 /// Near pairs one parallel task handles in the pair pass's candidate search.
@@ -66,6 +72,8 @@ pub(crate) struct ActiveSet {
     damping: Vec<f32>,
     /// Candidate pairs of the pair pass, one buffer per chunk (kept between substeps).
     candidates: Vec<Vec<(u32, u32)>>,
+    /// The contact of each candidate pair (computed in the parallel part), same layout.
+    contacts: Vec<Vec<Option<PairContact>>>,
     /// Per-slot sums and approaching counts while the contacts are added (zero between
     /// passes).
     acc: Vec<([f32; 11], f32)>,
@@ -163,8 +171,9 @@ impl ActiveSet {
     ///
     /// Each unordered pair is tested once: the near pairs `(i, j)`, `i < j`, closer than `d`
     /// (with a margin) are found in parallel over fixed chunks of the near list, each chunk
-    /// into its own buffer; then, serially in buffer order (`i` ascending, then `j`), each
-    /// candidate adds its exact contact to both particles' sums. A particle thus receives its
+    /// into its own buffer, with their exact contacts (computed in the same task); then,
+    /// serially in buffer order (`i` ascending, then `j`), each candidate adds its contact to
+    /// both particles' sums. A particle thus receives its
     /// contacts in ascending partner order, as the per-particle loop over its sorted list would
     /// (the tests hold the two equal bit for bit); nothing depends on the thread count. Only
     /// the particles that received a contact are written (their blocks are the *touched*
@@ -175,15 +184,20 @@ impl ActiveSet {
         if self.candidates.len() < chunks {
             self.candidates.resize_with(chunks, Vec::new);
         }
-        let find = |c: usize, buf: &mut Vec<(u32, u32)>| {
+        let find = |c: usize, (buf, found): (&mut Vec<(u32, u32)>, &mut Vec<Option<PairContact>>)| {
             buf.clear();
             ctx.near_candidates(&near[c * PAIR_CHUNK..((c + 1) * PAIR_CHUNK).min(near.len())], simd, buf);
+            found.clear();
+            found.extend(buf.iter().map(|&(i, j)| ctx.pair_contact(i as usize, j as usize)));
         };
-        let bufs = &mut self.candidates[..chunks];
+        if self.contacts.len() < chunks {
+            self.contacts.resize_with(chunks, Vec::new);
+        }
+        let bufs = (&mut self.candidates[..chunks], &mut self.contacts[..chunks]);
         if parallel && chunks > 1 {
-            bufs.par_iter_mut().enumerate().for_each(|(c, b)| find(c, b));
+            bufs.into_par_iter().enumerate().for_each(|(c, b)| find(c, b));
         } else {
-            bufs.iter_mut().enumerate().for_each(|(c, b)| find(c, b));
+            bufs.0.iter_mut().zip(bufs.1.iter_mut()).enumerate().for_each(|(c, b)| find(c, b));
         }
         // Only the particles with a contact are written, not whole blocks (a folded cloth has
         // a few hundred contacts a substep spread over ~170 blocks: zeroing and storing the
@@ -201,13 +215,15 @@ impl ActiveSet {
             Some(&k) if k != INACTIVE => Some(k as usize * LANES + i % LANES),
             _ => None,
         };
-        for &(i, j) in self.candidates[..chunks].iter().flatten() {
+        let found = self.candidates[..chunks]
+            .iter()
+            .flatten()
+            .zip(self.contacts[..chunks].iter().flatten());
+        for (&(i, j), contact) in found {
             let (i, j) = (i as usize, j as usize);
-            // One contact computation for both ends (the same bits as one per end).
-            let contact = ctx.pair_contact(i, j);
             for (side, a) in [(0, i), (1, j)] {
                 if let Some(k) = slot(a) {
-                    if let Some(c) = &contact {
+                    if let Some(c) = contact {
                         let (out, approaching) = &mut self.acc[k];
                         let first = out[10] == 0.0;
                         if c.add_to(side, out, approaching) && first {
