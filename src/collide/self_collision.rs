@@ -94,6 +94,7 @@ use super::particle_tree::{ParticleTree, TreeShape};
 pub(crate) use super::response::mean_velocity;
 use super::self_active::ActiveSet;
 pub(crate) use super::self_active::ApplyParams;
+use super::self_active::APPLY_PARALLEL_BLOCKS;
 use super::self_near::NearList;
 use super::self_pairs::PairCtx;
 use super::self_verlet::VerletLists;
@@ -373,6 +374,7 @@ impl SelfCollisionData {
     pub(crate) fn apply(&mut self, x: [&[f32]; 3], w: &[f32], p: [&mut [f32]; 3], ap: ApplyParams, parallel: bool, simd: bool) {
         let t0 = Instant::now();
         if let Some(st) = self.state.as_ref().filter(|s| s.ready) {
+            let parallel = parallel && st.active.touched() >= APPLY_PARALLEL_BLOCKS;
             st.active.apply(x, w, p, ap, parallel, simd);
         }
         self.stats.phases.correction_s += t0.elapsed().as_secs_f64();
