@@ -344,3 +344,39 @@ fn parallel_correction_equals_serial() {
         assert_ne!(got, p, "the correction moved particles");
     }
 }
+
+/// The fold at 48 x 48 (its candidate lists span several ranges, so the near list is rebuilt
+/// in parallel): 1 and 2 threads and the scalar backend (serial) give the same bits every
+/// step.
+#[test]
+fn fold_with_parallel_near_ranges_is_bitwise_on_any_thread_count() {
+    let make = |threads: usize, backend: crate::Backend| {
+        let params = crate::SolverParams {
+            substeps: 10,
+            iterations: 1,
+            threads,
+            backend,
+            ..Default::default()
+        };
+        let sc = SelfCollision {
+            response: Response::Vccpbd,
+            ..SelfCollision::default()
+        };
+        crate::perf::fold_world(48, crate::Fabric::preset("basic").unwrap(), params, sc).unwrap()
+    };
+    let (mut one, dt) = make(1, crate::Backend::Simd);
+    let mut others = [make(2, crate::Backend::Simd).0, make(1, crate::Backend::Scalar).0];
+    let mut ranged = 0;
+    for step in 0..80 {
+        one.step(dt).unwrap();
+        let near = &one.selfcol.state.as_ref().unwrap().near;
+        ranged += usize::from(near.ranges() > 1);
+        for w in &mut others {
+            w.step(dt).unwrap();
+            for (a, b) in w.positions().iter().zip(one.positions()) {
+                assert!(a.iter().zip(b).all(|(u, v)| u.to_bits() == v.to_bits()), "step {step}");
+            }
+        }
+    }
+    assert!(ranged > 10, "the near list spanned several ranges in {ranged} steps");
+}

@@ -71,6 +71,14 @@
 //! them, timeline example, 150 steps, 240 rebuilds) 30.0 -> 18.9 ms in all. One thread: no
 //! change (pairs 0.366 -> 0.368).
 //!
+//! Tried in session 6 and not kept: the near list kept as the ranges' buffers and each
+//! rebuild run inside the pair pass's parallel candidate search (one region for both, the
+//! candidate search then split by the same ranges). Timeline example, two threads, three
+//! alternate runs: pairs 0.265-0.274 ms a step before against 0.287-0.302 (0.269-0.285 with
+//! the search parallel from 2 048 near pairs instead of 4 096): the ranges, cut by candidate
+//! entries, split the near pairs of a kept list unevenly; one region fewer a rebuild did not
+//! make up for it. Without the `[x, y, z, 0]` copy (three lane gathers from `p`) 0.316-0.338.
+//!
 //! The skin rule is unchanged: a larger cap than `d` makes the near list approach the
 //! candidate lists (radius `3 d` against `4 d`), and a cap of `d / 2` (tried: fewer near
 //! pairs, more rebuilds) measured no faster (CPU of these phases over the distance solve's,
@@ -145,6 +153,12 @@ impl NearList {
         self.valid = true;
         self.subs_since = 0;
         self.rebuilds += 1;
+    }
+
+    /// Number of particle ranges of the last parallel build (0 or 1: built serially).
+    #[cfg(test)]
+    pub(crate) fn ranges(&self) -> usize {
+        self.bounds.len().saturating_sub(1)
     }
 
     /// [`collect_near`] into `pairs`; when `parallel`, over the ranges of [`chunk_bounds`],
