@@ -94,7 +94,7 @@ use super::particle_tree::{ParticleTree, TreeShape};
 pub(crate) use super::response::mean_velocity;
 use super::self_active::ActiveSet;
 pub(crate) use super::self_active::ApplyParams;
-use super::self_active::APPLY_PARALLEL_BLOCKS;
+use super::self_active::{PredictionSink, APPLY_PARALLEL_BLOCKS};
 use super::self_near::NearList;
 use super::self_pairs::PairCtx;
 use super::self_verlet::VerletLists;
@@ -338,10 +338,17 @@ impl SelfCollisionData {
 
     /// Copies the predicted positions (the VcCPBD box centres) of the active blocks after
     /// the speed clamp.
+    #[cfg(test)]
     pub(crate) fn keep_predictions(&mut self, p: [&[f32]; 3]) {
         if let Some(st) = &mut self.state {
             st.active.keep_predictions(p);
         }
+    }
+
+    /// Where the speed clamp's chunks copy the predictions of the active blocks (the parallel
+    /// form of [`SelfCollisionData::keep_predictions`], the same copy).
+    pub(crate) fn prediction_sink(&mut self) -> Option<PredictionSink<'_>> {
+        self.state.as_mut().map(|st| st.active.prediction_sink())
     }
 
     /// The pair pass: updates the near list, then fills the contact sums of the active blocks
