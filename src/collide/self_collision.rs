@@ -35,10 +35,11 @@
 //!   steps, up to 4 d of travel a step) every step still runs the query, which is now the
 //!   largest phase. The skin is `3 d` (`2 d` before session 6) only when the cloth moved at
 //!   most `d` a step since the last build (otherwise zero: a wider reach would cost more than
-//!   the reuse saves; the measurements are in `self_verlet`). The hash query tests the rest-neighbour rule in its
-//!   eight-lane mask (the `hash_rest` module), so only kept pairs leave the lanes, and walks
-//!   the cells over a half shell (the `hash_cells` module: each pair tested once, the rows
-//!   looked up once a cell; a falling step's query 1.45-1.84 ms before, 0.81-0.92 after).
+//!   the reuse saves; the measurements are in `self_verlet`). The hash query tests the
+//!   rest-neighbour rule in its eight-lane mask (the `hash_rest` module), so only kept pairs
+//!   leave the lanes, and walks the cells over a half shell (the `hash_cells` module: each
+//!   pair tested once, the rows looked up once a cell; a falling step's query 1.45-1.84 ms
+//!   before, 0.81-0.92 after).
 //! * **After predict** (each substep): the speed clamp ([`super::response`]) limits a free
 //!   particle's velocity relative to the mean velocity of the free particles to `T / substeps`
 //!   a substep, so two particles close in by at most `2T` in a step: any pair that touches
