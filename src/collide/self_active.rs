@@ -46,7 +46,7 @@ const PAIR_CHUNK: usize = 2048;
 const APPLY_BLOCKS: usize = 64;
 
 /// Touched blocks from which the correction runs in parallel (see [`ActiveSet::apply`]).
-pub(crate) const APPLY_PARALLEL_BLOCKS: usize = 1024;
+pub(crate) const APPLY_PARALLEL_BLOCKS: usize = 17;
 
 /// Marks a block that is not active.
 const INACTIVE: u32 = u32::MAX;
@@ -311,11 +311,13 @@ impl ActiveSet {
     /// (full particle arrays, padded to the lane width), with start positions `x` and inverse
     /// masses `w`. The kernel leaves a particle without contacts as it is, so the other blocks
     /// are skipped. Parallel over the blocks when `parallel`; same bits either way. The caller
-    /// asks for it from [`APPLY_PARALLEL_BLOCKS`] touched blocks: a folded 100x100 cloth
-    /// touches ~170 blocks a substep (~4 µs of kernel), and a parallel region there cost more
-    /// than it saved (session 6, timeline example, two threads: the correction column 0.070
-    /// ms a step parallel against 0.039 serial; waking the second thread for a few
-    /// microseconds of work costs more than the work on this machine).
+    /// asks for it from [`APPLY_PARALLEL_BLOCKS`] touched blocks (a folded 100x100 cloth
+    /// touches ~170 a substep). Session 6 tried 1 024 (serial on the fold): the timeline's
+    /// correction column fell from 0.070 to 0.039 ms a step on two threads, but the step did
+    /// not get faster: the idle second thread went to sleep and the next parallel pass (update
+    /// and predict, outside the stage's timer) paid for waking it (a 100x100 fold run,
+    /// 150 steps, 14 alternate runs: step 2.697 ms a step with the parallel correction
+    /// against 2.788 serial, collision 1.019 against 1.018; slow phase of the VM), not kept.
     pub(crate) fn apply(&self, x: [&[f32]; 3], w: &[f32], p: [&mut [f32]; 3], ap: ApplyParams, parallel: bool, simd: bool) {
         // `run` blocks from compact block `k`, particle block `b`.
         let one = |k: usize, b: usize, run: usize, p: [&mut [f32]; 3]| {
