@@ -382,9 +382,14 @@ impl World {
             limit: TRAVEL_FACTOR * a.d / n_sub as f32,
             h,
         };
-        self.particles.for_chunks(parallel, |c| clamp_speed(c, &cp, simd));
-        let p = &self.particles;
-        self.selfcol.keep_predictions([&p.px, &p.py, &p.pz]);
+        // Each chunk also copies the predictions of its active blocks (one parallel pass).
+        let sink = self.selfcol.prediction_sink();
+        self.particles.for_chunks(parallel, |mut c| {
+            clamp_speed(c.reborrow(), &cp, simd);
+            if let Some(s) = &sink {
+                s.keep(c.start, [&*c.px, &*c.py, &*c.pz]);
+            }
+        });
     }
 
     /// The self-collision pair pass and its correction of the predictions `p`.

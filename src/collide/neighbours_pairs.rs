@@ -19,6 +19,17 @@
 //! Sorting and de-duplicating make the lists canonical: they do not depend on the order the
 //! pairs were emitted in, nor on the number of threads, so they equal the lists of any other
 //! upper query (each pair once, in the list of its smaller id).
+//!
+//! The assembly is serial. Tried in session 6 and not kept (issue #5 on two threads; timers
+//! around the emission and the assembly, timeline example, 150 steps, 49 rebuilds, CPU lock,
+//! idle machine): the tasks filing each pair by the range of its smaller id (one buffer a
+//! range of `2^shift` particles) and the ranges assembled in parallel, then joined. With at
+//! most 16 ranges of at least 256 particles (10 at 10 000) the assembly took 11.0 ms in all
+//! on two threads against 10.7-11.3 serial (the fold's pairs are filed under the lower half's
+//! ids: half the ranges hold them all, and joining the ranges' lists cost 1.7-2.0 ms), and
+//! 13.6 on one thread; with up to 64 ranges 18.5 ms (each range's counting sort on `j`
+//! walks all the partners above it, so the work grows with the ranges). The emission into
+//! range buffers was also slower on one thread (33-34 to 37 ms).
 
 use super::{prefix_sum, Neighbours};
 use crate::Result;

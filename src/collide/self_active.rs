@@ -25,19 +25,28 @@
 //! several substeps, and zeroing then storing them again cost ~60 of the ~1 290 million
 //! instructions of the fold's pair phase; callgrind, timeline example, 150 steps, 1 thread:
 //! 1 292 to 1 230 million, same bits).
+//!
+//! Session 6: the contact of each candidate pair ([`PairCtx::pair_contact`]: square root,
+//! division, the rest data) is computed in the parallel candidate search, so the serial part
+//! only adds them. Timers around the two parts (timeline example, 150 steps, two threads,
+//! ~205 candidate pairs a substep): the serial part 13.0 -> 8.4 ms over the run, the parallel
+//! part 10.2 -> 10.7 ms.
 
 use rayon::prelude::*;
 
 use super::neighbours::Neighbours;
 use super::response::{apply, ApplyInput, ApplyMode, ContactSums};
-use super::self_pairs::PairCtx;
-use crate::lanes::LANES;
+use super::self_pairs::{PairContact, PairCtx};
+use crate::lanes::{SharedVec3, Vec3x8, LANES};
 
 /// Near pairs one parallel task handles in the pair pass's candidate search.
 const PAIR_CHUNK: usize = 2048;
 
-/// Blocks one parallel task handles in the correction pass at least.
-const APPLY_BLOCKS: usize = 16;
+/// Particle blocks one parallel task handles in the correction pass at least.
+const APPLY_BLOCKS: usize = 64;
+
+/// Touched blocks from which the correction runs in parallel (see [`ActiveSet::apply`]).
+pub(crate) const APPLY_PARALLEL_BLOCKS: usize = 17;
 
 /// Marks a block that is not active.
 const INACTIVE: u32 = u32::MAX;
@@ -49,6 +58,44 @@ pub(crate) struct ApplyParams {
     pub friction: f32,
     pub h: f32,
     pub r: f32,
+}
+
+/// Where the predicted positions of the active blocks are copied to (the box centres of the
+/// correction), from any chunk of whole blocks, on any thread ([`ActiveSet::prediction_sink`]).
+///
+/// Session 6: the copy ran serially after the clamp's parallel pass (timers, timeline
+/// example, two threads: 0.018 ms a step, about as much as the clamp itself); each chunk of
+/// the clamp now copies its own blocks.
+pub(crate) struct PredictionSink<'a> {
+    slot_of_block: &'a [u32],
+    /// The compact predictions, written at disjoint slots only (see [`PredictionSink::keep`]).
+    pred: SharedVec3,
+}
+
+impl PredictionSink<'_> {
+    /// Copies the active blocks among the particles `start..start + len` of the predicted
+    /// positions `p` (one chunk's slices; `start` and the lengths multiples of [`LANES`]).
+    ///
+    /// Chunks given to concurrent calls must not overlap (the clamp's chunks do not).
+    pub(crate) fn keep(&self, start: usize, p: [&[f32]; 3]) {
+        let len = p[0].len().min(p[1].len()).min(p[2].len());
+        let first = start / LANES;
+        for (k, b) in (first..self.slot_of_block.len()).enumerate().take(len / LANES) {
+            let slot = self.slot_of_block[b];
+            if slot == INACTIVE {
+                continue;
+            }
+            let l = k * LANES;
+            let v = Vec3x8::load(p[0], p[1], p[2], l);
+            let dst = slot as usize * LANES;
+            if dst + LANES <= self.pred.len() {
+                // SAFETY: in bounds (checked); slot `slot` belongs to particle block `b` alone
+                // (the numbering of `rebuild` is one-to-one), block `b` to this chunk alone,
+                // and nothing reads the predictions while the clamp's chunks write them.
+                unsafe { self.pred.store_run(dst, v) };
+            }
+        }
+    }
 }
 
 /// The active blocks of a step and their compact per-particle data.
@@ -66,6 +113,8 @@ pub(crate) struct ActiveSet {
     damping: Vec<f32>,
     /// Candidate pairs of the pair pass, one buffer per chunk (kept between substeps).
     candidates: Vec<Vec<(u32, u32)>>,
+    /// The contact of each candidate pair (computed in the parallel part), same layout.
+    contacts: Vec<Vec<Option<PairContact>>>,
     /// Per-slot sums and approaching counts while the contacts are added (zero between
     /// passes).
     acc: Vec<([f32; 11], f32)>,
@@ -148,13 +197,21 @@ impl ActiveSet {
         self.blocks.len()
     }
 
-    /// Copies the predicted positions of the active blocks (after the speed clamp).
+    /// Copies the predicted positions of the active blocks (after the speed clamp; `p` the
+    /// full particle arrays, padded to the lane width): the serial form of the clamp's copy
+    /// ([`ActiveSet::prediction_sink`]), used by the tests.
+    #[cfg(test)]
     pub(crate) fn keep_predictions(&mut self, p: [&[f32]; 3]) {
-        for (dst, src) in self.pred.iter_mut().zip(p) {
-            for (k, &b) in self.blocks.iter().enumerate() {
-                let g = b as usize * LANES;
-                dst[k * LANES..(k + 1) * LANES].copy_from_slice(&src[g..g + LANES]);
-            }
+        self.prediction_sink().keep(0, p);
+    }
+
+    /// A sink the speed clamp's parallel chunks copy the predicted positions of their active
+    /// blocks into ([`PredictionSink::keep`]), inside the clamp's own parallel region.
+    pub(crate) fn prediction_sink(&mut self) -> PredictionSink<'_> {
+        let [x, y, z] = &mut self.pred;
+        PredictionSink {
+            slot_of_block: &self.slot_of_block,
+            pred: SharedVec3::new(x, y, z),
         }
     }
 
@@ -163,8 +220,9 @@ impl ActiveSet {
     ///
     /// Each unordered pair is tested once: the near pairs `(i, j)`, `i < j`, closer than `d`
     /// (with a margin) are found in parallel over fixed chunks of the near list, each chunk
-    /// into its own buffer; then, serially in buffer order (`i` ascending, then `j`), each
-    /// candidate adds its exact contact to both particles' sums. A particle thus receives its
+    /// into its own buffer, with their exact contacts (computed in the same task); then,
+    /// serially in buffer order (`i` ascending, then `j`), each candidate adds its contact to
+    /// both particles' sums. A particle thus receives its
     /// contacts in ascending partner order, as the per-particle loop over its sorted list would
     /// (the tests hold the two equal bit for bit); nothing depends on the thread count. Only
     /// the particles that received a contact are written (their blocks are the *touched*
@@ -175,15 +233,20 @@ impl ActiveSet {
         if self.candidates.len() < chunks {
             self.candidates.resize_with(chunks, Vec::new);
         }
-        let find = |c: usize, buf: &mut Vec<(u32, u32)>| {
+        let find = |c: usize, (buf, found): (&mut Vec<(u32, u32)>, &mut Vec<Option<PairContact>>)| {
             buf.clear();
             ctx.near_candidates(&near[c * PAIR_CHUNK..((c + 1) * PAIR_CHUNK).min(near.len())], simd, buf);
+            found.clear();
+            found.extend(buf.iter().map(|&(i, j)| ctx.pair_contact(i as usize, j as usize)));
         };
-        let bufs = &mut self.candidates[..chunks];
+        if self.contacts.len() < chunks {
+            self.contacts.resize_with(chunks, Vec::new);
+        }
+        let bufs = (&mut self.candidates[..chunks], &mut self.contacts[..chunks]);
         if parallel && chunks > 1 {
-            bufs.par_iter_mut().enumerate().for_each(|(c, b)| find(c, b));
+            bufs.into_par_iter().enumerate().for_each(|(c, b)| find(c, b));
         } else {
-            bufs.iter_mut().enumerate().for_each(|(c, b)| find(c, b));
+            bufs.0.iter_mut().zip(bufs.1.iter_mut()).enumerate().for_each(|(c, b)| find(c, b));
         }
         // Only the particles with a contact are written, not whole blocks (a folded cloth has
         // a few hundred contacts a substep spread over ~170 blocks: zeroing and storing the
@@ -201,13 +264,15 @@ impl ActiveSet {
             Some(&k) if k != INACTIVE => Some(k as usize * LANES + i % LANES),
             _ => None,
         };
-        for &(i, j) in self.candidates[..chunks].iter().flatten() {
+        let found = self.candidates[..chunks]
+            .iter()
+            .flatten()
+            .zip(self.contacts[..chunks].iter().flatten());
+        for (&(i, j), contact) in found {
             let (i, j) = (i as usize, j as usize);
-            // One contact computation for both ends (the same bits as one per end).
-            let contact = ctx.pair_contact(i, j);
             for (side, a) in [(0, i), (1, j)] {
                 if let Some(k) = slot(a) {
-                    if let Some(c) = &contact {
+                    if let Some(c) = contact {
                         let (out, approaching) = &mut self.acc[k];
                         let first = out[10] == 0.0;
                         if c.add_to(side, out, approaching) && first {
@@ -245,7 +310,14 @@ impl ActiveSet {
     /// The velocity-correction kernel on the touched blocks of the predicted positions `p`
     /// (full particle arrays, padded to the lane width), with start positions `x` and inverse
     /// masses `w`. The kernel leaves a particle without contacts as it is, so the other blocks
-    /// are skipped. Parallel over the blocks when `parallel`; same bits either way.
+    /// are skipped. Parallel over the blocks when `parallel`; same bits either way. The caller
+    /// asks for it from [`APPLY_PARALLEL_BLOCKS`] touched blocks (a folded 100x100 cloth
+    /// touches ~170 a substep). Session 6 tried 1 024 (serial on the fold): the timeline's
+    /// correction column fell from 0.070 to 0.039 ms a step on two threads, but the step did
+    /// not get faster: the idle second thread went to sleep and the next parallel pass (update
+    /// and predict, outside the stage's timer) paid for waking it (a 100x100 fold run,
+    /// 150 steps, 14 alternate runs: step 2.697 ms a step with the parallel correction
+    /// against 2.788 serial, collision 1.019 against 1.018; slow phase of the VM), not kept.
     pub(crate) fn apply(&self, x: [&[f32]; 3], w: &[f32], p: [&mut [f32]; 3], ap: ApplyParams, parallel: bool, simd: bool) {
         // `run` blocks from compact block `k`, particle block `b`.
         let one = |k: usize, b: usize, run: usize, p: [&mut [f32]; 3]| {
@@ -264,7 +336,7 @@ impl ActiveSet {
             apply(&inp, p, ap.mode, simd);
         };
         let [px, py, pz] = p;
-        if parallel && self.touched.len() > APPLY_BLOCKS {
+        if parallel {
             let nb = self.slot_of_block.len();
             (
                 px[..nb * LANES].par_chunks_mut(LANES),
@@ -272,7 +344,7 @@ impl ActiveSet {
                 pz[..nb * LANES].par_chunks_mut(LANES),
             )
                 .into_par_iter()
-                .with_min_len(APPLY_BLOCKS * 4)
+                .with_min_len(APPLY_BLOCKS)
                 .enumerate()
                 .for_each(|(b, (a, c, d))| {
                     let k = self.slot_of_block[b];

@@ -307,3 +307,76 @@ fn consecutive_pair_passes_leave_no_stale_sums() {
     }
     assert!(ended > 0 && kept > 0, "{ended} ended, {kept} kept contacts");
 }
+
+/// The correction pass over the touched blocks in parallel (1 and 2 threads) gives the bits of
+/// the serial runs (the step asks for it only from `APPLY_PARALLEL_BLOCKS` touched blocks).
+#[test]
+fn parallel_correction_equals_serial() {
+    let mut rng = signed(21);
+    let (rows, cols, s) = (30, 17, 0.02f32);
+    let (mut data, x0) = folded(rows, cols, s, 1.02 * s, 0.3 * s, &mut rng);
+    data.config = Some(SelfCollision::default());
+    let n = rows * cols;
+    let x = [padded(&x0[0]), padded(&x0[1]), padded(&x0[2])];
+    let mut p = x.clone();
+    for c in &mut p {
+        for v in &mut c[..n] {
+            *v += 0.5 * s * rng();
+        }
+    }
+    let w = padded(&vec![1.0f32; n]);
+    let (want, _) = compact(&mut data, &x, &p, &w, n, false, true);
+    assert!(data.touched_blocks() > 8, "{} touched blocks", data.touched_blocks());
+    let st = data.state.as_ref().unwrap();
+    let ap = data.active().unwrap().apply_params(0.005);
+    let xs = [&x[0][..], &x[1][..], &x[2][..]];
+    for threads in [1, 2] {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        let mut got = p.clone();
+        let [g0, g1, g2] = &mut got;
+        pool.install(|| st.active.apply(xs, &w, [g0, g1, g2], ap, true, true));
+        for a in 0..3 {
+            assert!(
+                got[a].iter().zip(&want[a]).all(|(u, v)| u.to_bits() == v.to_bits()),
+                "{threads} threads"
+            );
+        }
+        assert_ne!(got, p, "the correction moved particles");
+    }
+}
+
+/// The fold at 48 x 48 (its candidate lists span several ranges, so the near list is rebuilt
+/// in parallel): 1 and 2 threads and the scalar backend (serial) give the same bits every
+/// step.
+#[test]
+fn fold_with_parallel_near_ranges_is_bitwise_on_any_thread_count() {
+    let make = |threads: usize, backend: crate::Backend| {
+        let params = crate::SolverParams {
+            substeps: 10,
+            iterations: 1,
+            threads,
+            backend,
+            ..Default::default()
+        };
+        let sc = SelfCollision {
+            response: Response::Vccpbd,
+            ..SelfCollision::default()
+        };
+        crate::perf::fold_world(48, crate::Fabric::preset("basic").unwrap(), params, sc).unwrap()
+    };
+    let (mut one, dt) = make(1, crate::Backend::Simd);
+    let mut others = [make(2, crate::Backend::Simd).0, make(1, crate::Backend::Scalar).0];
+    let mut ranged = 0;
+    for step in 0..80 {
+        one.step(dt).unwrap();
+        let near = &one.selfcol.state.as_ref().unwrap().near;
+        ranged += usize::from(near.ranges() > 1);
+        for w in &mut others {
+            w.step(dt).unwrap();
+            for (a, b) in w.positions().iter().zip(one.positions()) {
+                assert!(a.iter().zip(b).all(|(u, v)| u.to_bits() == v.to_bits()), "step {step}");
+            }
+        }
+    }
+    assert!(ranged > 10, "the near list spanned several ranges in {ranged} steps");
+}

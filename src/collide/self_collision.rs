@@ -33,12 +33,13 @@
 //!   cloth, of which none was in contact. After the fold settles the lists last many steps
 //!   and the near list holds a few hundred pairs; while the cloth falls (the first ~50
 //!   steps, up to 4 d of travel a step) every step still runs the query, which is now the
-//!   largest phase. The skin is `2 d` only when the cloth moved at most `d` a step since the
-//!   last build (otherwise zero: a wider reach would cost more than the reuse saves; the
-//!   measurements are in `self_verlet`). The hash query tests the rest-neighbour rule in its
-//!   eight-lane mask (the `hash_rest` module), so only kept pairs leave the lanes, and walks
-//!   the cells over a half shell (the `hash_cells` module: each pair tested once, the rows
-//!   looked up once a cell; a falling step's query 1.45-1.84 ms before, 0.81-0.92 after).
+//!   largest phase. The skin is `3 d` (`2 d` before session 6) only when the cloth moved at
+//!   most `d` a step since the last build (otherwise zero: a wider reach would cost more than
+//!   the reuse saves; the measurements are in `self_verlet`). The hash query tests the
+//!   rest-neighbour rule in its eight-lane mask (the `hash_rest` module), so only kept pairs
+//!   leave the lanes, and walks the cells over a half shell (the `hash_cells` module: each
+//!   pair tested once, the rows looked up once a cell; a falling step's query 1.45-1.84 ms
+//!   before, 0.81-0.92 after).
 //! * **After predict** (each substep): the speed clamp ([`super::response`]) limits a free
 //!   particle's velocity relative to the mean velocity of the free particles to `T / substeps`
 //!   a substep, so two particles close in by at most `2T` in a step: any pair that touches
@@ -94,6 +95,7 @@ use super::particle_tree::{ParticleTree, TreeShape};
 pub(crate) use super::response::mean_velocity;
 use super::self_active::ActiveSet;
 pub(crate) use super::self_active::ApplyParams;
+use super::self_active::{PredictionSink, APPLY_PARALLEL_BLOCKS};
 use super::self_near::NearList;
 use super::self_pairs::PairCtx;
 use super::self_verlet::VerletLists;
@@ -337,10 +339,17 @@ impl SelfCollisionData {
 
     /// Copies the predicted positions (the VcCPBD box centres) of the active blocks after
     /// the speed clamp.
+    #[cfg(test)]
     pub(crate) fn keep_predictions(&mut self, p: [&[f32]; 3]) {
         if let Some(st) = &mut self.state {
             st.active.keep_predictions(p);
         }
+    }
+
+    /// Where the speed clamp's chunks copy the predictions of the active blocks (the parallel
+    /// form of [`SelfCollisionData::keep_predictions`], the same copy).
+    pub(crate) fn prediction_sink(&mut self) -> Option<PredictionSink<'_>> {
+        self.state.as_mut().map(|st| st.active.prediction_sink())
     }
 
     /// The pair pass: updates the near list, then fills the contact sums of the active blocks
@@ -352,7 +361,7 @@ impl SelfCollisionData {
         let Some(st) = self.state.as_mut().filter(|s| s.ready) else {
             return;
         };
-        st.near.update(&st.verlet.cand, p, &st.active.blocks, n, a.d, simd);
+        st.near.update(&st.verlet.cand, p, &st.active.blocks, n, a.d, simd, parallel);
         let q = QUERY_FACTOR * a.d;
         let ctx = PairCtx {
             x,
@@ -373,6 +382,7 @@ impl SelfCollisionData {
     pub(crate) fn apply(&mut self, x: [&[f32]; 3], w: &[f32], p: [&mut [f32]; 3], ap: ApplyParams, parallel: bool, simd: bool) {
         let t0 = Instant::now();
         if let Some(st) = self.state.as_ref().filter(|s| s.ready) {
+            let parallel = parallel && st.active.touched() >= APPLY_PARALLEL_BLOCKS;
             st.active.apply(x, w, p, ap, parallel, simd);
         }
         self.stats.phases.correction_s += t0.elapsed().as_secs_f64();

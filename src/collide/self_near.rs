@@ -59,7 +59,25 @@
 //! * the rebuild in parallel over fixed chunks of 2 048 particles (per-chunk buffers joined
 //!   in order: the same list): on two threads the pairs column measured 0.421-0.649 ms a
 //!   step before against 0.433-0.647 after (seven alternate runs each, load 3.3-3.5: the
-//!   second core was busy), no measurable gain on the shared machine.
+//!   second core was busy), no measurable gain on the shared machine (but see session 6).
+//!
+//! Session 6 (issue #5 on two threads): a rebuild runs in parallel over ranges of particles
+//! of about [`NEAR_CHUNK`] candidate entries each ([`chunk_bounds`], cut from the list
+//! offsets, so a folded region's long lists spread over several tasks), each range into its
+//! own buffer, joined in order: the same list on any number of threads (tested). Measured
+//! under the CPU lock on the otherwise idle machine, `weft reproduce vccpbd --size 100
+//! --threads 2`, basic VcCPBD hash row, five alternate runs each: collision 0.704 -> 0.631
+//! ms a step (medians), pairs column 0.356 -> 0.267; the rebuilds alone (timers around
+//! them, timeline example, 150 steps, 240 rebuilds) 30.0 -> 18.9 ms in all. One thread: no
+//! change (pairs 0.366 -> 0.368).
+//!
+//! Tried in session 6 and not kept: the near list kept as the ranges' buffers and each
+//! rebuild run inside the pair pass's parallel candidate search (one region for both, the
+//! candidate search then split by the same ranges). Timeline example, two threads, three
+//! alternate runs: pairs 0.265-0.274 ms a step before against 0.287-0.302 (0.269-0.285 with
+//! the search parallel from 2 048 near pairs instead of 4 096): the ranges, cut by candidate
+//! entries, split the near pairs of a kept list unevenly; one region fewer a rebuild did not
+//! make up for it. Without the `[x, y, z, 0]` copy (three lane gathers from `p`) 0.316-0.338.
 //!
 //! The skin rule is unchanged: a larger cap than `d` makes the near list approach the
 //! candidate lists (radius `3 d` against `4 d`), and a cap of `d / 2` (tried: fewer near
@@ -70,6 +88,7 @@
 use super::neighbours::Neighbours;
 use super::self_verlet::SAFE;
 use crate::lanes::{idx8, load, F32s, Idx8, LANES};
+use rayon::prelude::*;
 
 /// Near pairs of the candidate lists for the substeps (see the module docs).
 #[derive(Clone, Debug, Default)]
@@ -85,6 +104,10 @@ pub(crate) struct NearList {
     pub(crate) rebuilds: u64,
     /// Scratch: the positions of the build as `[x, y, z, 0]` (one load per candidate).
     xyz: Vec<[f32; 4]>,
+    /// Particle ranges of the parallel rebuild ([`chunk_bounds`]).
+    bounds: Vec<usize>,
+    /// The near pairs of each range (joined in order into `pairs`).
+    chunks: Vec<Vec<(u32, u32)>>,
 }
 
 impl NearList {
@@ -97,8 +120,10 @@ impl NearList {
     /// `blocks` (ascending; every near pair has both ends in them) moved more than `0.49 s₂`
     /// since the build, else rebuilt from `cand` (first `n` lists) with a new skin. Only the
     /// active blocks are checked and copied: before the fold they are a few, and the
-    /// particles outside them have no candidate.
-    pub(crate) fn update(&mut self, cand: &Neighbours, p: [&[f32]; 3], blocks: &[u32], n: usize, d: f32, simd: bool) {
+    /// particles outside them have no candidate. A rebuild runs in parallel over ranges of
+    /// particles when `parallel` ([`NearList::collect`]: the same list).
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn update(&mut self, cand: &Neighbours, p: [&[f32]; 3], blocks: &[u32], n: usize, d: f32, simd: bool, parallel: bool) {
         if self.valid && self.at[0].len() == blocks.len() * LANES {
             let at = [&self.at[0][..], &self.at[1][..], &self.at[2][..]];
             let m2 = max_disp2_blocks(p, at, blocks, simd);
@@ -124,10 +149,43 @@ impl NearList {
             }
         }
         let r = d + self.skin;
-        collect_near(cand, p, n, r * r, simd, &mut self.xyz, &mut self.pairs);
+        self.collect(cand, p, n, r * r, simd, parallel);
         self.valid = true;
         self.subs_since = 0;
         self.rebuilds += 1;
+    }
+
+    /// Number of particle ranges of the last parallel build (0 or 1: built serially).
+    #[cfg(test)]
+    pub(crate) fn ranges(&self) -> usize {
+        self.bounds.len().saturating_sub(1)
+    }
+
+    /// [`collect_near`] into `pairs`; when `parallel`, over the ranges of [`chunk_bounds`],
+    /// each into its own buffer, the buffers joined in range order: the same list as the
+    /// serial walk whatever the number of threads.
+    fn collect(&mut self, cand: &Neighbours, p: [&[f32]; 3], n: usize, r2: f32, simd: bool, parallel: bool) {
+        let n = near_len(cand, p, n);
+        chunk_bounds(cand, n, &mut self.bounds);
+        let m = self.bounds.len() - 1;
+        if !parallel || m < 2 {
+            return collect_near(cand, p, n, r2, simd, &mut self.xyz, &mut self.pairs);
+        }
+        if simd {
+            fill_xyz(p, n, true, &mut self.xyz);
+        }
+        if self.chunks.len() < m {
+            self.chunks.resize_with(m, Vec::new);
+        }
+        let (bounds, xyz) = (&self.bounds, &self.xyz[..]);
+        self.chunks[..m].par_iter_mut().enumerate().for_each(|(c, buf)| {
+            buf.clear();
+            collect_range(cand, p, bounds[c]..bounds[c + 1], r2, simd, xyz, buf);
+        });
+        self.pairs.clear();
+        for c in &self.chunks[..m] {
+            self.pairs.extend_from_slice(c);
+        }
     }
 }
 
@@ -171,6 +229,11 @@ pub(crate) fn max_disp2_blocks(p: [&[f32]; 3], at: [&[f32]; 3], blocks: &[u32], 
     }
 }
 
+/// Candidate entries one parallel task of the near-list rebuild tests, about (a chunk ends at
+/// the first particle boundary past this many entries, so a task's work does not depend on
+/// how the candidates are spread over the particles).
+pub(crate) const NEAR_CHUNK: usize = 8192;
+
 /// Replaces `out` with the candidate pairs `(i, j)` of `cand` (first `n` lists) closer than
 /// `sqrt(r2)` at `p`, or with a NaN distance (the exact test rejects those later, as the fresh
 /// path does), in list order. With `simd`, eight candidates of one particle at a time: their
@@ -187,14 +250,67 @@ pub(crate) fn collect_near(
     out: &mut Vec<(u32, u32)>,
 ) {
     out.clear();
-    let n = n.min(cand.len()).min(p[0].len()).min(p[1].len()).min(p[2].len());
+    let n = near_len(cand, p, n);
     if simd {
-        xyz.clear();
-        let (x, y, z) = (&p[0][..n], &p[1][..n], &p[2][..n]);
-        xyz.extend(x.iter().zip(y).zip(z).map(|((&x, &y), &z)| [x, y, z, 0.0]));
+        fill_xyz(p, n, false, xyz);
     }
+    collect_range(cand, p, 0..n, r2, simd, xyz, out);
+}
+
+/// The particles [`collect_near`] walks: the first `n` with a list and a position.
+fn near_len(cand: &Neighbours, p: [&[f32]; 3], n: usize) -> usize {
+    n.min(cand.len()).min(p[0].len()).min(p[1].len()).min(p[2].len())
+}
+
+/// Replaces `xyz` with `[x, y, z, 0]` of the first `n` particles of `p` (element-wise, in
+/// parallel over fixed blocks when `parallel`: the same values either way).
+fn fill_xyz(p: [&[f32]; 3], n: usize, parallel: bool, xyz: &mut Vec<[f32; 4]>) {
+    const BLOCK: usize = 2048;
+    xyz.clear();
+    xyz.resize(n, [0.0; 4]);
+    let (x, y, z) = (&p[0][..n], &p[1][..n], &p[2][..n]);
+    let one = |b: usize, dst: &mut [[f32; 4]]| {
+        let o = b * BLOCK;
+        for (k, d) in dst.iter_mut().enumerate() {
+            *d = [x[o + k], y[o + k], z[o + k], 0.0];
+        }
+    };
+    if parallel && n > BLOCK {
+        xyz.par_chunks_mut(BLOCK).enumerate().for_each(|(b, d)| one(b, d));
+    } else {
+        xyz.chunks_mut(BLOCK).enumerate().for_each(|(b, d)| one(b, d));
+    }
+}
+
+/// Splits particles `0..n` into consecutive ranges of about [`NEAR_CHUNK`] candidate entries
+/// (from the list offsets): `bounds` becomes `0 = b_0 < b_1 < .. < b_m = n`.
+pub(crate) fn chunk_bounds(cand: &Neighbours, n: usize, bounds: &mut Vec<usize>) {
+    bounds.clear();
+    bounds.push(0);
+    let first = &cand.first[..=n];
+    let mut lo = 0;
+    while lo < n {
+        let goal = first[lo] as usize + NEAR_CHUNK;
+        // The first particle whose list starts at or past the goal (at least one particle on).
+        let hi = (lo + 1).max(first.partition_point(|&f| (f as usize) < goal)).min(n);
+        bounds.push(hi);
+        lo = hi;
+    }
+}
+
+/// Appends to `out` the near pairs of the particles in `range` (the work of [`collect_near`]
+/// on a part of the lists; `xyz` filled when `simd`).
+fn collect_range(
+    cand: &Neighbours,
+    p: [&[f32]; 3],
+    range: std::ops::Range<usize>,
+    r2: f32,
+    simd: bool,
+    xyz: &[[f32; 4]],
+    out: &mut Vec<(u32, u32)>,
+) {
     let r2v = F32s::splat(r2);
-    for i in 0..n {
+    for i in range {
         let list = cand.of(i);
         if list.is_empty() {
             continue;
@@ -267,94 +383,5 @@ pub(crate) fn gather_xyz8(xyz: &[[f32; 4]], idx: &Idx8) -> [F32s; 3] {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::test_rng::signed;
-
-    #[test]
-    fn simd_near_list_equals_scalar_and_brute_force() {
-        let mut rng = signed(5);
-        let n = 301;
-        let p: [Vec<f32>; 3] = std::array::from_fn(|_| (0..n).map(|_| rng()).collect());
-        let mut cand = Neighbours::new();
-        cand.fill_serial(n, |i, buf| buf.extend((i + 1..n).filter(|j| (i + j) % 3 != 0).map(|j| j as u32)))
-            .unwrap();
-        let mut p = p;
-        p[1][17] = f32::NAN;
-        let pr = [&p[0][..], &p[1][..], &p[2][..]];
-        let r2 = 0.6f32 * 0.6;
-        let (mut a, mut b) = (Vec::new(), Vec::new());
-        collect_near(&cand, pr, n, r2, false, &mut Vec::new(), &mut a);
-        collect_near(&cand, pr, n, r2, true, &mut Vec::new(), &mut b);
-        assert_eq!(a, b);
-        let want: Vec<(u32, u32)> = cand
-            .pairs()
-            .filter(|&(i, j)| {
-                let (i, j) = (i as usize, j as usize);
-                let d2: f32 = (0..3).map(|k| (p[k][i] - p[k][j]) * (p[k][i] - p[k][j])).sum();
-                d2 < r2 || d2.is_nan()
-            })
-            .collect();
-        assert_eq!(a, want);
-        assert!(a.len() > 100 && a.len() < cand.total(), "{} of {}", a.len(), cand.total());
-        assert!(a.iter().any(|&(i, j)| i == 17 || j == 17), "NaN pairs are kept");
-    }
-
-    #[test]
-    fn block_displacement_simd_equals_scalar_and_flags_nan() {
-        let mut rng = signed(9);
-        let n = 8 * 9 + 3; // the last block is partial
-        let p: [Vec<f32>; 3] = std::array::from_fn(|_| (0..n).map(|_| rng()).collect());
-        let blocks = [0u32, 2, 3, 7, 9];
-        let mut at: [Vec<f32>; 3] = std::array::from_fn(|_| vec![0.0; blocks.len() * LANES]);
-        for (k, &b) in blocks.iter().enumerate() {
-            for l in 0..LANES {
-                let i = b as usize * LANES + l;
-                for a in 0..3 {
-                    at[a][k * LANES + l] = p[a].get(i).map_or(0.0, |v| v + 0.01 * rng());
-                }
-            }
-        }
-        let pr = [&p[0][..], &p[1][..], &p[2][..]];
-        let ar = [&at[0][..], &at[1][..], &at[2][..]];
-        let s = max_disp2_blocks(pr, ar, &blocks, false);
-        assert_eq!(s.to_bits(), max_disp2_blocks(pr, ar, &blocks, true).to_bits());
-        // The largest over the listed particles only (block 1 is left out and moved far).
-        let mut want = 0.0f32;
-        for (k, &b) in blocks.iter().enumerate() {
-            for l in 0..LANES {
-                let i = b as usize * LANES + l;
-                if i < n {
-                    let d2: f32 = (0..3).map(|a| (p[a][i] - at[a][k * LANES + l]).powi(2)).sum();
-                    want = want.max(d2);
-                }
-            }
-        }
-        assert!(s > 0.0 && (s - want).abs() <= 1e-6 * want, "{s} {want}");
-        let mut q = p.clone();
-        q[0][8 + 1] = 50.0;
-        let qr = [&q[0][..], &q[1][..], &q[2][..]];
-        assert_eq!(
-            max_disp2_blocks(qr, ar, &blocks, true).to_bits(),
-            s.to_bits(),
-            "block 1 is not checked"
-        );
-        q[2][3 * 8 + 5] = f32::NAN;
-        for simd in [false, true] {
-            let qr = [&q[0][..], &q[1][..], &q[2][..]];
-            assert_eq!(max_disp2_blocks(qr, ar, &blocks, simd), f32::INFINITY);
-        }
-    }
-
-    #[test]
-    fn gather_xyz8_puts_entry_l_in_lane_l() {
-        let xyz: Vec<[f32; 4]> = (0..40).map(|i| [i as f32, 100.0 + i as f32, 200.0 + i as f32, -1.0]).collect();
-        let idx: Idx8 = [3, 39, 0, 17, 17, 8, 25, 1];
-        let [x, y, z] = gather_xyz8(&xyz, &idx);
-        for (l, &i) in idx.iter().enumerate() {
-            assert_eq!(x.to_array()[l], i as f32);
-            assert_eq!(y.to_array()[l], 100.0 + i as f32);
-            assert_eq!(z.to_array()[l], 200.0 + i as f32);
-        }
-    }
-}
+#[path = "self_near_tests.rs"]
+mod tests;

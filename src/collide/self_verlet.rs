@@ -43,6 +43,16 @@
 //! rebuilds either way (the cloth hangs from a pinned row, so it does not translate as a
 //! whole), broadphase 0.55-0.59 against 0.48-0.53, not kept.
 //!
+//! Session 6 (issue #5 on two threads, with the near-list rebuild in parallel): the skin
+//! measured again on `weft reproduce vccpbd --size 100 --threads 2`, basic VcCPBD hash row,
+//! CPU lock, idle machine, alternate runs. Collision ms a step: skin 2 d 0.603-0.638 (six
+//! runs without the two slow outliers of the VM, 0.690 and 0.854), 3 d 0.582-0.609 (six runs,
+//! one outlier 0.683); query column 0.19-0.23 against 0.16-0.18 (47 rebuilds against 49),
+//! pairs 0.264-0.269 against 0.271-0.281; 1.5 d 0.627-0.641, d 0.675-0.700, 2.5 d
+//! 0.648-0.663, 4 d 0.667-0.672. One thread, two runs each: 2 d 0.804 / 0.811, 3 d 0.802 /
+//! 0.822 (no change). The skin is now 3 d: the wider reach's extra candidates cost the near
+//! list's rebuild, which two threads now share, less than the rebuilds it saves.
+//!
 //! A wider skin makes each rebuild's reach (`q + s`) and candidate count larger but lets the
 //! folding cloth (steps ~42-75, 4.5-9.7 ms of queries a step before) keep its lists for
 //! several steps; allowing the skin for faster motion (`SLOW_FACTOR` 2) makes the falling
@@ -53,8 +63,9 @@ use super::self_config::SelfBroadphase;
 use crate::lanes::{load, F32s, LANES};
 
 /// Skin of the candidate lists over the collision distance, when the cloth moves slowly
-/// (measured, see the module docs).
-pub const SKIN_FACTOR: f32 = 2.0;
+/// (measured, see the module docs: 2 on one thread, 3 since the near-list rebuild runs on
+/// two).
+pub const SKIN_FACTOR: f32 = 3.0;
 
 /// Largest displacement a step (over the collision distance) for which the skin is used.
 pub const SLOW_FACTOR: f32 = 1.0;
