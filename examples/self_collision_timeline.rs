@@ -3,8 +3,10 @@
 //! while the cloth falls (every step runs the broadphase) and after it has folded (lists reused).
 //!
 //! ```text
-//! cargo run --release --example self_collision_timeline [steps] [threads]
+//! cargo run --release --example self_collision_timeline [steps] [threads] [response]
 //! ```
+//!
+//! `response` is `vccpbd` (the default), `pbd` or `movement-speed`.
 //!
 //! Columns are ms for that step; `clamp` is the stage's total minus the listed phases (the speed
 //! clamp and bookkeeping); `rebuild` is 1 when the step ran the broadphase.
@@ -16,6 +18,12 @@ fn main() -> weft::Result<()> {
     let mut args = std::env::args().skip(1).map(|a| a.parse::<usize>().ok());
     let steps = args.next().flatten().unwrap_or(150);
     let threads = args.next().flatten().unwrap_or(1);
+    let response = match std::env::args().nth(3).as_deref() {
+        None | Some("vccpbd") => Response::Vccpbd,
+        Some("pbd") => Response::Pbd,
+        Some("movement-speed") => Response::MovementSpeed,
+        Some(other) => return Err(weft::WeftError::param("response", other, "must be vccpbd, pbd or movement-speed")),
+    };
     let params = SolverParams {
         substeps: 10,
         iterations: 1,
@@ -23,7 +31,7 @@ fn main() -> weft::Result<()> {
         ..Default::default()
     };
     let sc = SelfCollision {
-        response: Response::Vccpbd,
+        response,
         broadphase: SelfBroadphase::Hash,
         ..SelfCollision::default()
     };

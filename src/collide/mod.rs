@@ -47,6 +47,7 @@ mod self_active;
 pub mod self_collision;
 pub mod self_config;
 mod self_near;
+mod self_near_scan;
 mod self_pairs;
 mod self_verlet;
 pub mod shapes;

@@ -361,7 +361,8 @@ impl SelfCollisionData {
         let Some(st) = self.state.as_mut().filter(|s| s.ready) else {
             return;
         };
-        st.near.update(&st.verlet.cand, p, &st.active.blocks, n, a.d, simd, parallel);
+        let reach = QUERY_FACTOR * a.d + st.verlet.skin();
+        st.near.update(&st.verlet.cand, reach, p, &st.active.blocks, n, a.d, simd, parallel);
         let q = QUERY_FACTOR * a.d;
         let ctx = PairCtx {
             x,

@@ -8,6 +8,28 @@
 //! it. The substeps test only the near pairs, and a pair also has to be within `q` at the
 //! step's start (in the lists of the step), exactly as the fresh path requires.
 //!
+//! # Mid list (session 7)
+//! Once the cloth has folded, the candidate lists are built with a skin of `3 d` (reach
+//! `6 d`): ~763 000 pairs on the 100x100 fold, mostly pairs of one layer between `3 d` and
+//! `6 d` apart at rest that are never near. Each near rebuild walked all of them (timers: 59
+//! rebuilds over lists above 500 000 pairs, 28 of the stage's ~140 ms on one thread). The near
+//! list is now built from a **mid list**: the candidate pairs within
+//! `r₁ = d + NEAR_SKIN_MAX d + MID_SKIN d` (`3 d`, ~108 000 pairs on the fold) of its build
+//! positions `y₁`, kept while every particle of the active blocks stays within
+//! `0.49 MID_SKIN d` of `y₁`. Exact: a pair within `d + s₂` (`s₂ <= NEAR_SKIN_MAX d`) at a
+//! near build was within `d + s₂ + 0.98 MID_SKIN d < r₁` at `y₁`, so the near list built from
+//! the mid list is the one built from the candidates (tested at every rebuild, with a mid
+//! radius of `2 d` failing the test). The mid list is used only when the candidate reach is
+//! at least `MID_REACH_RATIO r₁` (while the cloth falls the reach is `3 d` and the mid list
+//! would hold nearly every candidate: an extra pass at every rebuild cost ~0.5 ms a step over
+//! steps 41-50) and the near skin is below its cap (then both lists expire together).
+//! Measured with `examples/self_collision_timeline` (basic VcCPBD, 150 steps, alternate runs,
+//! ms over the run's segments, steps 47-99 folding and 100-149 settled): one thread, pairs
+//! column folding 38.6-39.8 -> 31.3-33.0, settled 16.9-17.9 -> 12.1-12.3, the step of the
+//! wide rebuild 1.9-2.0 -> 3.1-3.3 (the mid list's first build), falling unchanged; stage
+//! total 141-148 -> 133-142. Two threads: pairs folding 23.8-27.2 -> 21.1-23.2, settled
+//! 11.0-13.4 -> 9.3-10.0.
+//!
 //! # Cost (issue #5, `examples/self_collision_timeline.rs`, basic VcCPBD 100x100, 1 thread)
 //! Measured per substep, averaged over the 1500 substeps, with timers around the parts
 //! (loaded shared machine, so roughly): the near-list update 36 µs (274 rebuilds, ~180 µs
@@ -86,105 +108,143 @@
 //! folding phase (steps ~40-100), where the cloth moves `~d / 10` a substep and the list is rebuilt every 4-10 substeps.
 
 use super::neighbours::Neighbours;
+use super::self_near_scan::{collect, filter_pairs, ScanScratch};
 use super::self_verlet::SAFE;
-use crate::lanes::{idx8, load, F32s, Idx8, LANES};
-use rayon::prelude::*;
+use crate::lanes::{load, F32s, LANES};
+
+/// Largest near-list skin over the collision distance (the adaptive skin's cap).
+pub(crate) const NEAR_SKIN_MAX: f32 = 1.0;
+
+/// Skin of the mid list over the collision distance: its pairs are those within
+/// `d + NEAR_SKIN_MAX d + MID_SKIN d` of its build, kept while no particle of the active
+/// blocks moves more than `0.49 MID_SKIN d` from it (see the module docs).
+pub(crate) const MID_SKIN: f32 = 1.0;
+
+/// The mid list is used when the candidate lists' reach is at least this many times its
+/// radius (with a smaller reach it holds nearly every candidate and only adds a pass).
+pub(crate) const MID_REACH_RATIO: f32 = 1.5;
 
 /// Near pairs of the candidate lists for the substeps (see the module docs).
 #[derive(Clone, Debug, Default)]
 pub(crate) struct NearList {
     /// Pairs `(i, j)`, `i < j`, ordered by `i` then `j`.
     pub(crate) pairs: Vec<(u32, u32)>,
-    /// Positions of the build (particle arrays, padded like them).
+    /// Positions of the build (the active blocks' particles, block by block).
     at: [Vec<f32>; 3],
     skin: f32,
     valid: bool,
     subs_since: u32,
     /// Builds so far.
     pub(crate) rebuilds: u64,
-    /// Scratch: the positions of the build as `[x, y, z, 0]` (one load per candidate).
-    xyz: Vec<[f32; 4]>,
-    /// Particle ranges of the parallel rebuild ([`chunk_bounds`]).
-    bounds: Vec<usize>,
-    /// The near pairs of each range (joined in order into `pairs`).
-    chunks: Vec<Vec<(u32, u32)>>,
+    /// The mid list the near list is built from (pairs `(i, j)`, `i < j`, ordered by `i` then
+    /// `j`).
+    mid: Vec<(u32, u32)>,
+    /// Positions of the mid list's build (like `at`).
+    mid_at: [Vec<f32>; 3],
+    mid_valid: bool,
+    /// Mid-list builds so far.
+    pub(crate) mid_rebuilds: u64,
+    scratch: ScanScratch,
 }
 
 impl NearList {
-    /// Forgets the list (new candidate lists).
+    /// Forgets the lists (new candidate lists).
     pub(crate) fn invalidate(&mut self) {
         self.valid = false;
+        self.mid_valid = false;
     }
 
     /// Makes the list hold for the predicted positions `p`: kept if no particle of the active
-    /// `blocks` (ascending; every near pair has both ends in them) moved more than `0.49 s₂`
-    /// since the build, else rebuilt from `cand` (first `n` lists) with a new skin. Only the
-    /// active blocks are checked and copied: before the fold they are a few, and the
-    /// particles outside them have no candidate. A rebuild runs in parallel over ranges of
-    /// particles when `parallel` ([`NearList::collect`]: the same list).
+    /// `blocks` (ascending; every candidate pair has both ends in them) moved more than
+    /// `0.49 s₂` since the build, else rebuilt with a new skin from the mid list, itself
+    /// rebuilt from `cand` (first `n` lists) first when one of those particles moved more
+    /// than `0.49 MID_SKIN d` since its build. Only the active blocks are checked and copied:
+    /// before the fold they are a few, and the particles outside them have no candidate. The
+    /// scans run in parallel over ranges of particles when `parallel` (the same lists).
     #[allow(clippy::too_many_arguments)]
-    pub(crate) fn update(&mut self, cand: &Neighbours, p: [&[f32]; 3], blocks: &[u32], n: usize, d: f32, simd: bool, parallel: bool) {
+    pub(crate) fn update(
+        &mut self,
+        cand: &Neighbours,
+        reach: f32,
+        p: [&[f32]; 3],
+        blocks: &[u32],
+        n: usize,
+        d: f32,
+        simd: bool,
+        parallel: bool,
+    ) {
         if self.valid && self.at[0].len() == blocks.len() * LANES {
-            let at = [&self.at[0][..], &self.at[1][..], &self.at[2][..]];
-            let m2 = max_disp2_blocks(p, at, blocks, simd);
+            let m2 = max_disp2_blocks(p, as_refs(&self.at), blocks, simd);
             let lim = 0.5 * SAFE * self.skin;
             self.subs_since += 1;
             if m2 <= lim * lim {
                 return;
             }
-            // Aim at about 20 substeps between builds, within [d / 8, d].
+            // Aim at about 20 substeps between builds, within [d / 8, NEAR_SKIN_MAX d].
             let rate = if m2.is_finite() { m2.sqrt() / self.subs_since as f32 } else { d };
-            self.skin = (20.0 * rate).clamp(0.125 * d, d);
+            self.skin = (20.0 * rate).clamp(0.125 * d, NEAR_SKIN_MAX * d);
         } else if !self.valid {
             self.skin = 0.25 * d;
         }
-        for (a, src) in self.at.iter_mut().zip(p) {
-            a.clear();
-            for &b in blocks {
-                let g = b as usize * LANES;
-                match src.get(g..g + LANES) {
-                    Some(s) => a.extend_from_slice(s),
-                    None => a.extend((g..g + LANES).map(|i| src.get(i).copied().unwrap_or(0.0))),
-                }
-            }
-        }
+        copy_blocks(p, blocks, &mut self.at);
         let r = d + self.skin;
-        self.collect(cand, p, n, r * r, simd, parallel);
+        let r_mid = d * (1.0 + NEAR_SKIN_MAX + MID_SKIN);
+        if self.skin < NEAR_SKIN_MAX * d && reach >= MID_REACH_RATIO * r_mid {
+            self.update_mid(cand, p, blocks, n, d, simd, parallel);
+            filter_pairs(&self.mid, p, n, r * r, simd, parallel, &mut self.scratch, &mut self.pairs);
+        } else {
+            self.mid_valid = false;
+            collect(cand, p, n, r * r, simd, parallel, &mut self.scratch, &mut self.pairs);
+        }
         self.valid = true;
         self.subs_since = 0;
         self.rebuilds += 1;
     }
 
-    /// Number of particle ranges of the last parallel build (0 or 1: built serially).
-    #[cfg(test)]
-    pub(crate) fn ranges(&self) -> usize {
-        self.bounds.len().saturating_sub(1)
+    /// Keeps the mid list if no particle of `blocks` moved more than `0.49 MID_SKIN d` since
+    /// its build, else rebuilds it from `cand` at `p`: the pairs within
+    /// `d + (NEAR_SKIN_MAX + MID_SKIN) d`. A near pair (within `d + s₂`, `s₂ <= NEAR_SKIN_MAX
+    /// d`, at `p`) was then within `d + s₂ + 0.98 MID_SKIN d` at the mid build, so it is in
+    /// the mid list: the near list built from it is the one built from `cand`.
+    #[allow(clippy::too_many_arguments)]
+    fn update_mid(&mut self, cand: &Neighbours, p: [&[f32]; 3], blocks: &[u32], n: usize, d: f32, simd: bool, parallel: bool) {
+        let lim = 0.5 * SAFE * MID_SKIN * d;
+        if self.mid_valid
+            && self.mid_at[0].len() == blocks.len() * LANES
+            && max_disp2_blocks(p, as_refs(&self.mid_at), blocks, simd) <= lim * lim
+        {
+            return;
+        }
+        copy_blocks(p, blocks, &mut self.mid_at);
+        let r = d * (1.0 + NEAR_SKIN_MAX + MID_SKIN);
+        collect(cand, p, n, r * r, simd, parallel, &mut self.scratch, &mut self.mid);
+        self.mid_valid = true;
+        self.mid_rebuilds += 1;
     }
 
-    /// [`collect_near`] into `pairs`; when `parallel`, over the ranges of [`chunk_bounds`],
-    /// each into its own buffer, the buffers joined in range order: the same list as the
-    /// serial walk whatever the number of threads.
-    fn collect(&mut self, cand: &Neighbours, p: [&[f32]; 3], n: usize, r2: f32, simd: bool, parallel: bool) {
-        let n = near_len(cand, p, n);
-        chunk_bounds(cand, n, &mut self.bounds);
-        let m = self.bounds.len() - 1;
-        if !parallel || m < 2 {
-            return collect_near(cand, p, n, r2, simd, &mut self.xyz, &mut self.pairs);
-        }
-        if simd {
-            fill_xyz(p, n, true, &mut self.xyz);
-        }
-        if self.chunks.len() < m {
-            self.chunks.resize_with(m, Vec::new);
-        }
-        let (bounds, xyz) = (&self.bounds, &self.xyz[..]);
-        self.chunks[..m].par_iter_mut().enumerate().for_each(|(c, buf)| {
-            buf.clear();
-            collect_range(cand, p, bounds[c]..bounds[c + 1], r2, simd, xyz, buf);
-        });
-        self.pairs.clear();
-        for c in &self.chunks[..m] {
-            self.pairs.extend_from_slice(c);
+    /// Number of particle ranges of the last parallel scan (0 or 1: built serially).
+    #[cfg(test)]
+    pub(crate) fn ranges(&self) -> usize {
+        self.scratch.bounds.len().saturating_sub(1)
+    }
+}
+
+/// The three coordinate arrays as slices.
+fn as_refs(a: &[Vec<f32>; 3]) -> [&[f32]; 3] {
+    [&a[0][..], &a[1][..], &a[2][..]]
+}
+
+/// Copies the positions of the particles of `blocks` into `dst`, block by block (the layout
+/// [`max_disp2_blocks`] reads; past the arrays' end, zeros).
+fn copy_blocks(p: [&[f32]; 3], blocks: &[u32], dst: &mut [Vec<f32>; 3]) {
+    for (a, src) in dst.iter_mut().zip(p) {
+        a.clear();
+        for &b in blocks {
+            let g = b as usize * LANES;
+            match src.get(g..g + LANES) {
+                Some(s) => a.extend_from_slice(s),
+                None => a.extend((g..g + LANES).map(|i| src.get(i).copied().unwrap_or(0.0))),
+            }
         }
     }
 }
@@ -226,159 +286,6 @@ pub(crate) fn max_disp2_blocks(p: [&[f32]; 3], at: [&[f32]; 3], blocks: &[u32], 
         f32::INFINITY
     } else {
         m
-    }
-}
-
-/// Candidate entries one parallel task of the near-list rebuild tests, about (a chunk ends at
-/// the first particle boundary past this many entries, so a task's work does not depend on
-/// how the candidates are spread over the particles).
-pub(crate) const NEAR_CHUNK: usize = 8192;
-
-/// Replaces `out` with the candidate pairs `(i, j)` of `cand` (first `n` lists) closer than
-/// `sqrt(r2)` at `p`, or with a NaN distance (the exact test rejects those later, as the fresh
-/// path does), in list order. With `simd`, eight candidates of one particle at a time: their
-/// positions come from `xyz`, a copy of `p` as `[x, y, z, 0]` made here (one 16-byte load a
-/// candidate instead of three scattered ones, transposed to `f32x8` in registers by
-/// [`gather_xyz8`]); the same operations as the scalar twin, so the same list.
-pub(crate) fn collect_near(
-    cand: &Neighbours,
-    p: [&[f32]; 3],
-    n: usize,
-    r2: f32,
-    simd: bool,
-    xyz: &mut Vec<[f32; 4]>,
-    out: &mut Vec<(u32, u32)>,
-) {
-    out.clear();
-    let n = near_len(cand, p, n);
-    if simd {
-        fill_xyz(p, n, false, xyz);
-    }
-    collect_range(cand, p, 0..n, r2, simd, xyz, out);
-}
-
-/// The particles [`collect_near`] walks: the first `n` with a list and a position.
-fn near_len(cand: &Neighbours, p: [&[f32]; 3], n: usize) -> usize {
-    n.min(cand.len()).min(p[0].len()).min(p[1].len()).min(p[2].len())
-}
-
-/// Replaces `xyz` with `[x, y, z, 0]` of the first `n` particles of `p` (element-wise, in
-/// parallel over fixed blocks when `parallel`: the same values either way).
-fn fill_xyz(p: [&[f32]; 3], n: usize, parallel: bool, xyz: &mut Vec<[f32; 4]>) {
-    const BLOCK: usize = 2048;
-    xyz.clear();
-    xyz.resize(n, [0.0; 4]);
-    let (x, y, z) = (&p[0][..n], &p[1][..n], &p[2][..n]);
-    let one = |b: usize, dst: &mut [[f32; 4]]| {
-        let o = b * BLOCK;
-        for (k, d) in dst.iter_mut().enumerate() {
-            *d = [x[o + k], y[o + k], z[o + k], 0.0];
-        }
-    };
-    if parallel && n > BLOCK {
-        xyz.par_chunks_mut(BLOCK).enumerate().for_each(|(b, d)| one(b, d));
-    } else {
-        xyz.chunks_mut(BLOCK).enumerate().for_each(|(b, d)| one(b, d));
-    }
-}
-
-/// Splits particles `0..n` into consecutive ranges of about [`NEAR_CHUNK`] candidate entries
-/// (from the list offsets): `bounds` becomes `0 = b_0 < b_1 < .. < b_m = n`.
-pub(crate) fn chunk_bounds(cand: &Neighbours, n: usize, bounds: &mut Vec<usize>) {
-    bounds.clear();
-    bounds.push(0);
-    let first = &cand.first[..=n];
-    let mut lo = 0;
-    while lo < n {
-        let goal = first[lo] as usize + NEAR_CHUNK;
-        // The first particle whose list starts at or past the goal (at least one particle on).
-        let hi = (lo + 1).max(first.partition_point(|&f| (f as usize) < goal)).min(n);
-        bounds.push(hi);
-        lo = hi;
-    }
-}
-
-/// Appends to `out` the near pairs of the particles in `range` (the work of [`collect_near`]
-/// on a part of the lists; `xyz` filled when `simd`).
-fn collect_range(
-    cand: &Neighbours,
-    p: [&[f32]; 3],
-    range: std::ops::Range<usize>,
-    r2: f32,
-    simd: bool,
-    xyz: &[[f32; 4]],
-    out: &mut Vec<(u32, u32)>,
-) {
-    let r2v = F32s::splat(r2);
-    for i in range {
-        let list = cand.of(i);
-        if list.is_empty() {
-            continue;
-        }
-        let pi = [p[0][i], p[1][i], p[2][i]];
-        let mut k = 0;
-        if simd {
-            let piv = [F32s::splat(pi[0]), F32s::splat(pi[1]), F32s::splat(pi[2])];
-            while k + LANES <= list.len() {
-                let js = &list[k..k + LANES];
-                let idx = idx8(|l| js[l]);
-                let q = gather_xyz8(xyz, &idx);
-                let v = [piv[0] - q[0], piv[1] - q[1], piv[2] - q[2]];
-                let d2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
-                let mut bits = (d2.simd_lt(r2v) | d2.is_nan()).to_bitmask();
-                while bits != 0 {
-                    out.push((i as u32, js[bits.trailing_zeros() as usize]));
-                    bits &= bits - 1;
-                }
-                k += LANES;
-            }
-        }
-        for &j in &list[k..] {
-            let ju = j as usize;
-            let v = [pi[0] - p[0][ju], pi[1] - p[1][ju], pi[2] - p[2][ju]];
-            let d2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
-            if d2 < r2 || d2.is_nan() {
-                out.push((i as u32, j));
-            }
-        }
-    }
-}
-
-/// The x, y and z of eight entries of `xyz` (indices `idx`, bounds-checked) as three vectors,
-/// lane `l` from entry `idx[l]`. On AVX: eight 16-byte loads and an 8x4 transpose in
-/// registers (unpack and shuffle); elsewhere a portable array version. Pure data movement.
-#[inline(always)]
-pub(crate) fn gather_xyz8(xyz: &[[f32; 4]], idx: &Idx8) -> [F32s; 3] {
-    #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
-    {
-        use std::arch::x86_64::{__m128, __m256, _mm256_set_m128, _mm256_shuffle_ps, _mm256_unpackhi_ps, _mm256_unpacklo_ps};
-        // Written out (no array `map`, which can end up as an out-of-line call).
-        let row = |l: usize| -> __m128 { bytemuck::cast(xyz[idx[l] as usize]) };
-        let r = [row(0), row(1), row(2), row(3), row(4), row(5), row(6), row(7)];
-        // SAFETY: the cfg guarantees AVX at compile time; register-only intrinsics.
-        let (x, y, z) = unsafe {
-            // Low halves hold rows 0..4, high halves rows 4..8.
-            let a = _mm256_set_m128(r[4], r[0]);
-            let b = _mm256_set_m128(r[5], r[1]);
-            let c = _mm256_set_m128(r[6], r[2]);
-            let d = _mm256_set_m128(r[7], r[3]);
-            let t0 = _mm256_unpacklo_ps(a, b); // x0 x1 y0 y1 | x4 x5 y4 y5
-            let t1 = _mm256_unpacklo_ps(c, d); // x2 x3 y2 y3 | x6 x7 y6 y7
-            let t2 = _mm256_unpackhi_ps(a, b); // z0 z1 w0 w1 | z4 z5 w4 w5
-            let t3 = _mm256_unpackhi_ps(c, d); // z2 z3 w2 w3 | z6 z7 w6 w7
-            (
-                _mm256_shuffle_ps::<0x44>(t0, t1),
-                _mm256_shuffle_ps::<0xEE>(t0, t1),
-                _mm256_shuffle_ps::<0x44>(t2, t3),
-            )
-        };
-        let c = |v: __m256| -> F32s { bytemuck::cast(v) };
-        [c(x), c(y), c(z)]
-    }
-    #[cfg(not(all(target_arch = "x86_64", target_feature = "avx")))]
-    {
-        let rows: [[f32; 4]; LANES] = std::array::from_fn(|l| xyz[idx[l] as usize]);
-        [0, 1, 2].map(|a| F32s::from(rows.map(|r| r[a])))
     }
 }
 

@@ -2,6 +2,8 @@
 //! one on 1 and 2 threads, the block displacement check.
 
 use super::*;
+use crate::collide::self_near_scan::{chunk_bounds, collect, collect_near, filter_pairs, gather_xyz8, ScanScratch, FILTER_CHUNK};
+use crate::lanes::Idx8;
 use crate::test_rng::signed;
 
 #[test]
@@ -59,9 +61,9 @@ fn parallel_rebuild_over_ranges_equals_the_serial_list_on_1_and_2_threads() {
     for threads in [1, 2] {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         for (simd, parallel) in [(true, true), (false, true), (true, false)] {
-            let mut near = NearList::default();
-            pool.install(|| near.collect(&cand, pr, n, r2, simd, parallel));
-            assert_eq!(near.pairs, want, "{threads} threads, simd {simd}, parallel {parallel}");
+            let (mut scratch, mut got) = (ScanScratch::default(), Vec::new());
+            pool.install(|| collect(&cand, pr, n, r2, simd, parallel, &mut scratch, &mut got));
+            assert_eq!(got, want, "{threads} threads, simd {simd}, parallel {parallel}");
         }
     }
     chunk_bounds(&cand, 0, &mut bounds);
@@ -123,5 +125,105 @@ fn gather_xyz8_puts_entry_l_in_lane_l() {
         assert_eq!(x.to_array()[l], i as f32);
         assert_eq!(y.to_array()[l], 100.0 + i as f32);
         assert_eq!(z.to_array()[l], 200.0 + i as f32);
+    }
+}
+
+/// The near list built through the mid list is the one built from the candidates directly,
+/// at every rebuild, and holds every pair in contact at every update, while pairs close in
+/// (the near list kept, or rebuilt from a kept mid list) and at jumps (both rebuilt). A mid
+/// radius of `2 d` instead of `3 d` fails it.
+#[test]
+fn near_list_through_the_mid_list_equals_the_direct_build() {
+    let mut rng = signed(21);
+    let (n, d) = (200usize, 0.1f32);
+    let mut p: [Vec<f32>; 3] = std::array::from_fn(|_| (0..n).map(|_| 0.3 * rng()).collect());
+    let mut cand = Neighbours::new();
+    cand.fill_serial(n, |i, buf| {
+        buf.extend((i + 1..n).filter(|j| (i + 2 * j) % 7 != 0).map(|j| j as u32))
+    })
+    .unwrap();
+    let blocks: Vec<u32> = (0..n.div_ceil(LANES) as u32).collect();
+    let mut near = NearList::default();
+    let (mut scratch, mut want) = (ScanScratch::default(), Vec::new());
+    let (mut checked, mut kept) = (0, 0);
+    // Even particles drift along +x and odd ones along -x (0.03 d a call, so pairs close in at
+    // up to 0.06 d a call: the near list is rebuilt from a kept mid list after the pairs
+    // moved ~0.6 d relative to its build), with a jump of up to 0.6 d every 50 calls.
+    let vel: [Vec<f32>; 3] = std::array::from_fn(|k| {
+        (0..n)
+            .map(|i| {
+                if k == 0 {
+                    if i % 2 == 0 {
+                        0.03 * d
+                    } else {
+                        -0.03 * d
+                    }
+                } else {
+                    0.005 * d * rng()
+                }
+            })
+            .collect()
+    });
+    for call in 0..300 {
+        for (a, v) in p.iter_mut().zip(&vel) {
+            for (x, dx) in a.iter_mut().zip(v) {
+                *x += if call % 50 == 0 { 0.6 * d * rng() } else { *dx };
+            }
+        }
+        let pr = [&p[0][..], &p[1][..], &p[2][..]];
+        let (before, mid_before) = (near.rebuilds, near.mid_rebuilds);
+        near.update(&cand, 10.0 * d, pr, &blocks, n, d, true, false);
+        if near.rebuilds > before {
+            let r = d + near.skin;
+            collect(&cand, pr, n, r * r, false, false, &mut scratch, &mut want);
+            assert_eq!(near.pairs, want, "call {call}");
+            checked += 1;
+            kept += usize::from(near.mid_rebuilds == mid_before);
+        }
+        for (i, j) in cand.pairs() {
+            let (i, j) = (i as usize, j as usize);
+            let d2: f32 = (0..3).map(|k| (p[k][i] - p[k][j]).powi(2)).sum();
+            if d2 < d * d {
+                assert!(
+                    near.pairs.binary_search(&(i as u32, j as u32)).is_ok(),
+                    "call {call}: contact ({i}, {j}) missed"
+                );
+            }
+        }
+    }
+    let msg = format!("{checked} near builds, {} mid, {kept} from a kept mid list", near.mid_rebuilds);
+    assert!(near.mid_rebuilds >= 6 && kept > 10, "{msg}");
+    assert!(near.pairs.len() > 20, "{} near pairs", near.pairs.len());
+}
+
+#[test]
+fn filter_pairs_simd_and_parallel_equal_the_scalar_filter() {
+    let mut rng = signed(17);
+    let n = 500;
+    let mut p: [Vec<f32>; 3] = std::array::from_fn(|_| (0..n).map(|_| rng()).collect());
+    p[2][77] = f32::NAN;
+    let pairs: Vec<(u32, u32)> = (0..n as u32)
+        .flat_map(|i| (i + 1..n as u32).filter(move |j| (i + j) % 5 == 0).map(move |j| (i, j)))
+        .collect();
+    assert!(pairs.len() > 3 * FILTER_CHUNK, "{} pairs", pairs.len());
+    let pr = [&p[0][..], &p[1][..], &p[2][..]];
+    let r2 = 0.5f32 * 0.5;
+    let want: Vec<(u32, u32)> = pairs
+        .iter()
+        .copied()
+        .filter(|&(i, j)| {
+            let (i, j) = (i as usize, j as usize);
+            let d2: f32 = (0..3).map(|k| (p[k][i] - p[k][j]) * (p[k][i] - p[k][j])).sum();
+            d2 < r2 || d2.is_nan()
+        })
+        .collect();
+    assert!(want.len() > 100 && want.len() < pairs.len() && want.iter().any(|&(i, j)| i == 77 || j == 77));
+    for threads in [1, 2] {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        for (simd, parallel) in [(false, false), (true, false), (true, true), (false, true)] {
+            let (mut s, mut got) = (ScanScratch::default(), vec![(9, 9)]);
+            pool.install(|| filter_pairs(&pairs, pr, n, r2, simd, parallel, &mut s, &mut got));
+            assert_eq!(got, want, "{threads} threads, simd {simd}, parallel {parallel}");
+        }
     }
 }

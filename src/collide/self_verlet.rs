@@ -140,6 +140,11 @@ impl VerletLists {
         Some(if rate <= SLOW_FACTOR * d { SKIN_FACTOR * d } else { 0.0 })
     }
 
+    /// The skin of the last build (the candidate lists' reach is `q` plus this).
+    pub(crate) fn skin(&self) -> f32 {
+        self.skin
+    }
+
     /// Records a successful build from `x` with `skin`.
     pub(crate) fn built(&mut self, x: [&[f32]; 3], n: usize, d: f32, bp: SelfBroadphase, skin: f32) {
         for (s, src) in self.snap.iter_mut().zip(x) {
