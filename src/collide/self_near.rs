@@ -30,6 +30,14 @@
 //! total 141-148 -> 133-142. Two threads: pairs folding 23.8-27.2 -> 21.1-23.2, settled
 //! 11.0-13.4 -> 9.3-10.0.
 //!
+//! With rebuilds that cheap the near skin is sized for `NEAR_LIFETIME = 5` substeps at the
+//! fastest particle's rate (20 before): with 20 one fast particle of the movement-speed fold
+//! set the skin to its cap and the substeps then tested ~40 000 near pairs for the rest of
+//! the run. Timeline, one thread, stage total / pairs column over the run (ms, two runs
+//! each): lifetime 20: VcCPBD 131-136 / 60-61, movement speed 151-160 / 86-88; 8: 135-136 /
+//! 58-62, 150-164 / 82-91, PBD 126-127 / 59-61; 5: 129-134 / 57-60, 131-141 / 66-70, PBD
+//! 121-123 / 56-57; 3: 128-174 / 57-78 (slower with every response).
+//!
 //! # Cost (issue #5, `examples/self_collision_timeline.rs`, basic VcCPBD 100x100, 1 thread)
 //! Measured per substep, averaged over the 1500 substeps, with timers around the parts
 //! (loaded shared machine, so roughly): the near-list update 36 µs (274 rebuilds, ~180 µs
@@ -115,6 +123,10 @@ use crate::lanes::{load, F32s, LANES};
 /// Largest near-list skin over the collision distance (the adaptive skin's cap).
 pub(crate) const NEAR_SKIN_MAX: f32 = 1.0;
 
+/// Substeps the near skin is sized to last, at the fastest particle's rate since the last
+/// build (20 before the mid list made rebuilds cheap; see the module docs).
+pub(crate) const NEAR_LIFETIME: f32 = 5.0;
+
 /// Skin of the mid list over the collision distance: its pairs are those within
 /// `d + NEAR_SKIN_MAX d + MID_SKIN d` of its build, kept while no particle of the active
 /// blocks moves more than `0.49 MID_SKIN d` from it (see the module docs).
@@ -180,9 +192,9 @@ impl NearList {
             if m2 <= lim * lim {
                 return;
             }
-            // Aim at about 20 substeps between builds, within [d / 8, NEAR_SKIN_MAX d].
+            // Aim at about NEAR_LIFETIME substeps between builds, within [d / 8, NEAR_SKIN_MAX d].
             let rate = if m2.is_finite() { m2.sqrt() / self.subs_since as f32 } else { d };
-            self.skin = (20.0 * rate).clamp(0.125 * d, NEAR_SKIN_MAX * d);
+            self.skin = (NEAR_LIFETIME * rate).clamp(0.125 * d, NEAR_SKIN_MAX * d);
         } else if !self.valid {
             self.skin = 0.25 * d;
         }
