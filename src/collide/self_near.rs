@@ -34,7 +34,7 @@
 //! fastest particle's rate (20 before): with 20 one fast particle of the movement-speed fold
 //! set the skin to its cap and the substeps then tested ~40 000 near pairs for the rest of
 //! the run. Timeline, one thread, stage total / pairs column over the run (ms, two runs
-//! each): lifetime 20: VcCPBD 131-136 / 60-61, movement speed 151-160 / 86-88; 8: 135-136 /
+//! each): lifetime 20: VcCPBD 128-140 / 58-61, movement speed 155-172 / 87-88; 8: 135-136 /
 //! 58-62, 150-164 / 82-91, PBD 126-127 / 59-61; 5: 129-134 / 57-60, 131-141 / 66-70, PBD
 //! 121-123 / 56-57; 3: 128-174 / 57-78 (slower with every response).
 //!
