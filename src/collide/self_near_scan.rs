@@ -108,7 +108,14 @@ fn filter_range(pairs: &[(u32, u32)], p: [&[f32]; 3], r2: f32, simd: bool, xyz: 
         let r2v = F32s::splat(r2);
         while k + LANES <= pairs.len() {
             let c = &pairs[k..k + LANES];
-            let a = gather_xyz8(xyz, &idx8(|l| c[l].0));
+            // Sorted by `i`, eight pairs mostly share it: then one load, broadcast (the same
+            // values as the gather).
+            let a = if c.iter().all(|q| q.0 == c[0].0) {
+                let q = xyz[c[0].0 as usize];
+                [F32s::splat(q[0]), F32s::splat(q[1]), F32s::splat(q[2])]
+            } else {
+                gather_xyz8(xyz, &idx8(|l| c[l].0))
+            };
             let b = gather_xyz8(xyz, &idx8(|l| c[l].1));
             let v = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
             let d2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
