@@ -174,7 +174,8 @@ fn near_len(cand: &Neighbours, p: [&[f32]; 3], n: usize) -> usize {
 /// parallel over fixed blocks when `parallel`: the same values either way).
 fn fill_xyz(p: [&[f32]; 3], n: usize, parallel: bool, xyz: &mut Vec<[f32; 4]>) {
     const BLOCK: usize = 2048;
-    xyz.clear();
+    // Every entry is overwritten below: zero only new entries (a rebuild used to clear and
+    // zero all `n`, ~9% of the near updates' instructions in callgrind).
     xyz.resize(n, [0.0; 4]);
     let (x, y, z) = (&p[0][..n], &p[1][..n], &p[2][..n]);
     let one = |b: usize, dst: &mut [[f32; 4]]| {
