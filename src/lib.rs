@@ -15,6 +15,7 @@ pub mod fabric;
 #[doc(hidden)]
 pub mod fuzzing;
 pub mod integrate;
+mod keep_awake;
 pub mod lanes;
 pub mod metrics;
 pub mod params;

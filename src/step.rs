@@ -36,6 +36,7 @@ use crate::collide::response::{clamp_speed, ClampParams};
 use crate::collide::self_collision::{mean_velocity, Active, TRAVEL_FACTOR};
 use crate::error::{positive, Result, WeftError};
 use crate::integrate::{predict, update, PredictParams};
+use crate::keep_awake;
 use crate::params::{Backend, Method};
 use crate::particles::chunk_finite_simd;
 use crate::world::World;
@@ -109,9 +110,11 @@ impl World {
         match self.pool.clone() {
             // The scalar backend is single-threaded: no pool to enter.
             _ if self.embed.caller_thread_only || self.params.backend == Backend::Scalar => f(self),
-            Some(pool) => pool.install(|| f(self)),
+            // The pool's other workers poll for work through the step's serial parts instead
+            // of sleeping between the passes (`keep_awake`).
+            Some(pool) => pool.install(|| keep_awake::run(|| f(self))),
             // Enter the global pool once per step (one injected job instead of one per kernel).
-            None => rayon::scope(|_| f(self)),
+            None => rayon::scope(|_| keep_awake::run(|| f(self))),
         }
     }
 
