@@ -14,21 +14,27 @@
 //! `6 d` apart at rest that are never near. Each near rebuild walked all of them (timers: 59
 //! rebuilds over lists above 500 000 pairs, 28 of the stage's ~140 ms on one thread). The near
 //! list is now built from a **mid list**: the candidate pairs within
-//! `r₁ = d + NEAR_SKIN_MAX d + MID_SKIN d` (`3 d`, ~108 000 pairs on the fold) of its build
-//! positions `y₁`, kept while every particle of the active blocks stays within
-//! `0.49 MID_SKIN d` of `y₁`. Exact: a pair within `d + s₂` (`s₂ <= NEAR_SKIN_MAX d`) at a
-//! near build was within `d + s₂ + 0.98 MID_SKIN d < r₁` at `y₁`, so the near list built from
-//! the mid list is the one built from the candidates (tested at every rebuild, with a mid
-//! radius of `2 d` failing the test). The mid list is used only when the candidate reach is
-//! at least `MID_REACH_RATIO r₁` (while the cloth falls the reach is `3 d` and the mid list
-//! would hold nearly every candidate: an extra pass at every rebuild cost ~0.5 ms a step over
-//! steps 41-50) and the near skin is below its cap (then both lists expire together).
+//! `r₁ = d + MID_NEAR_SKIN_MAX d + MID_SKIN d` (`2.5 d`, ~66 000 pairs on the fold) of its
+//! build positions `y₁`, kept while every particle of the active blocks stays within
+//! `0.49 MID_SKIN d` of `y₁`. Exact: a pair within `d + s₂` (`s₂ <= MID_NEAR_SKIN_MAX d`, the
+//! near skin's cap while the mid list is in use) at a near build was within
+//! `d + s₂ + 0.98 MID_SKIN d < r₁` at `y₁`, so the near list built from the mid list is the one
+//! built from the candidates (tested at every rebuild; a mid radius of `2 d` fails the test).
+//! The mid list is used only when the candidate reach is at least `MID_REACH_RATIO r₁`: while
+//! the cloth falls the reach is `3 d` and the mid list would hold nearly every candidate (an
+//! extra pass at every rebuild cost ~0.5 ms a step over steps 41-50); there the near list is
+//! built from the candidates with the skin capped at `NEAR_SKIN_MAX d` as before.
 //! Measured with `examples/self_collision_timeline` (basic VcCPBD, 150 steps, alternate runs,
 //! ms over the run's segments, steps 47-99 folding and 100-149 settled): one thread, pairs
 //! column folding 38.6-39.8 -> 31.3-33.0, settled 16.9-17.9 -> 12.1-12.3, the step of the
 //! wide rebuild 1.9-2.0 -> 3.1-3.3 (the mid list's first build), falling unchanged; stage
 //! total 141-148 -> 133-142. Two threads: pairs folding 23.8-27.2 -> 21.1-23.2, settled
-//! 11.0-13.4 -> 9.3-10.0.
+//! 11.0-13.4 -> 9.3-10.0. (Those figures are for the first version: mid radius `3 d`, the
+//! near skin capped at `d` on both paths, ~108 000 mid pairs. Capping the near skin at `d / 2`
+//! on the mid path only, which allows the `2.5 d` radius: callgrind over the stage, one
+//! thread, 2 111 -> 2 046 million instructions with the cap on both paths; timeline, two
+//! threads, three alternate runs: pairs folding 19.9-20.6 -> 17.7-18.3 ms, stage total
+//! 85.8-100.6 -> 82.8-86.5.)
 //!
 //! With rebuilds that cheap the near skin is sized for `NEAR_LIFETIME = 5` substeps at the
 //! fastest particle's rate (20 before): with 20 one fast particle of the movement-speed fold
@@ -120,15 +126,19 @@ use super::self_near_scan::{collect, filter_pairs, ScanScratch};
 use super::self_verlet::SAFE;
 use crate::lanes::{load, F32s, LANES};
 
-/// Largest near-list skin over the collision distance (the adaptive skin's cap).
+/// Largest near-list skin over the collision distance (the adaptive skin's cap) when the
+/// near list is built from the candidates directly.
 pub(crate) const NEAR_SKIN_MAX: f32 = 1.0;
+
+/// The cap when it is built from the mid list (the mid radius allows for it).
+pub(crate) const MID_NEAR_SKIN_MAX: f32 = 0.5;
 
 /// Substeps the near skin is sized to last, at the fastest particle's rate since the last
 /// build (20 before the mid list made rebuilds cheap; see the module docs).
 pub(crate) const NEAR_LIFETIME: f32 = 5.0;
 
 /// Skin of the mid list over the collision distance: its pairs are those within
-/// `d + NEAR_SKIN_MAX d + MID_SKIN d` of its build, kept while no particle of the active
+/// `d + MID_NEAR_SKIN_MAX d + MID_SKIN d` of its build, kept while no particle of the active
 /// blocks moves more than `0.49 MID_SKIN d` from it (see the module docs).
 pub(crate) const MID_SKIN: f32 = 1.0;
 
@@ -185,6 +195,11 @@ impl NearList {
         simd: bool,
         parallel: bool,
     ) {
+        // The mid list is used when the candidates reach well past its radius (the wide
+        // skin of a folded cloth; see the module docs).
+        let r_mid = d * (1.0 + MID_NEAR_SKIN_MAX + MID_SKIN);
+        let use_mid = reach >= MID_REACH_RATIO * r_mid;
+        let cap = if use_mid { MID_NEAR_SKIN_MAX } else { NEAR_SKIN_MAX } * d;
         if self.valid && self.at[0].len() == blocks.len() * LANES {
             let m2 = max_disp2_blocks(p, as_refs(&self.at), blocks, simd);
             let lim = 0.5 * SAFE * self.skin;
@@ -192,16 +207,15 @@ impl NearList {
             if m2 <= lim * lim {
                 return;
             }
-            // Aim at about NEAR_LIFETIME substeps between builds, within [d / 8, NEAR_SKIN_MAX d].
+            // Aim at about NEAR_LIFETIME substeps between builds, within [d / 8, cap].
             let rate = if m2.is_finite() { m2.sqrt() / self.subs_since as f32 } else { d };
-            self.skin = (NEAR_LIFETIME * rate).clamp(0.125 * d, NEAR_SKIN_MAX * d);
+            self.skin = (NEAR_LIFETIME * rate).clamp(0.125 * d, cap);
         } else if !self.valid {
             self.skin = 0.25 * d;
         }
         copy_blocks(p, blocks, &mut self.at);
         let r = d + self.skin;
-        let r_mid = d * (1.0 + NEAR_SKIN_MAX + MID_SKIN);
-        if self.skin < NEAR_SKIN_MAX * d && reach >= MID_REACH_RATIO * r_mid {
+        if use_mid {
             self.update_mid(cand, p, blocks, n, d, simd, parallel);
             filter_pairs(&self.mid, p, n, r * r, simd, parallel, &mut self.scratch, &mut self.pairs);
         } else {
@@ -215,8 +229,8 @@ impl NearList {
 
     /// Keeps the mid list if no particle of `blocks` moved more than `0.49 MID_SKIN d` since
     /// its build, else rebuilds it from `cand` at `p`: the pairs within
-    /// `d + (NEAR_SKIN_MAX + MID_SKIN) d`. A near pair (within `d + s₂`, `s₂ <= NEAR_SKIN_MAX
-    /// d`, at `p`) was then within `d + s₂ + 0.98 MID_SKIN d` at the mid build, so it is in
+    /// `d + (MID_NEAR_SKIN_MAX + MID_SKIN) d`. A near pair (within `d + s₂`,
+    /// `s₂ <= MID_NEAR_SKIN_MAX d`, at `p`) was then within `d + s₂ + 0.98 MID_SKIN d` at the mid build, so it is in
     /// the mid list: the near list built from it is the one built from `cand`.
     #[allow(clippy::too_many_arguments)]
     fn update_mid(&mut self, cand: &Neighbours, p: [&[f32]; 3], blocks: &[u32], n: usize, d: f32, simd: bool, parallel: bool) {
@@ -228,7 +242,7 @@ impl NearList {
             return;
         }
         copy_blocks(p, blocks, &mut self.mid_at);
-        let r = d * (1.0 + NEAR_SKIN_MAX + MID_SKIN);
+        let r = d * (1.0 + MID_NEAR_SKIN_MAX + MID_SKIN);
         collect(cand, p, n, r * r, simd, parallel, &mut self.scratch, &mut self.mid);
         self.mid_valid = true;
         self.mid_rebuilds += 1;

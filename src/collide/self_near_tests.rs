@@ -131,7 +131,7 @@ fn gather_xyz8_puts_entry_l_in_lane_l() {
 /// The near list built through the mid list is the one built from the candidates directly,
 /// at every rebuild, and holds every pair in contact at every update, while pairs close in
 /// (the near list kept, or rebuilt from a kept mid list) and at jumps (both rebuilt). A mid
-/// radius of `2 d` instead of `3 d` fails it.
+/// radius of `2 d` instead of `2.5 d` fails it.
 #[test]
 fn near_list_through_the_mid_list_equals_the_direct_build() {
     let mut rng = signed(21);
