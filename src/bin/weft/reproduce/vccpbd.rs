@@ -24,7 +24,11 @@
 //! (20.5-38.9x); the query gains from the second thread, the substep passes do not. One thread
 //! stays the default so the table compares like with like (the paper's program used one);
 //! `--threads 2` prints the other figure. The results are
-//! the same bits on any thread count.
+//! the same bits on any thread count. Session 7 (mid list, pollers, `--size 100`, two
+//! alternate runs against the session's starting build): the basic rows, the slowest, 0.574-
+//! 0.687 ms collision a step on two threads (41.2-46.0x; 0.637-0.764 ms, 33.5-43.0x before)
+//! against 0.726-0.820 ms on one (30.2-37.7x; 0.855-1.022 ms before); two threads now clearly
+//! pay, but the default stays one thread for the reason above.
 //!
 //! A second table splits the collision time by phase (hash build, query, the rest of the step
 //! start, substep pair passes, substep corrections, the speed clamp) and gives the number of
@@ -54,8 +58,8 @@ pub struct VccpbdArgs {
     /// Steps per row (default 150, or 30 with --quick).
     #[arg(long)]
     steps: Option<u32>,
-    /// Solver threads (default 1: the paper's program was single-threaded, and two threads
-    /// did not pay on the shared two-core machine, see the module docs; 0 = all cores).
+    /// Solver threads (default 1, like the paper's program; `2` or `0` = all cores is faster
+    /// here, see the module docs).
     #[arg(long, default_value_t = 1)]
     threads: usize,
     /// Substeps a step (a modelling choice: fewer is faster but the cloth stretches more;
