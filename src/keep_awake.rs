@@ -14,7 +14,9 @@
 //! jobs the pool would run anyway, so results do not change (the kernels split their work
 //! into fixed chunks; the thread-count tests hold the bits), and they stop when the call
 //! returns or unwinds. They cost CPU time on the other cores for that long. Outside a pool,
-//! or on a pool of one thread, the call just runs.
+//! or on a pool of one thread, the call just runs. On a pool shared with other work (the
+//! global pool with `threads = 0`), a poller may pick up an unrelated job, and the step then
+//! returns when that job is done, as a rayon join that steals work while it waits does.
 //!
 //! Measured on the 100x100 fold (`weft reproduce vccpbd --size 100 --threads 2`, three
 //! alternate runs, basic fabric hash rows): step 1.67-1.75 ms -> 1.62-1.69 ms, collision
