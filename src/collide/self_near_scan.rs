@@ -41,16 +41,24 @@ pub(crate) fn collect(
     if simd {
         fill_xyz(p, n, true, &mut s.xyz);
     }
-    if s.chunks.len() < m {
-        s.chunks.resize_with(m, Vec::new);
-    }
     let (bounds, xyz) = (&s.bounds, &s.xyz[..]);
-    s.chunks[..m].par_iter_mut().enumerate().for_each(|(c, buf)| {
+    join_chunks(&mut s.chunks, m, out, |c, buf| {
+        collect_range(cand, p, bounds[c]..bounds[c + 1], r2, simd, xyz, buf)
+    });
+}
+
+/// Runs `f(c, buf)` for the chunks `c < m` in parallel, each into its own kept buffer
+/// (cleared first), and joins the buffers in chunk order into `out`.
+fn join_chunks(chunks: &mut Vec<Vec<(u32, u32)>>, m: usize, out: &mut Vec<(u32, u32)>, f: impl Fn(usize, &mut Vec<(u32, u32)>) + Sync) {
+    if chunks.len() < m {
+        chunks.resize_with(m, Vec::new);
+    }
+    chunks[..m].par_iter_mut().enumerate().for_each(|(c, buf)| {
         buf.clear();
-        collect_range(cand, p, bounds[c]..bounds[c + 1], r2, simd, xyz, buf);
+        f(c, buf);
     });
     out.clear();
-    for c in &s.chunks[..m] {
+    for c in &chunks[..m] {
         out.extend_from_slice(c);
     }
 }
@@ -84,20 +92,11 @@ pub(crate) fn filter_pairs(
     if !parallel || m < 2 {
         return filter_range(pairs, p, r2, simd, &s.xyz, out);
     }
-    if s.chunks.len() < m {
-        s.chunks.resize_with(m, Vec::new);
-    }
     let xyz = &s.xyz[..];
-    s.chunks[..m]
-        .par_iter_mut()
-        .zip(pairs.par_chunks(FILTER_CHUNK))
-        .for_each(|(buf, part)| {
-            buf.clear();
-            filter_range(part, p, r2, simd, xyz, buf);
-        });
-    for c in &s.chunks[..m] {
-        out.extend_from_slice(c);
-    }
+    join_chunks(&mut s.chunks, m, out, |c, buf| {
+        let part = &pairs[c * FILTER_CHUNK..((c + 1) * FILTER_CHUNK).min(pairs.len())];
+        filter_range(part, p, r2, simd, xyz, buf)
+    });
 }
 
 /// Appends to `out` the pairs of `pairs` within the radius (the work of [`filter_pairs`]):
