@@ -316,6 +316,10 @@ pub fn run(args: VccpbdArgs) -> weft::Result<ExitCode> {
             .iter()
             .filter(|r| r.particles == 10_000 && r.broadphase == "hash" && r.response == resp.name())
             .collect();
+        if big.is_empty() {
+            println!("  {:>14}: no 100x100 row was run (see --size), nothing to check", resp.name());
+            continue;
+        }
         let ratio = big
             .iter()
             .map(|r| r.paper_ms / r.collision_ms.max(1e-9))
