@@ -118,8 +118,9 @@
 //! The skin rule is unchanged: a larger cap than `d` makes the near list approach the
 //! candidate lists (radius `3 d` against `4 d`), and a cap of `d / 2` (tried: fewer near
 //! pairs, more rebuilds) measured no faster (CPU of these phases over the distance solve's,
-//! 0.68-0.75 against 0.64-0.70, three runs each); the remaining cost is the
-//! folding phase (steps ~40-100), where the cloth moves `~d / 10` a substep and the list is rebuilt every 4-10 substeps.
+//! 0.68-0.75 against 0.64-0.70, three runs each); the remaining cost is the folding phase
+//! (steps ~40-100), where the cloth moves `~d / 10` a substep and the list is rebuilt every
+//! 4-10 substeps. (Session 7 changed the rule: see "Mid list" above.)
 
 use super::neighbours::Neighbours;
 use super::self_near_scan::{collect, filter_pairs, ScanScratch};
@@ -213,6 +214,9 @@ impl NearList {
         } else if !self.valid {
             self.skin = 0.25 * d;
         }
+        // Within the cap of the path taken whatever happened before (the mid radius relies
+        // on it).
+        self.skin = self.skin.min(cap);
         copy_blocks(p, blocks, &mut self.at);
         let r = d + self.skin;
         if use_mid {
@@ -230,8 +234,9 @@ impl NearList {
     /// Keeps the mid list if no particle of `blocks` moved more than `0.49 MID_SKIN d` since
     /// its build, else rebuilds it from `cand` at `p`: the pairs within
     /// `d + (MID_NEAR_SKIN_MAX + MID_SKIN) d`. A near pair (within `d + s₂`,
-    /// `s₂ <= MID_NEAR_SKIN_MAX d`, at `p`) was then within `d + s₂ + 0.98 MID_SKIN d` at the mid build, so it is in
-    /// the mid list: the near list built from it is the one built from `cand`.
+    /// `s₂ <= MID_NEAR_SKIN_MAX d`, at `p`) was then within `d + s₂ + 0.98 MID_SKIN d` at the
+    /// mid build, so it is in the mid list: the near list built from it is the one built from
+    /// `cand`.
     #[allow(clippy::too_many_arguments)]
     fn update_mid(&mut self, cand: &Neighbours, p: [&[f32]; 3], blocks: &[u32], n: usize, d: f32, simd: bool, parallel: bool) {
         let lim = 0.5 * SAFE * MID_SKIN * d;
