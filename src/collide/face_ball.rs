@@ -57,8 +57,7 @@ pub const BALL_STEPS: f32 = 1.0;
 /// The margin `m` of the near faces for a sort at the step `x -> p` of reach `reach`.
 #[inline]
 pub fn ball_margin(x: [f32; 3], p: [f32; 3], reach: f32) -> f32 {
-    let d = (0..3).fold(0.0f32, |m, k| m.max((p[k] - x[k]).abs()));
-    BALL_REACH * reach + BALL_STEPS * d
+    BALL_REACH * reach + BALL_STEPS * super::face_cache::largest_change(x, p)
 }
 
 /// Relative size of the rounding pad `s` (module doc).

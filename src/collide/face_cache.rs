@@ -69,11 +69,17 @@ pub const MARGIN_REACH: f32 = 1.0;
 /// ... plus this many times the step's largest coordinate change.
 pub const MARGIN_STEPS: f32 = 4.0;
 
+/// The step `x -> p`'s largest coordinate change (the margins here and of the clearance
+/// ball grow with it).
+#[inline]
+pub(crate) fn largest_change(x: [f32; 3], p: [f32; 3]) -> f32 {
+    (0..3).fold(0.0f32, |m, k| m.max((p[k] - x[k]).abs()))
+}
+
 /// The margin of a gathered box for the step `x -> p` of reach `reach` (module doc).
 #[inline]
 pub fn margin(x: [f32; 3], p: [f32; 3], reach: f32) -> f32 {
-    let d = (0..3).fold(0.0f32, |m, k| m.max((p[k] - x[k]).abs()));
-    MARGIN_REACH * reach + MARGIN_STEPS * d
+    MARGIN_REACH * reach + MARGIN_STEPS * largest_change(x, p)
 }
 
 /// Faces a list keeps inline (in the cold block itself); longer lists live in their own heap

@@ -361,9 +361,10 @@ impl SelfCollisionData {
         let Some(st) = self.state.as_mut().filter(|s| s.ready) else {
             return;
         };
-        let reach = QUERY_FACTOR * a.d + st.verlet.skin();
-        st.near.update(&st.verlet.cand, reach, p, &st.active.blocks, n, a.d, simd, parallel);
         let q = QUERY_FACTOR * a.d;
+        // The candidate lists reach `q` plus their skin.
+        st.near
+            .update(&st.verlet.cand, q + st.verlet.skin(), p, &st.active.blocks, n, a.d, simd, parallel);
         let ctx = PairCtx {
             x,
             p,
