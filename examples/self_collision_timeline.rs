@@ -3,10 +3,12 @@
 //! while the cloth falls (every step runs the broadphase) and after it has folded (lists reused).
 //!
 //! ```text
-//! cargo run --release --example self_collision_timeline [steps] [threads] [response]
+//! cargo run --release --example self_collision_timeline [steps] [threads] [response] [fabric] [tethers]
 //! ```
 //!
-//! `response` is `vccpbd` (the default), `pbd` or `movement-speed`.
+//! `response` is `vccpbd` (the default), `pbd` or `movement-speed`; `fabric` one of the presets
+//! (`basic`, the default, `cotton`, `wool`, `polyester`); `tethers` a slack for tethers to the
+//! pinned row (none by default, like the reproduction).
 //!
 //! Columns are ms for that step; `clamp` is the stage's total minus the listed phases (the speed
 //! clamp and bookkeeping); `rebuild` is 1 when the step ran the broadphase.
@@ -35,7 +37,12 @@ fn main() -> weft::Result<()> {
         broadphase: SelfBroadphase::Hash,
         ..SelfCollision::default()
     };
-    let (mut w, dt) = weft::perf::fold_world(100, Fabric::preset("basic")?, params, sc)?;
+    let fabric = Fabric::preset(&std::env::args().nth(4).unwrap_or_else(|| "basic".into()))?;
+    let tethers = match std::env::args().nth(5) {
+        None => None,
+        Some(t) => Some(t.parse::<f32>().map_err(|e| weft::WeftError::param("tethers", t, e.to_string()))?),
+    };
+    let (mut w, dt) = weft::perf::fold_world_tethered(100, fabric, params, sc, tethers)?;
     println!("step   total   build   query   start   pairs    corr   clamp rebuild");
     let mut last = w.self_collision_stats().clone();
     for s in 0..steps {
@@ -56,7 +63,7 @@ fn main() -> weft::Result<()> {
         for v in parts.iter().chain([&clamp]) {
             print!(" {v:7.3}");
         }
-        println!(" {:7}", p.rebuilds - q.rebuilds);
+        println!(" {:7} {}", p.rebuilds - q.rebuilds, w.self_collision_active_blocks());
         last = now;
     }
     Ok(())

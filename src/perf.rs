@@ -71,8 +71,22 @@ pub fn cloth_world(n: usize, threads: usize) -> Result<World> {
 /// in `fabric` with the thickness of its spacing, hung over its middle row 1.5 m up, so that
 /// both halves fall and fold face to face, with `self_collision` on. `params` gives threads,
 /// substeps, iterations and backend; its `dt` is replaced by the fabric's, which is also
-/// returned (the step to use).
+/// returned (the step to use). No tethers: see [`fold_world_tethered`].
 pub fn fold_world(size: u32, fabric: Fabric, params: SolverParams, self_collision: SelfCollision) -> Result<(World, f32)> {
+    fold_world_tethered(size, fabric, params, self_collision, None)
+}
+
+/// [`fold_world`] with tethers to the pinned row of slack `tethers` (a fraction of the rest
+/// distance; `None` for none, an error if negative or not finite). At the paper's time steps
+/// and 10 substeps the untethered cloth stretches well past its rest lengths near the line
+/// (see `weft reproduce vccpbd --tethers`).
+pub fn fold_world_tethered(
+    size: u32,
+    fabric: Fabric,
+    params: SolverParams,
+    self_collision: SelfCollision,
+    tethers: Option<f32>,
+) -> Result<(World, f32)> {
     if size < 2 {
         return Err(WeftError::param("size", size, "a fold needs at least 2 x 2 particles"));
     }
@@ -94,7 +108,7 @@ pub fn fold_world(size: u32, fabric: Fabric, params: SolverParams, self_collisio
         pins: vec![PinSpec::Row(size / 2)],
         shear: true,
         bend: true,
-        tethers: None,
+        tethers,
     })?;
     w.set_self_collision(Some(self_collision))?;
     Ok((w, dt))
