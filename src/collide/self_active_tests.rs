@@ -293,10 +293,17 @@ fn consecutive_pair_passes_leave_no_stale_sums() {
             }
         }
         let (_, want) = reference(&data, &x, &p, &w, n);
-        for simd in [false, true] {
-            let (_, got) = compact(&mut data, &x, &p, &w, n, false, simd);
+        // Serial and parallel passes alternating (the parallel search fills its chunks'
+        // buffers; each pass zeroes the sums the other left).
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+        for (parallel, simd) in [(false, false), (true, true), (false, true), (true, false)] {
+            let (_, got) = pool.install(|| compact(&mut data, &x, &p, &w, n, parallel, simd));
             for i in 0..n {
-                assert_eq!(got[i].map(f32::to_bits), want[i].map(f32::to_bits), "pass {pass} particle {i}");
+                assert_eq!(
+                    got[i].map(f32::to_bits),
+                    want[i].map(f32::to_bits),
+                    "pass {pass} particle {i} ({parallel}, {simd})"
+                );
             }
         }
         if let Some(prev) = &last {
