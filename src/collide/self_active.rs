@@ -140,7 +140,6 @@ impl ActiveSet {
     /// rates. Allocation-free once the buffers have reached their working size.
     pub(crate) fn rebuild(&mut self, lists: &Neighbours, n: usize, damping: &[f32]) {
         let nb = n.div_ceil(LANES);
-        self.blocks.clear();
         self.slot_of_block.clear();
         self.slot_of_block.resize(nb, INACTIVE);
         // Mark (any value but INACTIVE), then number the marked blocks in order.
@@ -155,6 +154,21 @@ impl ActiveSet {
                 }
             }
         }
+        self.number_marked(damping);
+    }
+
+    /// Makes every block of `n` particles active (a step without candidate lists, where any
+    /// particle may meet any other) and gathers their damping rates.
+    pub(crate) fn rebuild_all(&mut self, n: usize, damping: &[f32]) {
+        self.slot_of_block.clear();
+        self.slot_of_block.resize(n.div_ceil(LANES), 0);
+        self.number_marked(damping);
+    }
+
+    /// Numbers the marked blocks of `slot_of_block` in order and sizes the compact arrays.
+    fn number_marked(&mut self, damping: &[f32]) {
+        let nb = self.slot_of_block.len();
+        self.blocks.clear();
         for b in 0..nb {
             if self.slot_of_block[b] != INACTIVE {
                 self.slot_of_block[b] = self.blocks.len() as u32;

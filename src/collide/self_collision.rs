@@ -35,7 +35,9 @@
 //!   steps, up to 4 d of travel a step) every step still runs the query, which is now the
 //!   largest phase. The skin is `3 d` (`2 d` before session 6) only when the cloth moved at
 //!   most `d` a step since the last build (otherwise zero: a wider reach would cost more than
-//!   the reuse saves; the measurements are in `self_verlet`). The hash query tests the
+//!   the reuse saves; the measurements are in `self_verlet`). With the hash such slow steps
+//!   build no candidate lists at all (session 8): every block is active and the substeps query
+//!   their mid list from a hash of the predicted positions (`self_verlet`, `self_near`). The hash query tests the
 //!   rest-neighbour rule in its eight-lane mask (the `hash_rest` module), so only kept pairs
 //!   leave the lanes, and walks the cells over a half shell (the `hash_cells` module: each
 //!   pair tested once, the rows looked up once a cell; a falling step's query 1.45-1.84 ms
@@ -96,9 +98,9 @@ pub(crate) use super::response::mean_velocity;
 use super::self_active::ActiveSet;
 pub(crate) use super::self_active::ApplyParams;
 use super::self_active::{PredictionSink, APPLY_PARALLEL_BLOCKS};
-use super::self_near::NearList;
+use super::self_near::{MidSource, NearList};
 use super::self_pairs::PairCtx;
-use super::self_verlet::VerletLists;
+use super::self_verlet::{Plan, VerletLists};
 use crate::error::{positive, Result, WeftError};
 
 pub use super::self_config::{Response, SelfBroadphase, SelfCollision, SelfCollisionPhases, SelfCollisionStats, PENETRATION_TOLERANCE};
@@ -230,7 +232,11 @@ impl SelfCollisionData {
         }
         if let Some(st) = &mut self.state {
             if st.active_of != st.verlet.rebuilds {
-                st.active.rebuild(&st.verlet.cand, n, damping);
+                if st.verlet.is_direct() {
+                    st.active.rebuild_all(n, damping);
+                } else {
+                    st.active.rebuild(&st.verlet.cand, n, damping);
+                }
                 st.active_of = st.verlet.rebuilds;
             } else {
                 st.active.refresh_damping(damping);
@@ -274,16 +280,28 @@ impl SelfCollisionData {
         let q = QUERY_FACTOR * a.d;
         st.ready = false;
         st.lists = OnceLock::new();
+        // Planned against the previous start positions (the motion of a step without lists),
+        // then replaced by this step's.
+        let prev = [&st.start[0][..], &st.start[1][..], &st.start[2][..]];
+        let plan = st.verlet.plan(x, prev, n, a.d, broadphase, self.fresh_every_step);
         for (s, src) in st.start.iter_mut().zip(x) {
             s.clear();
             s.extend_from_slice(&src[..n.min(src.len())]);
         }
-        let done = match st.verlet.plan(x, n, a.d, broadphase, self.fresh_every_step) {
-            None => {
+        let done = match plan {
+            Plan::Keep => {
                 st.structure_fresh = false;
                 Ok(())
             }
-            Some(skin) => {
+            Plan::Direct => {
+                st.structure_fresh = false;
+                if !st.verlet.is_direct() {
+                    st.near.invalidate();
+                }
+                st.verlet.went_direct();
+                Ok(())
+            }
+            Plan::Build(skin) => {
                 let reach = q + skin;
                 // Each pair once (`j > i`), rest neighbours dropped.
                 let keep = |i: usize, j: u32| j as usize > i && !self.rest_skipped(i, j as usize, a.d);
@@ -362,9 +380,21 @@ impl SelfCollisionData {
             return;
         };
         let q = QUERY_FACTOR * a.d;
-        // The candidate lists reach `q` plus their skin.
-        st.near
-            .update(&st.verlet.cand, q + st.verlet.skin(), p, &st.active.blocks, n, a.d, simd, parallel);
+        let source = if st.verlet.is_direct() {
+            MidSource::Hash {
+                hash: &mut st.hash,
+                rest: [&self.rest[0], &self.rest[1], &self.rest[2]],
+                cloth_of: &self.cloth_of,
+                skip: REST_SKIP_FACTOR * a.d,
+            }
+        } else {
+            // The candidate lists reach `q` plus their skin.
+            MidSource::Candidates {
+                cand: &st.verlet.cand,
+                reach: q + st.verlet.skin(),
+            }
+        };
+        let queried = st.near.update(source, p, &st.active.blocks, n, a.d, simd, parallel);
         let ctx = PairCtx {
             x,
             p,
@@ -377,7 +407,9 @@ impl SelfCollisionData {
             movement: a.response == Response::MovementSpeed,
         };
         st.active.pair_pass(&ctx, &st.near.pairs, parallel, simd);
-        self.stats.phases.pairs_s += t0.elapsed().as_secs_f64();
+        let ph = &mut self.stats.phases;
+        ph.pairs_s += t0.elapsed().as_secs_f64();
+        ph.mid_queries += u64::from(queried);
     }
 
     /// The velocity-correction kernel on the active blocks of the predicted positions `p`.

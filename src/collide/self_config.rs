@@ -118,6 +118,9 @@ pub struct SelfCollisionPhases {
     pub correction_s: f64,
     /// Steps that rebuilt the candidate lists (ran the broadphase).
     pub rebuilds: u64,
+    /// Mid lists queried from the hash of the predicted positions in the substeps of slow
+    /// steps, which run without candidate lists (their time is in `pairs_s`).
+    pub mid_queries: u64,
 }
 
 impl SelfCollisionStats {

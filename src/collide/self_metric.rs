@@ -4,7 +4,7 @@
 
 use rayon::prelude::*;
 
-use super::{dist2, SelfBroadphase, SelfCollisionData, PENETRATION_TOLERANCE, QUERY_FACTOR};
+use super::{dist2, SelfBroadphase, SelfCollisionData, SpatialHash, CELL_FACTOR, PENETRATION_TOLERANCE, QUERY_FACTOR, REST_SKIP_FACTOR};
 use crate::collide::neighbours::{within, Neighbours};
 use crate::error::Result;
 
@@ -89,6 +89,18 @@ impl SelfCollisionData {
         Some(st.lists.get_or_init(|| {
             let (c, s) = (&st.verlet.cand, &st.start);
             let mut out = Neighbours::new();
+            if st.verlet.is_direct() {
+                // No candidate lists this step: the query a fresh step start would run (on
+                // finite positions it cannot fail; on a failure the lists stay empty).
+                let n = s[0].len();
+                let mut hash = SpatialHash::new(n);
+                let skip = REST_SKIP_FACTOR * self.distance();
+                let _ = hash
+                    .build(&s[0], &s[1], &s[2], n, q * CELL_FACTOR)
+                    .and_then(|_| hash.attach_rest([&self.rest[0], &self.rest[1], &self.rest[2]], &self.cloth_of))
+                    .and_then(|_| hash.query_upper_unskipped_cells(q, skip, &mut out));
+                return out;
+            }
             // Cannot fail: the candidates already fit in `u32` offsets.
             let _ = out.fill_serial(c.len(), |i, buf| {
                 buf.extend(c.of(i).iter().filter(|&&j| {

@@ -36,6 +36,11 @@
 //! threads, three alternate runs: pairs folding 19.9-20.6 -> 17.7-18.3 ms, stage total
 //! 85.8-100.6 -> 82.8-86.5.)
 //!
+//! On slow steps with the hash there are no candidate lists (session 8, see
+//! [`super::self_verlet`]): the mid list is then queried from a hash built on the predicted
+//! positions ([`MidSource::Hash`]): every pair within `r₁` but the rest neighbours, all
+//! blocks active. The argument above holds with "every pair" for "the candidates".
+//!
 //! With rebuilds that cheap the near skin is sized for `NEAR_LIFETIME = 5` substeps at the
 //! fastest particle's rate (20 before): with 20 one fast particle of the movement-speed fold
 //! set the skin to its cap and the substeps then tested ~40 000 near pairs for the rest of
@@ -122,7 +127,9 @@
 //! (steps ~40-100), where the cloth moves `~d / 10` a substep and the list is rebuilt every
 //! 4-10 substeps. (Session 7 changed the rule: see "Mid list" above.)
 
+use super::hash::SpatialHash;
 use super::neighbours::Neighbours;
+use super::self_collision::CELL_FACTOR;
 use super::self_near_scan::{collect, filter_pairs, ScanScratch};
 use super::self_verlet::SAFE;
 use crate::lanes::{load, F32s, LANES};
@@ -167,7 +174,26 @@ pub(crate) struct NearList {
     mid_valid: bool,
     /// Mid-list builds so far.
     pub(crate) mid_rebuilds: u64,
+    /// The upper lists of the last mid query of the hash ([`MidSource::Hash`]): the mid list
+    /// when `mid_hashed`, else `mid`.
+    mid_lists: Neighbours,
+    mid_hashed: bool,
     scratch: ScanScratch,
+}
+
+/// Where a mid list comes from.
+pub(crate) enum MidSource<'a> {
+    /// The candidate lists, reaching `reach` around the positions of their build.
+    Candidates { cand: &'a Neighbours, reach: f32 },
+    /// A query of the hash, rebuilt on the predicted positions (a slow step without candidate
+    /// lists): every pair within the mid radius but the rest neighbours (rest distance at
+    /// most `skip`, with the cloths' rest positions and cloth ids).
+    Hash {
+        hash: &'a mut SpatialHash,
+        rest: [&'a [f32]; 3],
+        cloth_of: &'a [u32],
+        skip: f32,
+    },
 }
 
 impl NearList {
@@ -180,33 +206,36 @@ impl NearList {
     /// Makes the list hold for the predicted positions `p`: kept if no particle of the active
     /// `blocks` (ascending; every candidate pair has both ends in them) moved more than
     /// `0.49 s₂` since the build, else rebuilt with a new skin from the mid list, itself
-    /// rebuilt from `cand` (first `n` lists) first when one of those particles moved more
-    /// than `0.49 MID_SKIN d` since its build. Only the active blocks are checked and copied:
+    /// rebuilt from `source` first when one of those particles moved more than
+    /// `0.49 MID_SKIN d` since its build. Only the active blocks are checked and copied:
     /// before the fold they are a few, and the particles outside them have no candidate. The
     /// scans run in parallel over ranges of particles when `parallel` (the same lists).
+    /// Returns whether the mid list was queried from the hash.
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn update(
         &mut self,
-        cand: &Neighbours,
-        reach: f32,
+        source: MidSource<'_>,
         p: [&[f32]; 3],
         blocks: &[u32],
         n: usize,
         d: f32,
         simd: bool,
         parallel: bool,
-    ) {
+    ) -> bool {
         // The mid list is used when the candidates reach well past its radius (the wide
-        // skin of a folded cloth; see the module docs).
+        // skin of a folded cloth) or come from the hash (see the module docs).
         let r_mid = d * (1.0 + MID_NEAR_SKIN_MAX + MID_SKIN);
-        let use_mid = reach >= MID_REACH_RATIO * r_mid;
+        let use_mid = match &source {
+            MidSource::Candidates { reach, .. } => *reach >= MID_REACH_RATIO * r_mid,
+            MidSource::Hash { .. } => true,
+        };
         let cap = if use_mid { MID_NEAR_SKIN_MAX } else { NEAR_SKIN_MAX } * d;
         if self.valid && self.at[0].len() == blocks.len() * LANES {
             let m2 = max_disp2_blocks(p, as_refs(&self.at), blocks, simd);
             let lim = 0.5 * SAFE * self.skin;
             self.subs_since += 1;
             if m2 <= lim * lim {
-                return;
+                return false;
             }
             // Aim at about NEAR_LIFETIME substeps between builds, within [d / 8, cap].
             let rate = if m2.is_finite() { m2.sqrt() / self.subs_since as f32 } else { d };
@@ -219,38 +248,83 @@ impl NearList {
         self.skin = self.skin.min(cap);
         copy_blocks(p, blocks, &mut self.at);
         let r = d + self.skin;
-        if use_mid {
-            self.update_mid(cand, p, blocks, n, d, simd, parallel);
-            filter_pairs(&self.mid, p, n, r * r, simd, parallel, &mut self.scratch, &mut self.pairs);
-        } else {
-            self.mid_valid = false;
-            collect(cand, p, n, r * r, simd, parallel, &mut self.scratch, &mut self.pairs);
+        let mut queried = false;
+        match source {
+            MidSource::Candidates { cand, .. } if !use_mid => {
+                self.mid_valid = false;
+                collect(cand, p, n, r * r, simd, parallel, &mut self.scratch, &mut self.pairs);
+            }
+            source => {
+                queried = self.update_mid(source, p, blocks, n, d, simd, parallel);
+                if self.mid_hashed {
+                    collect(&self.mid_lists, p, n, r * r, simd, parallel, &mut self.scratch, &mut self.pairs);
+                } else {
+                    filter_pairs(&self.mid, p, n, r * r, simd, parallel, &mut self.scratch, &mut self.pairs);
+                }
+            }
         }
         self.valid = true;
         self.subs_since = 0;
         self.rebuilds += 1;
+        queried
     }
 
     /// Keeps the mid list if no particle of `blocks` moved more than `0.49 MID_SKIN d` since
-    /// its build, else rebuilds it from `cand` at `p`: the pairs within
+    /// its build, else rebuilds it from `source` at `p`: the pairs within
     /// `d + (MID_NEAR_SKIN_MAX + MID_SKIN) d`. A near pair (within `d + s₂`,
     /// `s₂ <= MID_NEAR_SKIN_MAX d`, at `p`) was then within `d + s₂ + 0.98 MID_SKIN d` at the
     /// mid build, so it is in the mid list: the near list built from it is the one built from
-    /// `cand`.
+    /// the candidates, or from every pair. Returns whether it queried the hash.
     #[allow(clippy::too_many_arguments)]
-    fn update_mid(&mut self, cand: &Neighbours, p: [&[f32]; 3], blocks: &[u32], n: usize, d: f32, simd: bool, parallel: bool) {
+    fn update_mid(&mut self, source: MidSource<'_>, p: [&[f32]; 3], blocks: &[u32], n: usize, d: f32, simd: bool, parallel: bool) -> bool {
         let lim = 0.5 * SAFE * MID_SKIN * d;
         if self.mid_valid
             && self.mid_at[0].len() == blocks.len() * LANES
             && max_disp2_blocks(p, as_refs(&self.mid_at), blocks, simd) <= lim * lim
         {
-            return;
+            return false;
         }
         copy_blocks(p, blocks, &mut self.mid_at);
         let r = d * (1.0 + MID_NEAR_SKIN_MAX + MID_SKIN);
-        collect(cand, p, n, r * r, simd, parallel, &mut self.scratch, &mut self.mid);
-        self.mid_valid = true;
         self.mid_rebuilds += 1;
+        match source {
+            MidSource::Candidates { cand, .. } => {
+                collect(cand, p, n, r * r, simd, parallel, &mut self.scratch, &mut self.mid);
+                self.mid_valid = true;
+                self.mid_hashed = false;
+                false
+            }
+            MidSource::Hash {
+                hash,
+                rest,
+                cloth_of,
+                skip,
+            } => {
+                // Every pair within `r` of `p` but the rest neighbours, each once; a failed
+                // build (non-finite positions) leaves an empty, invalid mid list, like the
+                // failed broadphase of a step start.
+                let built = if parallel {
+                    hash.build(p[0], p[1], p[2], n, r * CELL_FACTOR)
+                } else {
+                    hash.build_serial(p[0], p[1], p[2], n, r * CELL_FACTOR)
+                };
+                let lists = &mut self.mid_lists;
+                let r = built.and_then(|_| hash.attach_rest(rest, cloth_of)).and_then(|_| {
+                    if parallel {
+                        hash.query_upper_unskipped_cells(r, skip, lists)
+                    } else {
+                        hash.query_upper_unskipped_cells_serial(r, skip, lists)
+                    }
+                });
+                // Kept as lists (the near list is collected from them), not copied to `mid`.
+                if r.is_err() {
+                    lists.clear();
+                }
+                self.mid_valid = r.is_ok();
+                self.mid_hashed = true;
+                true
+            }
+        }
     }
 
     /// Number of particle ranges of the last parallel scan (0 or 1: built serially).

@@ -134,14 +134,31 @@ fn gather_xyz8_puts_entry_l_in_lane_l() {
 /// radius of `2 d` instead of `2.5 d` fails it.
 #[test]
 fn near_list_through_the_mid_list_equals_the_direct_build() {
+    near_through_mid(false, false);
+}
+
+/// The same with the mid list queried from a hash of the predicted positions (the slow steps
+/// without candidate lists): the near list equals the one built from every pair (rest
+/// positions far apart, so no rest neighbour is dropped), serially and in parallel.
+#[test]
+fn near_list_through_a_hashed_mid_list_equals_the_build_from_every_pair() {
+    near_through_mid(true, false);
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+    pool.install(|| near_through_mid(true, true));
+}
+
+fn near_through_mid(hashed: bool, parallel: bool) {
     let mut rng = signed(21);
     let (n, d) = (200usize, 0.1f32);
     let mut p: [Vec<f32>; 3] = std::array::from_fn(|_| (0..n).map(|_| 0.3 * rng()).collect());
     let mut cand = Neighbours::new();
     cand.fill_serial(n, |i, buf| {
-        buf.extend((i + 1..n).filter(|j| (i + 2 * j) % 7 != 0).map(|j| j as u32))
+        buf.extend((i + 1..n).filter(|j| hashed || (i + 2 * j) % 7 != 0).map(|j| j as u32))
     })
     .unwrap();
+    let mut hash = SpatialHash::new(n);
+    let rest = [(0..n).map(|i| 100.0 * i as f32).collect::<Vec<f32>>(), vec![0.0; n], vec![0.0; n]];
+    let cloth_of = vec![0u32; n];
     let blocks: Vec<u32> = (0..n.div_ceil(LANES) as u32).collect();
     let mut near = NearList::default();
     let (mut scratch, mut want) = (ScanScratch::default(), Vec::new());
@@ -172,7 +189,20 @@ fn near_list_through_the_mid_list_equals_the_direct_build() {
         }
         let pr = [&p[0][..], &p[1][..], &p[2][..]];
         let (before, mid_before) = (near.rebuilds, near.mid_rebuilds);
-        near.update(&cand, 10.0 * d, pr, &blocks, n, d, true, false);
+        let source = if hashed {
+            MidSource::Hash {
+                hash: &mut hash,
+                rest: [&rest[0], &rest[1], &rest[2]],
+                cloth_of: &cloth_of,
+                skip: 3.0 * d,
+            }
+        } else {
+            MidSource::Candidates {
+                cand: &cand,
+                reach: 10.0 * d,
+            }
+        };
+        near.update(source, pr, &blocks, n, d, true, parallel);
         if near.rebuilds > before {
             let r = d + near.skin;
             collect(&cand, pr, n, r * r, false, false, &mut scratch, &mut want);

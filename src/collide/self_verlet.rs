@@ -57,6 +57,26 @@
 //! folding cloth (steps ~42-75, 4.5-9.7 ms of queries a step before) keep its lists for
 //! several steps; allowing the skin for faster motion (`SLOW_FACTOR` 2) makes the falling
 //! steps query with the wide reach and still rebuild every step, which costs more.
+//!
+//! # Slow steps without candidate lists (session 8, hash broadphase)
+//! Once the near list came from a mid list (pairs within `2.5 d`, see [`super::self_near`]),
+//! the wide candidate lists (reach `6 d`, ~763 000 pairs on the folded 100x100 cloth) were only
+//! a superset to filter the mid list from, and one wide rebuild cost 9-11 ms of a run's
+//! ~80 ms (timeline example, two threads: its first build grows every buffer). With the hash,
+//! a slow step (the same rule: at most `SLOW_FACTOR d` a step) now builds no lists
+//! ([`Plan::Direct`]): every block is active and the substeps query the mid list from a hash
+//! of the predicted positions when it expires (`query_upper_unskipped_cells`, reach
+//! `2.5 d`, the rest rule in the lanes: the same pairs, so the near lists and the results are
+//! the same bits; tests: the lists and positions of the fresh path every step, and the near
+//! list of a hashed mid list against the build from every pair). The motion of such a step is
+//! measured from the previous step's start positions, which the stage keeps anyway. A mid
+//! query costs about twice the filter from the candidates (0.74 against 0.36 ms, two threads),
+//! ~13 of them a basic run. Timeline example, two threads, alternate runs, stage total over
+//! 150 steps: basic VcCPBD 80.1-80.7 -> 77.4-79.2 ms (query column 25.0-25.6 -> 16.5-17.3,
+//! pairs 34.3-34.7 -> 40.2-41.3), in a slow spell of the VM 124.6-125.4 -> 118.3-119.8;
+//! polyester movement speed (five wide rebuilds before) 78.7-80.7 -> 71.3-71.9; the tethered
+//! basic fold (`--tethers 0`) 188.0-201.3 -> 180.6-195.2. The tree keeps the wide lists (its
+//! query is the slow part either way).
 
 use super::neighbours::Neighbours;
 use super::self_config::SelfBroadphase;
@@ -118,26 +138,53 @@ pub(crate) struct VerletLists {
     skin: f32,
     key: Option<Key>,
     steps_since: u32,
-    /// Builds so far.
+    /// No candidate lists: the near list's mid list comes from the hash ([`Plan::Direct`]).
+    direct: bool,
+    /// Builds so far (entering [`Plan::Direct`] counts as one).
     pub(crate) rebuilds: u64,
 }
 
+/// What a step start does (see [`VerletLists::plan`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum Plan {
+    /// The candidate lists still hold.
+    Keep,
+    /// Rebuild them with this skin.
+    Build(f32),
+    /// A slow cloth with the hash broadphase: no candidate lists; the substeps build their
+    /// mid list from a hash of the predicted positions (see [`super::self_near`]).
+    Direct,
+}
+
 impl VerletLists {
-    /// `None` when the lists of the last build still hold for `x` (see the module docs),
-    /// else `Some(skin)` for the rebuild. `fresh` forces a rebuild with no skin.
-    pub(crate) fn plan(&mut self, x: [&[f32]; 3], n: usize, d: f32, bp: SelfBroadphase, fresh: bool) -> Option<f32> {
-        if fresh || self.key != Some((n, d.to_bits(), bp)) {
-            return Some(0.0);
+    /// What the step start does with the candidate lists for `x` (see the module docs):
+    /// keep them, rebuild them with a skin, or (hash broadphase, a slow cloth) go without them
+    /// ([`Plan::Direct`]). `fresh` forces a rebuild with no skin.
+    ///
+    /// `prev` holds the positions of the last call (the previous step's start): without
+    /// lists, the motion a step is measured from them (no snapshot of its own to copy).
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn plan(&mut self, x: [&[f32]; 3], prev: [&[f32]; 3], n: usize, d: f32, bp: SelfBroadphase, fresh: bool) -> Plan {
+        if fresh || self.key != Some((n, d.to_bits(), bp)) || (self.direct && prev.iter().any(|a| a.len() < n)) {
+            return Plan::Build(0.0);
         }
-        let snap = [&self.snap[0][..], &self.snap[1][..], &self.snap[2][..]];
-        let m2 = max_disp2(x, snap, n, true);
+        let m2 = if self.direct {
+            max_disp2(x, prev, n, true)
+        } else {
+            max_disp2(x, [&self.snap[0][..], &self.snap[1][..], &self.snap[2][..]], n, true)
+        };
         let lim = 0.5 * SAFE * self.skin;
         self.steps_since += 1;
-        if m2 <= lim * lim {
-            return None;
+        if !self.direct && m2 <= lim * lim {
+            return Plan::Keep;
         }
         let rate = m2.sqrt() / self.steps_since as f32;
-        Some(if rate <= SLOW_FACTOR * d { SKIN_FACTOR * d } else { 0.0 })
+        let slow = rate <= SLOW_FACTOR * d;
+        match (slow, bp) {
+            (true, SelfBroadphase::Hash) => Plan::Direct,
+            (true, _) => Plan::Build(SKIN_FACTOR * d),
+            (false, _) => Plan::Build(0.0),
+        }
     }
 
     /// The skin of the last build (the candidate lists' reach is `q` plus this).
@@ -147,19 +194,43 @@ impl VerletLists {
 
     /// Records a successful build from `x` with `skin`.
     pub(crate) fn built(&mut self, x: [&[f32]; 3], n: usize, d: f32, bp: SelfBroadphase, skin: f32) {
+        self.snapshot(x, n, d, bp);
+        self.skin = skin;
+        self.direct = false;
+        self.rebuilds += 1;
+    }
+
+    /// Records a step of [`Plan::Direct`]: no candidate lists (emptied); the next plan
+    /// measures the motion from the positions it is given as the previous ones. Counts as a
+    /// build when it starts the mode.
+    pub(crate) fn went_direct(&mut self) {
+        self.skin = 0.0;
+        self.steps_since = 0;
+        if !self.direct {
+            self.direct = true;
+            self.cand.clear();
+            self.rebuilds += 1;
+        }
+    }
+
+    /// Whether the step runs without candidate lists ([`Plan::Direct`]).
+    pub(crate) fn is_direct(&self) -> bool {
+        self.direct
+    }
+
+    fn snapshot(&mut self, x: [&[f32]; 3], n: usize, d: f32, bp: SelfBroadphase) {
         for (s, src) in self.snap.iter_mut().zip(x) {
             s.clear();
             s.extend_from_slice(&src[..n]);
         }
-        self.skin = skin;
         self.key = Some((n, d.to_bits(), bp));
         self.steps_since = 0;
-        self.rebuilds += 1;
     }
 
     /// Forgets the lists (a failed build): the next step rebuilds.
     pub(crate) fn invalidate(&mut self) {
         self.key = None;
+        self.direct = false;
     }
 }
 
@@ -199,26 +270,71 @@ mod tests {
         let x = [vec![0.0f32, 1.0, 2.0, 3.0], vec![0.0; 4], vec![0.0; 4]];
         let r = [&x[0][..], &x[1][..], &x[2][..]];
         let mut v = VerletLists::default();
-        let bp = SelfBroadphase::Hash;
-        assert_eq!(v.plan(r, n, d, bp, false), Some(0.0), "nothing built yet");
+        let bp = SelfBroadphase::AabbTree;
+        assert_eq!(v.plan(r, r, n, d, bp, false), Plan::Build(0.0), "nothing built yet");
         v.built(r, n, d, bp, skin);
-        assert_eq!(v.plan(r, n, d, bp, false), None);
-        assert_eq!(v.plan(r, n, d, bp, true), Some(0.0), "forced");
-        assert_eq!(v.plan(r, n, 0.2, bp, false), Some(0.0), "other distance");
+        assert_eq!(v.plan(r, r, n, d, bp, false), Plan::Keep);
+        assert_eq!(v.plan(r, r, n, d, bp, true), Plan::Build(0.0), "forced");
+        assert_eq!(v.plan(r, r, n, 0.2, bp, false), Plan::Build(0.0), "other distance");
         let mut y = x.clone();
         y[2][3] = 0.48 * skin;
-        assert_eq!(v.plan([&y[0], &y[1], &y[2]], n, d, bp, false), None);
+        assert_eq!(v.plan([&y[0], &y[1], &y[2]], r, n, d, bp, false), Plan::Keep);
         y[2][3] = 0.5 * skin;
         // Past 0.49 skin after three steps, at a sixth of the skin a step: slow, skin again.
         assert!(skin / 6.0 <= slow);
-        assert_eq!(v.plan([&y[0], &y[1], &y[2]], n, d, bp, false), Some(skin));
+        assert_eq!(v.plan([&y[0], &y[1], &y[2]], r, n, d, bp, false), Plan::Build(skin));
         y[2][3] = 4.0 * (slow + skin);
-        assert_eq!(v.plan([&y[0], &y[1], &y[2]], n, d, bp, false), Some(0.0), "fast: no skin");
+        assert_eq!(v.plan([&y[0], &y[1], &y[2]], r, n, d, bp, false), Plan::Build(0.0), "fast: no skin");
         v.built(r, n, d, bp, 0.0);
-        assert_eq!(v.plan(r, n, d, bp, false), None, "unmoved: reused even with no skin");
+        assert_eq!(v.plan(r, r, n, d, bp, false), Plan::Keep, "unmoved: reused even with no skin");
         y[2][3] = 1e-3;
-        assert_eq!(v.plan([&y[0], &y[1], &y[2]], n, d, bp, false), Some(skin), "slow: skin");
+        assert_eq!(v.plan([&y[0], &y[1], &y[2]], r, n, d, bp, false), Plan::Build(skin), "slow: skin");
         y[0][0] = f32::NAN;
-        assert_eq!(v.plan([&y[0], &y[1], &y[2]], n, d, bp, false), Some(0.0), "non-finite");
+        assert_eq!(v.plan([&y[0], &y[1], &y[2]], r, n, d, bp, false), Plan::Build(0.0), "non-finite");
+    }
+
+    /// With the hash a slow cloth goes without candidate lists, every step while it stays
+    /// slow (each step measured from the one before), and back to lists when it speeds up.
+    #[test]
+    fn plan_goes_direct_while_slow_with_the_hash() {
+        let n = 4;
+        let d = 0.1f32;
+        let bp = SelfBroadphase::Hash;
+        let mut y = [vec![0.0f32, 1.0, 2.0, 3.0], vec![0.0; 4], vec![0.0; 4]];
+        let mut v = VerletLists::default();
+        v.built([&y[0], &y[1], &y[2]], n, d, bp, 0.0);
+        let mut prev = y.clone();
+        y[1][2] = 0.5 * d;
+        let r = |a: &[Vec<f32>; 3]| [a[0].clone(), a[1].clone(), a[2].clone()];
+        assert_eq!(
+            v.plan([&y[0], &y[1], &y[2]], [&prev[0], &prev[1], &prev[2]], n, d, bp, false),
+            Plan::Direct
+        );
+        v.went_direct();
+        assert!(v.is_direct() && v.cand.is_empty());
+        let builds = v.rebuilds;
+        // Unmoved, and then 0.9 d a step for three steps (measured from the step before):
+        // still direct, the mode entered once.
+        for step in 0..4 {
+            prev = r(&y);
+            y[1][2] += if step == 0 { 0.0 } else { 0.9 * d };
+            let plan = v.plan([&y[0], &y[1], &y[2]], [&prev[0], &prev[1], &prev[2]], n, d, bp, false);
+            assert_eq!(plan, Plan::Direct, "step {step}");
+            v.went_direct();
+        }
+        assert_eq!(v.rebuilds, builds);
+        prev = r(&y);
+        y[1][2] += 1.5 * d;
+        let p = [&prev[0][..], &prev[1][..], &prev[2][..]];
+        assert_eq!(v.plan([&y[0], &y[1], &y[2]], p, n, d, bp, false), Plan::Build(0.0), "fast");
+        v.went_direct();
+        assert_eq!(
+            v.plan([&y[0], &y[1], &y[2]], [&[][..], &[][..], &[][..]], n, d, bp, false),
+            Plan::Build(0.0),
+            "no previous positions"
+        );
+        v.built([&y[0], &y[1], &y[2]], n, d, bp, 0.0);
+        assert!(!v.is_direct());
+        assert_eq!(v.plan([&y[0], &y[1], &y[2]], p, n, d, bp, true), Plan::Build(0.0), "forced");
     }
 }

@@ -123,8 +123,12 @@ struct Row {
     /// query, rest of the step start (reuse check, active blocks), substep pair passes,
     /// substep corrections; the speed clamp is the rest of `collision_ms`.
     phase_ms: [f64; 5],
-    /// Steps that ran the broadphase (the others reused the candidate lists).
+    /// Steps that ran the broadphase (the others reused the candidate lists or, slow steps
+    /// with the hash, went without them).
     rebuilds: u64,
+    /// Mid lists queried from a hash of the predicted positions in the substeps of slow steps
+    /// (their time is in the pairs phase).
+    mid_queries: u64,
     /// Runs of the row (`--repeat`); the row is the one with the median collision time.
     runs: u32,
     /// Smallest and largest collision wall ms a step over the runs.
@@ -248,6 +252,7 @@ fn measure(size: u32, fi: usize, ri: usize, broadphase: SelfBroadphase, cfg: Run
             [p.build_s, p.query_s, list_rest, p.pairs_s, p.correction_s].map(|t| t * 1e3 / steps.max(1) as f64)
         },
         rebuilds: st.phases.rebuilds,
+        mid_queries: st.phases.mid_queries,
         runs: 1,
         collision_ms_range: [st.ms_per_step(); 2],
     })
@@ -340,15 +345,17 @@ pub fn run(args: VccpbdArgs) -> weft::Result<ExitCode> {
         );
     }
     println!();
-    println!("collision wall ms a step by phase (clamp = the rest), broadphase runs out of {steps} steps");
     println!(
-        "{:>9} {:>9} {:>14} {:>9} {:>7} {:>7} {:>7} {:>7} {:>7} {:>7} {:>8}",
-        "particles", "fabric", "response", "broad", "build", "query", "start", "pairs", "correct", "clamp", "rebuilds"
+        "collision wall ms a step by phase (clamp = the rest), broadphase runs out of {steps} steps, mid lists queried in the substeps (in pairs)"
+    );
+    println!(
+        "{:>9} {:>9} {:>14} {:>9} {:>7} {:>7} {:>7} {:>7} {:>7} {:>7} {:>8} {:>6}",
+        "particles", "fabric", "response", "broad", "build", "query", "start", "pairs", "correct", "clamp", "rebuilds", "mid q"
     );
     for r in &rows {
         let p = r.phase_ms;
         println!(
-            "{:>9} {:>9} {:>14} {:>9} {:>7.3} {:>7.3} {:>7.3} {:>7.3} {:>7.3} {:>7.3} {:>8}",
+            "{:>9} {:>9} {:>14} {:>9} {:>7.3} {:>7.3} {:>7.3} {:>7.3} {:>7.3} {:>7.3} {:>8} {:>6}",
             r.particles,
             r.fabric,
             r.response,
@@ -359,7 +366,8 @@ pub fn run(args: VccpbdArgs) -> weft::Result<ExitCode> {
             p[3],
             p[4],
             r.collision_ms - p.iter().sum::<f64>(),
-            r.rebuilds
+            r.rebuilds,
+            r.mid_queries
         );
     }
     println!();
