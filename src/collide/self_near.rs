@@ -174,10 +174,9 @@ pub(crate) struct NearList {
     mid_valid: bool,
     /// Mid-list builds so far.
     pub(crate) mid_rebuilds: u64,
-    /// The upper lists of the last mid query of the hash ([`MidSource::Hash`]): the mid list
-    /// when `mid_hashed`, else `mid`.
+    /// The upper lists of the last mid query of the hash ([`MidSource::Hash`]), copied to
+    /// `mid`.
     mid_lists: Neighbours,
-    mid_hashed: bool,
     scratch: ScanScratch,
 }
 
@@ -256,11 +255,7 @@ impl NearList {
             }
             source => {
                 queried = self.update_mid(source, p, blocks, n, d, simd, parallel);
-                if self.mid_hashed {
-                    collect(&self.mid_lists, p, n, r * r, simd, parallel, &mut self.scratch, &mut self.pairs);
-                } else {
-                    filter_pairs(&self.mid, p, n, r * r, simd, parallel, &mut self.scratch, &mut self.pairs);
-                }
+                filter_pairs(&self.mid, p, n, r * r, simd, parallel, &mut self.scratch, &mut self.pairs);
             }
         }
         self.valid = true;
@@ -291,7 +286,6 @@ impl NearList {
             MidSource::Candidates { cand, .. } => {
                 collect(cand, p, n, r * r, simd, parallel, &mut self.scratch, &mut self.mid);
                 self.mid_valid = true;
-                self.mid_hashed = false;
                 false
             }
             MidSource::Hash {
@@ -316,12 +310,16 @@ impl NearList {
                         hash.query_upper_unskipped_cells_serial(r, skip, lists)
                     }
                 });
-                // Kept as lists (the near list is collected from them), not copied to `mid`.
-                if r.is_err() {
-                    lists.clear();
-                }
+                // Copied to pairs: ~7 partners a particle, so the near rebuilds' eight-lane
+                // filter runs over the pairs (`filter_pairs`), not over the short lists (whose
+                // scan would mostly take its scalar tail).
+                self.mid.clear();
                 self.mid_valid = r.is_ok();
-                self.mid_hashed = true;
+                if r.is_ok() {
+                    for i in 0..lists.len() {
+                        self.mid.extend(lists.of(i).iter().map(|&j| (i as u32, j)));
+                    }
+                }
                 true
             }
         }
