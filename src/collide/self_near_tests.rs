@@ -134,7 +134,17 @@ fn gather_xyz8_puts_entry_l_in_lane_l() {
 /// radius of `2 d` instead of `2.5 d` fails it.
 #[test]
 fn near_list_through_the_mid_list_equals_the_direct_build() {
-    near_through_mid(false, false);
+    near_through_mid(false, false, 10.0);
+}
+
+/// With candidates reaching too little for a mid list, the near list is collected from the
+/// candidates directly: the same list, holding every contact, also after the candidates
+/// change halfway (a new build).
+#[test]
+fn near_list_without_mid_list_equals_the_scan_of_the_candidates() {
+    near_through_mid(false, false, 3.0);
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+    pool.install(|| near_through_mid(false, true, 3.0));
 }
 
 /// The same with the mid list queried from a hash of the predicted positions (the slow steps
@@ -142,12 +152,13 @@ fn near_list_through_the_mid_list_equals_the_direct_build() {
 /// positions far apart, so no rest neighbour is dropped), serially and in parallel.
 #[test]
 fn near_list_through_a_hashed_mid_list_equals_the_build_from_every_pair() {
-    near_through_mid(true, false);
+    near_through_mid(true, false, 10.0);
     let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
-    pool.install(|| near_through_mid(true, true));
+    pool.install(|| near_through_mid(true, true, 10.0));
 }
 
-fn near_through_mid(hashed: bool, parallel: bool) {
+/// `reach`: of the candidates, over `d` (10: the mid list is used; 3: it is not).
+fn near_through_mid(hashed: bool, parallel: bool, reach: f32) {
     let mut rng = signed(21);
     let (n, d) = (200usize, 0.1f32);
     let mut p: [Vec<f32>; 3] = std::array::from_fn(|_| (0..n).map(|_| 0.3 * rng()).collect());
@@ -182,6 +193,13 @@ fn near_through_mid(hashed: bool, parallel: bool) {
             .collect()
     });
     for call in 0..300 {
+        if call == 150 && !hashed {
+            // New candidates (a new build, so the near list is invalidated): every pair but
+            // another subset.
+            cand.fill_serial(n, |i, buf| buf.extend((i + 1..n).filter(|j| (i + j) % 5 != 0).map(|j| j as u32)))
+                .unwrap();
+            near.invalidate();
+        }
         for (a, v) in p.iter_mut().zip(&vel) {
             for (x, dx) in a.iter_mut().zip(v) {
                 *x += if call % 50 == 0 { 0.6 * d * rng() } else { *dx };
@@ -199,7 +217,7 @@ fn near_through_mid(hashed: bool, parallel: bool) {
         } else {
             MidSource::Candidates {
                 cand: &cand,
-                reach: 10.0 * d,
+                reach: reach * d,
             }
         };
         near.update(source, pr, &blocks, n, d, true, parallel);
@@ -222,7 +240,11 @@ fn near_through_mid(hashed: bool, parallel: bool) {
         }
     }
     let msg = format!("{checked} near builds, {} mid, {kept} from a kept mid list", near.mid_rebuilds);
-    assert!(near.mid_rebuilds >= 6 && kept > 10, "{msg}");
+    if reach >= 10.0 {
+        assert!(near.mid_rebuilds >= 6 && kept > 10, "{msg}");
+    } else {
+        assert!(near.mid_rebuilds == 0 && checked > 20, "{msg}");
+    }
     assert!(near.pairs.len() > 20, "{} near pairs", near.pairs.len());
 }
 
