@@ -75,8 +75,19 @@
 //! 150 steps: basic VcCPBD 80.1-80.7 -> 77.4-79.2 ms (query column 25.0-25.6 -> 16.5-17.3,
 //! pairs 34.3-34.7 -> 40.2-41.3), in a slow spell of the VM 124.6-125.4 -> 118.3-119.8;
 //! polyester movement speed (five wide rebuilds before) 78.7-80.7 -> 71.3-71.9; the tethered
-//! basic fold (`--tethers 0`) 188.0-201.3 -> 180.6-195.2. The tree keeps the wide lists (its
-//! query is the slow part either way).
+//! basic fold (`--tethers 0`) 188.0-201.3 -> 180.6-195.2. On one thread, where runs repeat
+//! within 1-3% on this machine (two threads drift up to 1.35 times), `weft reproduce vccpbd
+//! --size 100 --repeat 3`, two alternate runs: the 12 hash rows' medians sum to 7.92-8.18 ms
+//! before against 7.24-7.44 after (the mid lists copied to pairs, next paragraph), the basic
+//! rows 0.70-0.77 against 0.66-0.79 (unchanged within the noise: there one wide rebuild went
+//! and 13 mid queries of ~1.35 ms each came). The tree keeps the wide lists (its query is the
+//! slow part either way).
+//!
+//! The hashed mid list is copied to pairs for the near rebuilds' eight-lane filter (with ~7
+//! partners a particle the scan over lists ran its scalar tail): 7.49-7.85 -> 7.43 ms (sum
+//! above). Tried and not kept: `MID_SKIN` 1.5 and 2 (fewer mid queries, larger mid lists):
+//! sums 7.08-7.31 and 7.23-7.34 against 7.18-7.32; the candidates of a falling step filtered
+//! as pairs too (cached per build): 7.38-7.45 against 7.19-7.41.
 
 use super::neighbours::Neighbours;
 use super::self_config::SelfBroadphase;

@@ -28,7 +28,11 @@
 //! alternate runs against the session's starting build): the basic rows, the slowest, 0.574-
 //! 0.687 ms collision a step on two threads (41.2-46.0x; 0.637-0.764 ms, 33.5-43.0x before)
 //! against 0.726-0.820 ms on one (30.2-37.7x; 0.855-1.022 ms before); two threads now clearly
-//! pay, but the default stays one thread for the reason above.
+//! pay, but the default stays one thread for the reason above. Session 8 (slow steps without
+//! candidate lists, `self_verlet`), medians of `--repeat 3` on one thread: 0.52-0.79 ms
+//! collision a step over the 12 hash rows (30.6-59.2x), the basic rows 0.66-0.79 (30.6-41.4x);
+//! one thread repeats within 1-3% here, two threads drift by up to 1.35 times between runs
+//! (medians of `--repeat 5`: 0.41-0.69 ms, slowest rows 38-53x depending on the spell).
 //!
 //! A second table splits the collision time by phase (hash build, query, the rest of the step
 //! start, substep pair passes, substep corrections, the speed clamp) and gives the number of
