@@ -215,6 +215,7 @@ fn hung(size: u32, response: Response, broadphase: SelfBroadphase, threads: usiz
     let sc = SelfCollision {
         response,
         broadphase,
+        measure: true,
         ..SelfCollision::default()
     };
     let (mut w, dt) = crate::perf::fold_world(size, crate::Fabric::preset("wool").unwrap(), params, sc).unwrap();

@@ -10,9 +10,11 @@ use crate::error::Result;
 
 impl SelfCollisionData {
     /// Measures the penetration of the state the lists were just built from (once per step
-    /// count `steps`, skipping the initial state). Kept out of the timed collision stage.
+    /// count `steps`, skipping the initial state) when the settings ask for it
+    /// ([`super::SelfCollision::measure`]). Kept out of the timed collision stage.
     pub(crate) fn record_start_state(&mut self, x: [&[f32]; 3], n: usize, steps: u64, parallel: bool) {
-        if steps > 0 && self.last_measured != Some(steps) {
+        let on = self.config.as_ref().is_some_and(|c| c.measure);
+        if on && steps > 0 && self.last_measured != Some(steps) {
             let pct = self.penetration_pct(x, n, parallel);
             self.stats.record(pct);
             self.last_measured = Some(steps);

@@ -25,6 +25,7 @@
 //! response = "vccpbd"         # or "pbd", "movement-speed"
 //! broadphase = "hash"         # or "aabb-tree"
 //! friction = 0.3
+//! measure = false             # true: average collision over the steps (a query a step)
 //!
 //! [output]
 //! steps = 300

@@ -121,6 +121,9 @@ pub struct SelfCollisionSection {
     pub response: Option<Response>,
     /// `"hash"` (default) or `"aabb-tree"`.
     pub broadphase: Option<SelfBroadphase>,
+    /// Measure the average collision after every step (default false; it costs a broadphase
+    /// query a step, see [`SelfCollision::measure`]).
+    pub measure: Option<bool>,
 }
 
 impl SelfCollisionSection {
@@ -132,6 +135,7 @@ impl SelfCollisionSection {
             friction: self.friction.map_or(d.friction, |v| v.0),
             response: self.response.unwrap_or(d.response),
             broadphase: self.broadphase.unwrap_or(d.broadphase),
+            measure: self.measure.unwrap_or(d.measure),
         }
     }
 }

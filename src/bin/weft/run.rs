@@ -87,8 +87,9 @@ struct SelfCollisionSummary {
     response: &'static str,
     broadphase: &'static str,
     distance: f32,
-    avg_collision_pct: f64,
-    max_collision_pct: f64,
+    /// Over the steps, when the scene asks for it (`measure = true`; absent otherwise).
+    avg_collision_pct: Option<f64>,
+    max_collision_pct: Option<f64>,
     final_collision_pct: f64,
     collision_ms_per_step: f64,
     stats: weft::collide::self_config::SelfCollisionStats,
@@ -221,8 +222,8 @@ pub fn run(args: RunArgs) -> weft::Result<ExitCode> {
                 response: c.response.name(),
                 broadphase: c.broadphase.name(),
                 distance: world.self_collision_distance(),
-                avg_collision_pct: st.average_pct,
-                max_collision_pct: st.max_pct,
+                avg_collision_pct: c.measure.then_some(st.average_pct),
+                max_collision_pct: c.measure.then_some(st.max_pct),
                 final_collision_pct: last,
                 collision_ms_per_step: st.ms_per_step(),
                 stats: st,
@@ -317,9 +318,16 @@ pub fn run(args: RunArgs) -> weft::Result<ExitCode> {
             summary.max_strain * 100.0
         );
         if let Some(c) = &summary.self_collision {
+            let avg = match c.avg_collision_pct {
+                Some(a) => format!("average collision {a:.3}% (final {:.3}%)", c.final_collision_pct),
+                None => format!(
+                    "final collision {:.3}% (measure = true in [effects.self_collision] for the average over the steps)",
+                    c.final_collision_pct
+                ),
+            };
             println!(
-                "self-collision ({}, {}): average collision {:.3}% (final {:.3}%), {:.3} ms/step",
-                c.response, c.broadphase, c.avg_collision_pct, c.final_collision_pct, c.collision_ms_per_step
+                "self-collision ({}, {}): {avg}, {:.3} ms/step",
+                c.response, c.broadphase, c.collision_ms_per_step
             );
         }
         for w in &summary.warnings {

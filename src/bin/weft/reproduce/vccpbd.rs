@@ -201,6 +201,7 @@ fn world(size: u32, fabric: &str, response: Response, broadphase: SelfBroadphase
     let sc = SelfCollision {
         response,
         broadphase,
+        measure: true,
         ..SelfCollision::default()
     };
     weft::perf::fold_world_tethered(size, Fabric::preset(fabric)?, params, sc, cfg.tethers)
