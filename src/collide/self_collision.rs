@@ -36,8 +36,9 @@
 //!   largest phase. The skin is `3 d` (`2 d` before session 6) only when the cloth moved at
 //!   most `d` a step since the last build (otherwise zero: a wider reach would cost more than
 //!   the reuse saves; the measurements are in `self_verlet`). With the hash such slow steps
-//!   build no candidate lists at all (session 8): every block is active and the substeps query
-//!   their mid list from a hash of the predicted positions (`self_verlet`, `self_near`). The hash query tests the
+//!   build no candidate lists at all (session 8): every block is active and the substeps
+//!   query their mid list from a hash of the predicted positions (`self_verlet`,
+//!   `self_near`). The hash query tests the
 //!   rest-neighbour rule in its eight-lane mask (the `hash_rest` module), so only kept pairs
 //!   leave the lanes, and walks the cells over a half shell (the `hash_cells` module: each
 //!   pair tested once, the rows looked up once a cell; a falling step's query 1.45-1.84 ms
