@@ -83,7 +83,8 @@
 //!
 //! # Average collision (the paper's metric)
 //! A particle is *in penetration* when a non-neighbour particle (another cloth, or rest distance
-//! above `1.5 d`) lies closer than `(1 - PENETRATION_TOLERANCE) d`. The percentage is measured
+//! above `1.5 d`) lies closer than `(1 - PENETRATION_TOLERANCE) d`. When the settings ask for
+//! it ([`SelfCollision::measure`]; on demand otherwise) the percentage is measured
 //! on the positions the next step's broadphase is built from, with its own query of that
 //! broadphase (reach `(1 - PENETRATION_TOLERANCE) d`, outside the timed stage; it counts the
 //! pairs between `1.5 d` and `q` at rest that the response leaves to the cloth's constraints),
