@@ -297,10 +297,9 @@ impl SelfCollisionData {
             }
             Plan::Direct => {
                 st.structure_fresh = false;
-                if !st.verlet.is_direct() {
+                if st.verlet.went_direct() {
                     st.near.invalidate();
                 }
-                st.verlet.went_direct();
                 Ok(())
             }
             Plan::Build(skin) => {
@@ -337,13 +336,18 @@ impl SelfCollisionData {
         done.map(|_| true)
     }
 
+    /// The cloths' rest positions (the pair pass spells the fields out: it also holds the
+    /// state mutably).
+    fn rest(&self) -> [&[f32]; 3] {
+        [&self.rest[0], &self.rest[1], &self.rest[2]]
+    }
+
     /// Builds the hash (cell `reach`) or refits the tree on `x`.
     fn build_structure(&self, st: &mut State, x: [&[f32]; 3], n: usize, reach: f32, broadphase: SelfBroadphase) -> Result<()> {
         st.structure_fresh = false;
         match broadphase {
             SelfBroadphase::Hash => {
-                st.hash.build(x[0], x[1], x[2], n, reach * CELL_FACTOR)?;
-                st.hash.attach_rest([&self.rest[0], &self.rest[1], &self.rest[2]], &self.cloth_of)?;
+                build_hash(&mut st.hash, x, n, reach, self.rest(), &self.cloth_of, true)?;
             }
             SelfBroadphase::AabbTree => {
                 let t = match st.tree.take() {
@@ -437,6 +441,26 @@ impl SelfCollisionData {
 }
 
 #[inline(always)]
+/// Builds `hash` on `x` (first `n`) with cells of `reach` (times [`CELL_FACTOR`]) and
+/// attaches the cloths' `rest` positions and `cloth_of` ids for the rest rule of its
+/// self-collision query; `parallel` false builds serially (the same hash).
+pub(crate) fn build_hash(
+    hash: &mut SpatialHash,
+    x: [&[f32]; 3],
+    n: usize,
+    reach: f32,
+    rest: [&[f32]; 3],
+    cloth_of: &[u32],
+    parallel: bool,
+) -> Result<()> {
+    if parallel {
+        hash.build(x[0], x[1], x[2], n, reach * CELL_FACTOR)?;
+    } else {
+        hash.build_serial(x[0], x[1], x[2], n, reach * CELL_FACTOR)?;
+    }
+    hash.attach_rest(rest, cloth_of)
+}
+
 fn dist2(a: &[impl AsRef<[f32]>; 3], i: usize, j: usize) -> f32 {
     let d = |k: usize| a[k].as_ref()[i] - a[k].as_ref()[j];
     let (dx, dy, dz) = (d(0), d(1), d(2));

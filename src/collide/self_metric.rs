@@ -12,7 +12,7 @@
 
 use rayon::prelude::*;
 
-use super::{dist2, SelfBroadphase, SelfCollisionData, SpatialHash, CELL_FACTOR, PENETRATION_TOLERANCE, QUERY_FACTOR, REST_SKIP_FACTOR};
+use super::{build_hash, dist2, SelfBroadphase, SelfCollisionData, SpatialHash, PENETRATION_TOLERANCE, QUERY_FACTOR, REST_SKIP_FACTOR};
 use crate::collide::neighbours::{within, Neighbours};
 use crate::error::Result;
 
@@ -105,9 +105,7 @@ impl SelfCollisionData {
                 let n = s[0].len();
                 let mut hash = SpatialHash::new(n);
                 let skip = REST_SKIP_FACTOR * self.distance();
-                let _ = hash
-                    .build(&s[0], &s[1], &s[2], n, q * CELL_FACTOR)
-                    .and_then(|_| hash.attach_rest([&self.rest[0], &self.rest[1], &self.rest[2]], &self.cloth_of))
+                let _ = build_hash(&mut hash, [&s[0], &s[1], &s[2]], n, q, self.rest(), &self.cloth_of, true)
                     .and_then(|_| hash.query_upper_unskipped_cells(q, skip, &mut out));
                 return out;
             }

@@ -129,7 +129,7 @@
 
 use super::hash::SpatialHash;
 use super::neighbours::Neighbours;
-use super::self_collision::CELL_FACTOR;
+use super::self_collision::build_hash;
 use super::self_near_scan::{collect, filter_pairs, ScanScratch};
 use super::self_verlet::SAFE;
 use crate::lanes::{load, F32s, LANES};
@@ -297,13 +297,8 @@ impl NearList {
                 // Every pair within `r` of `p` but the rest neighbours, each once; a failed
                 // build (non-finite positions) leaves an empty, invalid mid list, like the
                 // failed broadphase of a step start.
-                let built = if parallel {
-                    hash.build(p[0], p[1], p[2], n, r * CELL_FACTOR)
-                } else {
-                    hash.build_serial(p[0], p[1], p[2], n, r * CELL_FACTOR)
-                };
                 let lists = &mut self.mid_lists;
-                let r = built.and_then(|_| hash.attach_rest(rest, cloth_of)).and_then(|_| {
+                let r = build_hash(hash, p, n, r, rest, cloth_of, parallel).and_then(|_| {
                     if parallel {
                         hash.query_upper_unskipped_cells(r, skip, lists)
                     } else {
@@ -316,9 +311,7 @@ impl NearList {
                 self.mid.clear();
                 self.mid_valid = r.is_ok();
                 if r.is_ok() {
-                    for i in 0..lists.len() {
-                        self.mid.extend(lists.of(i).iter().map(|&j| (i as u32, j)));
-                    }
+                    self.mid.extend(lists.pairs());
                 }
                 true
             }

@@ -213,15 +213,17 @@ impl VerletLists {
 
     /// Records a step of [`Plan::Direct`]: no candidate lists (emptied); the next plan
     /// measures the motion from the positions it is given as the previous ones. Counts as a
-    /// build when it starts the mode.
-    pub(crate) fn went_direct(&mut self) {
+    /// build when it starts the mode; returns whether it did.
+    pub(crate) fn went_direct(&mut self) -> bool {
         self.skin = 0.0;
         self.steps_since = 0;
-        if !self.direct {
+        let entered = !self.direct;
+        if entered {
             self.direct = true;
             self.cand.clear();
             self.rebuilds += 1;
         }
+        entered
     }
 
     /// Whether the step runs without candidate lists ([`Plan::Direct`]).
