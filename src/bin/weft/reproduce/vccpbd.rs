@@ -263,6 +263,13 @@ fn measure(size: u32, fi: usize, ri: usize, broadphase: SelfBroadphase, cfg: Run
     })
 }
 
+/// The first columns of every table: the heading and a row's.
+const KEY_HEAD: &str = "particles    fabric       response     broad";
+
+fn key(r: &Row) -> String {
+    format!("{:>9} {:>9} {:>14} {:>9}", r.particles, r.fabric, r.response, r.broadphase)
+}
+
 /// Runs the experiment and prints the table (or JSON).
 pub fn run(args: VccpbdArgs) -> weft::Result<ExitCode> {
     let steps = args.steps.unwrap_or(if args.quick { 30 } else { 150 }).max(1);
@@ -316,28 +323,13 @@ pub fn run(args: VccpbdArgs) -> weft::Result<ExitCode> {
     println!("ratio = paper collision ms / our collision wall ms; cpu rat = paper / our collision CPU ms");
     println!();
     println!(
-        "{:>9} {:>9} {:>14} {:>9} {:>10} {:>9} {:>9} {:>9} {:>10} {:>9} {:>8} {:>8} {:>7}",
-        "particles",
-        "fabric",
-        "response",
-        "broad",
-        "collision",
-        "step",
-        "cpu coll",
-        "cpu step",
-        "avg coll%",
-        "paper ms",
-        "ratio",
-        "cpu rat",
-        "strain"
+        "{} {:>10} {:>9} {:>9} {:>9} {:>10} {:>9} {:>8} {:>8} {:>7}",
+        KEY_HEAD, "collision", "step", "cpu coll", "cpu step", "avg coll%", "paper ms", "ratio", "cpu rat", "strain"
     );
     for r in &rows {
         println!(
-            "{:>9} {:>9} {:>14} {:>9} {:>10.3} {:>9.3} {:>9.3} {:>9.3} {:>10.3} {:>9.3} {:>7.2}x {:>7.2}x {:>7.4}",
-            r.particles,
-            r.fabric,
-            r.response,
-            r.broadphase,
+            "{} {:>10.3} {:>9.3} {:>9.3} {:>9.3} {:>10.3} {:>9.3} {:>7.2}x {:>7.2}x {:>7.4}",
+            key(r),
             r.collision_ms,
             r.step_ms,
             r.cpu_collision_ms.unwrap_or(f64::NAN),
@@ -354,17 +346,14 @@ pub fn run(args: VccpbdArgs) -> weft::Result<ExitCode> {
         "collision wall ms a step by phase (clamp = the rest), broadphase runs out of {steps} steps, mid lists queried in the substeps (in pairs)"
     );
     println!(
-        "{:>9} {:>9} {:>14} {:>9} {:>7} {:>7} {:>7} {:>7} {:>7} {:>7} {:>8} {:>6}",
-        "particles", "fabric", "response", "broad", "build", "query", "start", "pairs", "correct", "clamp", "rebuilds", "mid q"
+        "{} {:>7} {:>7} {:>7} {:>7} {:>7} {:>7} {:>8} {:>6}",
+        KEY_HEAD, "build", "query", "start", "pairs", "correct", "clamp", "rebuilds", "mid q"
     );
     for r in &rows {
         let p = r.phase_ms;
         println!(
-            "{:>9} {:>9} {:>14} {:>9} {:>7.3} {:>7.3} {:>7.3} {:>7.3} {:>7.3} {:>7.3} {:>8} {:>6}",
-            r.particles,
-            r.fabric,
-            r.response,
-            r.broadphase,
+            "{} {:>7.3} {:>7.3} {:>7.3} {:>7.3} {:>7.3} {:>7.3} {:>8} {:>6}",
+            key(r),
             p[0],
             p[1],
             p[2],
@@ -382,17 +371,14 @@ pub fn run(args: VccpbdArgs) -> weft::Result<ExitCode> {
             args.repeat
         );
         println!(
-            "{:>9} {:>9} {:>14} {:>9} {:>9} {:>9} {:>9} {:>8} {:>8}",
-            "particles", "fabric", "response", "broad", "min", "median", "max", "ratio lo", "ratio hi"
+            "{} {:>9} {:>9} {:>9} {:>8} {:>8}",
+            KEY_HEAD, "min", "median", "max", "ratio lo", "ratio hi"
         );
         for r in &rows {
             let [lo, hi] = r.collision_ms_range;
             println!(
-                "{:>9} {:>9} {:>14} {:>9} {:>9.3} {:>9.3} {:>9.3} {:>7.2}x {:>7.2}x",
-                r.particles,
-                r.fabric,
-                r.response,
-                r.broadphase,
+                "{} {:>9.3} {:>9.3} {:>9.3} {:>7.2}x {:>7.2}x",
+                key(r),
                 lo,
                 r.collision_ms,
                 hi,
