@@ -43,7 +43,7 @@ fn main() -> weft::Result<()> {
         Some(t) => Some(t.parse::<f32>().map_err(|e| weft::WeftError::param("tethers", t, e.to_string()))?),
     };
     let (mut w, dt) = weft::perf::fold_world_tethered(100, fabric, params, sc, tethers)?;
-    println!("step   total   build   query   start   pairs    corr   clamp rebuild");
+    println!("step   total   build   query   start   pairs    corr   clamp rebuild blocks mid-q mid-r");
     let mut last = w.self_collision_stats().clone();
     for s in 0..steps {
         w.step(dt)?;
@@ -63,7 +63,13 @@ fn main() -> weft::Result<()> {
         for v in parts.iter().chain([&clamp]) {
             print!(" {v:7.3}");
         }
-        println!(" {:7} {}", p.rebuilds - q.rebuilds, w.self_collision_active_blocks());
+        println!(
+            " {:7} {:6} {:5} {:5}",
+            p.rebuilds - q.rebuilds,
+            w.self_collision_active_blocks(),
+            p.mid_queries - q.mid_queries,
+            p.mid_refreshes - q.mid_refreshes
+        );
         last = now;
     }
     Ok(())

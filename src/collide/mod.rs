@@ -46,6 +46,7 @@ pub mod response;
 mod self_active;
 pub mod self_collision;
 pub mod self_config;
+mod self_mid;
 mod self_near;
 mod self_near_scan;
 mod self_pairs;

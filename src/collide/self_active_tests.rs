@@ -260,12 +260,14 @@ fn reused_candidate_lists_give_the_fresh_lists_and_the_same_bits() {
             ph.rebuilds, near.rebuilds
         );
         assert!(contacts > 0, "{response:?}: no contact in the run");
-        // The hash runs the slow steps without candidate lists (mid lists from the hash).
+        // The hash runs the slow steps without candidate lists (mid lists from the hash,
+        // queried and refreshed for the particles that moved).
         assert_eq!(
-            ph.mid_queries > 0,
-            broadphase == SelfBroadphase::Hash,
-            "{} mid queries",
-            ph.mid_queries
+            (ph.mid_queries > 0, ph.mid_refreshes > 0),
+            (broadphase == SelfBroadphase::Hash, broadphase == SelfBroadphase::Hash),
+            "{} mid queries, {} refreshes",
+            ph.mid_queries,
+            ph.mid_refreshes
         );
         assert_eq!(
             reuse[0].self_collision_stats().average_pct,

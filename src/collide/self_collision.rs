@@ -100,7 +100,8 @@ pub(crate) use super::response::mean_velocity;
 use super::self_active::ActiveSet;
 pub(crate) use super::self_active::ApplyParams;
 use super::self_active::{PredictionSink, APPLY_PARALLEL_BLOCKS};
-use super::self_near::{MidSource, NearList};
+use super::self_mid::RestRule;
+use super::self_near::{MidSource, MidUpdate, NearList};
 use super::self_pairs::PairCtx;
 use super::self_verlet::{Plan, VerletLists};
 use crate::error::{positive, Result, WeftError};
@@ -387,12 +388,11 @@ impl SelfCollisionData {
         };
         let q = QUERY_FACTOR * a.d;
         let source = if st.verlet.is_direct() {
-            MidSource::Hash {
-                hash: &mut st.hash,
+            MidSource::Hash(RestRule {
                 rest: [&self.rest[0], &self.rest[1], &self.rest[2]],
                 cloth_of: &self.cloth_of,
                 skip: REST_SKIP_FACTOR * a.d,
-            }
+            })
         } else {
             // The candidate lists reach `q` plus their skin.
             MidSource::Candidates {
@@ -400,7 +400,7 @@ impl SelfCollisionData {
                 reach: q + st.verlet.skin(),
             }
         };
-        let queried = st.near.update(source, p, &st.active.blocks, n, a.d, simd, parallel);
+        let mid = st.near.update(source, p, &st.active.blocks, n, a.d, simd, parallel);
         let ctx = PairCtx {
             x,
             p,
@@ -415,7 +415,8 @@ impl SelfCollisionData {
         st.active.pair_pass(&ctx, &st.near.pairs, parallel, simd);
         let ph = &mut self.stats.phases;
         ph.pairs_s += t0.elapsed().as_secs_f64();
-        ph.mid_queries += u64::from(queried);
+        ph.mid_queries += u64::from(mid == MidUpdate::Queried);
+        ph.mid_refreshes += u64::from(mid == MidUpdate::Refreshed);
     }
 
     /// The velocity-correction kernel on the active blocks of the predicted positions `p`.

@@ -129,6 +129,9 @@ pub struct SelfCollisionPhases {
     /// Mid lists queried from the hash of the predicted positions in the substeps of slow
     /// steps, which run without candidate lists (their time is in `pairs_s`).
     pub mid_queries: u64,
+    /// Mid lists refreshed for the few particles that moved past their bound instead of
+    /// queried afresh (their time is in `pairs_s`).
+    pub mid_refreshes: u64,
 }
 
 impl SelfCollisionStats {

@@ -127,10 +127,9 @@
 //! (steps ~40-100), where the cloth moves `~d / 10` a substep and the list is rebuilt every
 //! 4-10 substeps. (Session 7 changed the rule: see "Mid list" above.)
 
-use super::hash::SpatialHash;
 use super::neighbours::Neighbours;
-use super::self_collision::build_hash;
-use super::self_near_scan::{collect, filter_pairs, ScanScratch};
+use super::self_mid::{HashedMid, RestRule};
+use super::self_near_scan::{collect, filter_pairs, filter_range, ScanScratch};
 use super::self_verlet::SAFE;
 use crate::lanes::{load, F32s, LANES};
 
@@ -174,9 +173,11 @@ pub(crate) struct NearList {
     mid_valid: bool,
     /// Mid-list builds so far.
     pub(crate) mid_rebuilds: u64,
-    /// The upper lists of the last mid query of the hash ([`MidSource::Hash`]), copied to
-    /// `mid`.
-    mid_lists: Neighbours,
+    /// The hash of the mid list's last query ([`MidSource::Hash`]) and its refreshes.
+    pub(crate) hashed: HashedMid,
+    /// The refreshes' pairs within the near radius, and the merge's buffer.
+    extra_near: Vec<(u32, u32)>,
+    merged: Vec<(u32, u32)>,
     scratch: ScanScratch,
 }
 
@@ -187,12 +188,18 @@ pub(crate) enum MidSource<'a> {
     /// A query of the hash, rebuilt on the predicted positions (a slow step without candidate
     /// lists): every pair within the mid radius but the rest neighbours (rest distance at
     /// most `skip`, with the cloths' rest positions and cloth ids).
-    Hash {
-        hash: &'a mut SpatialHash,
-        rest: [&'a [f32]; 3],
-        cloth_of: &'a [u32],
-        skip: f32,
-    },
+    Hash(RestRule<'a>),
+}
+
+/// What became of the mid list in an update.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum MidUpdate {
+    /// Kept as it was, or built from the candidate lists.
+    Kept,
+    /// Queried from a hash built afresh.
+    Queried,
+    /// Refreshed for the particles that moved (module `self_mid`).
+    Refreshed,
 }
 
 impl NearList {
@@ -209,7 +216,7 @@ impl NearList {
     /// `0.49 MID_SKIN d` since its build. Only the active blocks are checked and copied:
     /// before the fold they are a few, and the particles outside them have no candidate. The
     /// scans run in parallel over ranges of particles when `parallel` (the same lists).
-    /// Returns whether the mid list was queried from the hash.
+    /// Returns what became of the mid list.
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn update(
         &mut self,
@@ -220,13 +227,13 @@ impl NearList {
         d: f32,
         simd: bool,
         parallel: bool,
-    ) -> bool {
+    ) -> MidUpdate {
         // The mid list is used when the candidates reach well past its radius (the wide
         // skin of a folded cloth) or come from the hash (see the module docs).
         let r_mid = d * (1.0 + MID_NEAR_SKIN_MAX + MID_SKIN);
         let use_mid = match &source {
             MidSource::Candidates { reach, .. } => *reach >= MID_REACH_RATIO * r_mid,
-            MidSource::Hash { .. } => true,
+            MidSource::Hash(_) => true,
         };
         let cap = if use_mid { MID_NEAR_SKIN_MAX } else { NEAR_SKIN_MAX } * d;
         if self.valid && self.at[0].len() == blocks.len() * LANES {
@@ -234,7 +241,7 @@ impl NearList {
             let lim = 0.5 * SAFE * self.skin;
             self.subs_since += 1;
             if m2 <= lim * lim {
-                return false;
+                return MidUpdate::Kept;
             }
             // Aim at about NEAR_LIFETIME substeps between builds, within [d / 8, cap].
             let rate = if m2.is_finite() { m2.sqrt() / self.subs_since as f32 } else { d };
@@ -247,21 +254,29 @@ impl NearList {
         self.skin = self.skin.min(cap);
         copy_blocks(p, blocks, &mut self.at);
         let r = d + self.skin;
-        let mut queried = false;
+        let mut mid = MidUpdate::Kept;
         match source {
             MidSource::Candidates { cand, .. } if !use_mid => {
                 self.mid_valid = false;
                 collect(cand, p, n, r * r, simd, parallel, &mut self.scratch, &mut self.pairs);
             }
             source => {
-                queried = self.update_mid(source, p, blocks, n, d, simd, parallel);
+                mid = self.update_mid(source, p, blocks, n, d, simd, parallel);
                 filter_pairs(&self.mid, p, n, r * r, simd, parallel, &mut self.scratch, &mut self.pairs);
+                let extra = self.hashed.extra();
+                if !extra.is_empty() {
+                    // The refreshes' pairs (module `self_mid`): filtered alike, then merged in
+                    // order, a pair in both lists once.
+                    self.extra_near.clear();
+                    filter_range(extra, p, r * r, simd, &self.scratch.xyz, &mut self.extra_near);
+                    merge_unique(&mut self.pairs, &self.extra_near, &mut self.merged);
+                }
             }
         }
         self.valid = true;
         self.subs_since = 0;
         self.rebuilds += 1;
-        queried
+        mid
     }
 
     /// Keeps the mid list if no particle of `blocks` moved more than `0.49 MID_SKIN d` since
@@ -269,51 +284,47 @@ impl NearList {
     /// `d + (MID_NEAR_SKIN_MAX + MID_SKIN) d`. A near pair (within `d + s₂`,
     /// `s₂ <= MID_NEAR_SKIN_MAX d`, at `p`) was then within `d + s₂ + 0.98 MID_SKIN d` at the
     /// mid build, so it is in the mid list: the near list built from it is the one built from
-    /// the candidates, or from every pair. Returns whether it queried the hash.
+    /// the candidates, or from every pair. From the hash, only the particles past the bound
+    /// are refreshed when that is possible (module `self_mid`; the same list).
     #[allow(clippy::too_many_arguments)]
-    fn update_mid(&mut self, source: MidSource<'_>, p: [&[f32]; 3], blocks: &[u32], n: usize, d: f32, simd: bool, parallel: bool) -> bool {
+    fn update_mid(
+        &mut self,
+        source: MidSource<'_>,
+        p: [&[f32]; 3],
+        blocks: &[u32],
+        n: usize,
+        d: f32,
+        simd: bool,
+        parallel: bool,
+    ) -> MidUpdate {
         let lim = 0.5 * SAFE * MID_SKIN * d;
-        if self.mid_valid
-            && self.mid_at[0].len() == blocks.len() * LANES
-            && max_disp2_blocks(p, as_refs(&self.mid_at), blocks, simd) <= lim * lim
-        {
-            return false;
+        let r = d * (1.0 + MID_NEAR_SKIN_MAX + MID_SKIN);
+        if self.mid_valid && self.mid_at[0].len() == blocks.len() * LANES {
+            let m2 = max_disp2_blocks(p, as_refs(&self.mid_at), blocks, simd);
+            if m2 <= lim * lim {
+                return MidUpdate::Kept;
+            }
+            if let MidSource::Hash(rule) = &source {
+                if m2.is_finite() && self.hashed.refresh(p, &mut self.mid_at, blocks, n, lim, r, *rule) {
+                    return MidUpdate::Refreshed;
+                }
+            }
         }
         copy_blocks(p, blocks, &mut self.mid_at);
-        let r = d * (1.0 + MID_NEAR_SKIN_MAX + MID_SKIN);
         self.mid_rebuilds += 1;
         match source {
             MidSource::Candidates { cand, .. } => {
                 collect(cand, p, n, r * r, simd, parallel, &mut self.scratch, &mut self.mid);
+                self.hashed.forget();
                 self.mid_valid = true;
-                false
+                MidUpdate::Kept
             }
-            MidSource::Hash {
-                hash,
-                rest,
-                cloth_of,
-                skip,
-            } => {
+            MidSource::Hash(rule) => {
                 // Every pair within `r` of `p` but the rest neighbours, each once; a failed
                 // build (non-finite positions) leaves an empty, invalid mid list, like the
                 // failed broadphase of a step start.
-                let lists = &mut self.mid_lists;
-                let r = build_hash(hash, p, n, r, rest, cloth_of, parallel).and_then(|_| {
-                    if parallel {
-                        hash.query_upper_unskipped_cells(r, skip, lists)
-                    } else {
-                        hash.query_upper_unskipped_cells_serial(r, skip, lists)
-                    }
-                });
-                // Copied to pairs: ~7 partners a particle, so the near rebuilds' eight-lane
-                // filter runs over the pairs (`filter_pairs`), not over the short lists (whose
-                // scan would mostly take its scalar tail).
-                self.mid.clear();
-                self.mid_valid = r.is_ok();
-                if r.is_ok() {
-                    self.mid.extend(lists.pairs());
-                }
-                true
+                self.mid_valid = self.hashed.build(p, n, r, rule, parallel, &mut self.mid);
+                MidUpdate::Queried
             }
         }
     }
@@ -323,6 +334,22 @@ impl NearList {
     pub(crate) fn ranges(&self) -> usize {
         self.scratch.bounds.len().saturating_sub(1)
     }
+}
+
+/// `a` with the pairs of `b` merged in, both ordered, a pair in both once (`tmp` the buffer).
+fn merge_unique(a: &mut Vec<(u32, u32)>, b: &[(u32, u32)], tmp: &mut Vec<(u32, u32)>) {
+    tmp.clear();
+    tmp.reserve(a.len() + b.len());
+    let mut f = b.iter().copied().peekable();
+    for &x in a.iter() {
+        while let Some(y) = f.next_if(|&y| y < x) {
+            tmp.push(y);
+        }
+        f.next_if_eq(&x);
+        tmp.push(x);
+    }
+    tmp.extend(f);
+    std::mem::swap(a, tmp);
 }
 
 /// The three coordinate arrays as slices.

@@ -11,7 +11,7 @@ use rayon::prelude::*;
 #[derive(Clone, Debug, Default)]
 pub(crate) struct ScanScratch {
     /// The positions as `[x, y, z, 0]` (one load per candidate).
-    xyz: Vec<[f32; 4]>,
+    pub(crate) xyz: Vec<[f32; 4]>,
     /// Particle ranges of the parallel scan ([`chunk_bounds`]).
     pub(crate) bounds: Vec<usize>,
     /// The pairs of each range (joined in order).
@@ -101,7 +101,7 @@ pub(crate) fn filter_pairs(
 
 /// Appends to `out` the pairs of `pairs` within the radius (the work of [`filter_pairs`]):
 /// the difference `p_i - p_j` and its squared length computed as [`collect_range`] does.
-fn filter_range(pairs: &[(u32, u32)], p: [&[f32]; 3], r2: f32, simd: bool, xyz: &[[f32; 4]], out: &mut Vec<(u32, u32)>) {
+pub(crate) fn filter_range(pairs: &[(u32, u32)], p: [&[f32]; 3], r2: f32, simd: bool, xyz: &[[f32; 4]], out: &mut Vec<(u32, u32)>) {
     let mut k = 0;
     if simd {
         let r2v = F32s::splat(r2);

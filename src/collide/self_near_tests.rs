@@ -167,7 +167,6 @@ fn near_through_mid(hashed: bool, parallel: bool, reach: f32) {
         buf.extend((i + 1..n).filter(|j| hashed || (i + 2 * j) % 7 != 0).map(|j| j as u32))
     })
     .unwrap();
-    let mut hash = SpatialHash::new(n);
     let rest = [(0..n).map(|i| 100.0 * i as f32).collect::<Vec<f32>>(), vec![0.0; n], vec![0.0; n]];
     let cloth_of = vec![0u32; n];
     let blocks: Vec<u32> = (0..n.div_ceil(LANES) as u32).collect();
@@ -208,12 +207,11 @@ fn near_through_mid(hashed: bool, parallel: bool, reach: f32) {
         let pr = [&p[0][..], &p[1][..], &p[2][..]];
         let (before, mid_before) = (near.rebuilds, near.mid_rebuilds);
         let source = if hashed {
-            MidSource::Hash {
-                hash: &mut hash,
+            MidSource::Hash(RestRule {
                 rest: [&rest[0], &rest[1], &rest[2]],
                 cloth_of: &cloth_of,
                 skip: 3.0 * d,
-            }
+            })
         } else {
             MidSource::Candidates {
                 cand: &cand,
@@ -246,6 +244,79 @@ fn near_through_mid(hashed: bool, parallel: bool, reach: f32) {
         assert!(near.mid_rebuilds == 0 && checked > 20, "{msg}");
     }
     assert!(near.pairs.len() > 20, "{} near pairs", near.pairs.len());
+}
+
+/// The hashed mid list refreshed for the few particles that moved (module `self_mid`): at
+/// every near build the near list equals the one built from every pair but the rest
+/// neighbours (two cloths on one rest grid, so many pairs are dropped by the rule), while a
+/// changing handful of particles moves fast and the rest drift; the stale particles pass
+/// their cap, so full builds happen too. Serially, in parallel, on 1 and 2 threads.
+#[test]
+fn refreshed_mid_list_gives_the_near_list_of_every_pair() {
+    for (threads, parallel) in [(1, false), (1, true), (2, true)] {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        pool.install(|| refreshed_mid(parallel));
+    }
+}
+
+fn refreshed_mid(parallel: bool) {
+    let mut rng = signed(33);
+    let (n, d) = (400usize, 0.1f32);
+    let mut p: [Vec<f32>; 3] = std::array::from_fn(|_| (0..n).map(|_| 0.6 * rng()).collect());
+    let rest: [Vec<f32>; 3] = [
+        (0..n).map(|i| (i % 20) as f32 * d).collect(),
+        (0..n).map(|i| (i / 20 % 10) as f32 * d).collect(),
+        vec![0.0; n],
+    ];
+    let cloth_of: Vec<u32> = (0..n as u32).map(|i| i / 200).collect();
+    let rule = RestRule {
+        rest: [&rest[0], &rest[1], &rest[2]],
+        cloth_of: &cloth_of,
+        skip: 3.0 * d,
+    };
+    // Every pair the rule keeps, as candidate lists for the reference build.
+    let mut all = Neighbours::new();
+    all.fill_serial(n, |i, buf| buf.extend((i + 1..n).filter(|&j| !rule.skips(i, j)).map(|j| j as u32)))
+        .unwrap();
+    assert!(all.total() < n * (n - 1) / 2 - 1000, "the rule drops pairs");
+    let blocks: Vec<u32> = (0..n.div_ceil(LANES) as u32).collect();
+    let mut near = NearList::default();
+    let (mut scratch, mut want) = (ScanScratch::default(), Vec::new());
+    let (mut checked, mut refreshed, mut queried) = (0, 0, 0);
+    for call in 0..400 {
+        // Six fast particles (0.15 d a call along a fixed direction each), a new six every
+        // 25 calls; the others drift by up to 0.004 d a call.
+        let fast = |i: usize| (i + 7 * (call / 25)).is_multiple_of(67);
+        for (k, a) in p.iter_mut().enumerate() {
+            for (i, x) in a.iter_mut().enumerate() {
+                *x += if fast(i) {
+                    0.15 * d * [0.6, -0.64, 0.48][k]
+                } else {
+                    0.004 * d * rng()
+                };
+            }
+        }
+        let pr = [&p[0][..], &p[1][..], &p[2][..]];
+        let before = near.rebuilds;
+        match near.update(MidSource::Hash(rule), pr, &blocks, n, d, true, parallel) {
+            MidUpdate::Refreshed => refreshed += 1,
+            MidUpdate::Queried => queried += 1,
+            MidUpdate::Kept => {}
+        }
+        if near.rebuilds > before {
+            let r = d + near.skin;
+            collect(&all, pr, n, r * r, false, false, &mut scratch, &mut want);
+            assert_eq!(near.pairs, want, "call {call}");
+            checked += 1;
+        }
+    }
+    let msg = format!("{checked} near builds, {queried} mid queries, {refreshed} refreshes");
+    assert!(checked > 100 && refreshed > 20 && queried >= 2, "{msg}");
+    assert!(
+        near.hashed.refreshes == refreshed && near.pairs.len() > 20,
+        "{msg}, {} near pairs",
+        near.pairs.len()
+    );
 }
 
 #[test]
