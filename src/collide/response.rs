@@ -146,45 +146,106 @@ pub fn apply(inp: &ApplyInput<'_>, p: [&mut [f32]; 3], mode: ApplyMode, simd: bo
     }
 }
 
+/// Runs of blocks of [`apply_runs`]: `(k, b, len)` = compact block `k` (the sums' index over
+/// [`LANES`]) holds particle block `b`, for `len` consecutive blocks of both.
+pub(crate) type Run = (usize, usize, usize);
+
+/// The kernel on runs of blocks, `x`, `w` and `p` the whole particle arrays (`inp.start`
+/// unused): per lane the operations of [`apply`] (the same bits), with the constants set up
+/// once for all runs instead of once a call. The scalar backend calls the scalar twin on
+/// each run.
+pub(crate) fn apply_runs(inp: &ApplyInput<'_>, p: [&mut [f32]; 3], runs: impl Iterator<Item = Run>, mode: ApplyMode, simd: bool) {
+    let [px, py, pz] = p;
+    match (mode, simd) {
+        (ApplyMode::Plain, true) => {
+            let c = Consts::new(inp);
+            for (k, b, len) in runs {
+                for l in 0..len {
+                    lanes::<false>(&c, inp, [&mut *px, &mut *py, &mut *pz], (b + l) * LANES, (k + l) * LANES);
+                }
+            }
+        }
+        (ApplyMode::Vccpbd, true) => {
+            let c = Consts::new(inp);
+            for (k, b, len) in runs {
+                for l in 0..len {
+                    lanes::<true>(&c, inp, [&mut *px, &mut *py, &mut *pz], (b + l) * LANES, (k + l) * LANES);
+                }
+            }
+        }
+        (m, false) => {
+            for (k, b, len) in runs {
+                let g = b * LANES..(b + len) * LANES;
+                let one = ApplyInput {
+                    start: k * LANES,
+                    x: [&inp.x[0][g.clone()], &inp.x[1][g.clone()], &inp.x[2][g.clone()]],
+                    w: &inp.w[g.clone()],
+                    ..*inp
+                };
+                apply_scalar(&one, [&mut px[g.clone()], &mut py[g.clone()], &mut pz[g]], m == ApplyMode::Vccpbd);
+            }
+        }
+    }
+}
+
+/// The kernel's constants in lanes.
+struct Consts {
+    mu: F32s,
+    h: F32s,
+    r2: F32s,
+}
+
+impl Consts {
+    #[inline(always)]
+    fn new(inp: &ApplyInput<'_>) -> Self {
+        Consts {
+            mu: F32s::splat(inp.friction),
+            h: F32s::splat(inp.h),
+            r2: F32s::splat(inp.r * inp.r),
+        }
+    }
+}
+
 fn apply_simd<const VC: bool>(inp: &ApplyInput<'_>, p: [&mut [f32]; 3]) {
     let [px, py, pz] = p;
-    let s = inp.sums;
-    let zero = F32s::ZERO;
-    let one = F32s::ONE;
-    let half = F32s::splat(0.5);
-    let quarter = F32s::splat(0.25);
-    let mu = F32s::splat(inp.friction);
-    let h = F32s::splat(inp.h);
-    let r2 = F32s::splat(inp.r * inp.r);
-    let tiny = F32s::splat(f32::MIN_POSITIVE);
+    let c = Consts::new(inp);
     for i in (0..px.len()).step_by(LANES) {
-        let g = inp.start + i;
-        let k = load(&s.count, g);
-        let active = k.simd_gt(zero) & load(inp.w, i).simd_gt(zero);
-        let inv = one / k.max(one);
-        let x = Vec3x8::load(inp.x[0], inp.x[1], inp.x[2], i);
-        let p0 = Vec3x8::load(px, py, pz, i);
-        let c = Vec3x8::load(&s.c[0], &s.c[1], &s.c[2], g);
-        let f = Vec3x8::load(&s.f[0], &s.f[1], &s.f[2], g);
-        let disp = p0 - x;
-        let mut t = p0 + c.scale(inv) + (f.scale(inv) - disp).scale(half).scale(mu);
-        if VC {
-            let n = Vec3x8::load(&s.n[0], &s.n[1], &s.n[2], g);
-            let nl = n.length_sq().sqrt();
-            let nh = n.scale(one / nl.max(tiny));
-            let e = load(&s.gap, g) * inv;
-            let q = Vec3x8::load(inp.q[0], inp.q[1], inp.q[2], g);
-            let back = (t - q).length_sq().simd_ge(r2);
-            let beta = (load(inp.b, g) * h).min(one);
-            let amt = beta * (t - x).dot(nh) + beta * beta * e * quarter;
-            let osc = t - nh.scale(amt);
-            t = Vec3x8::select(back, q, osc);
-        }
-        let out = Vec3x8::select(active, t, p0);
-        store(px, i, out.x);
-        store(py, i, out.y);
-        store(pz, i, out.z);
+        lanes::<VC>(&c, inp, [&mut *px, &mut *py, &mut *pz], i, inp.start + i);
     }
+}
+
+/// One block of the kernel: particles `i..i + 8` of `x`, `w`, `p`; sums, box centres and
+/// damping rates at `g..g + 8`.
+#[inline(always)]
+fn lanes<const VC: bool>(c: &Consts, inp: &ApplyInput<'_>, p: [&mut [f32]; 3], i: usize, g: usize) {
+    let [px, py, pz] = p;
+    let s = inp.sums;
+    let (zero, one) = (F32s::ZERO, F32s::ONE);
+    let k = load(&s.count, g);
+    let active = k.simd_gt(zero) & load(inp.w, i).simd_gt(zero);
+    let inv = one / k.max(one);
+    let x = Vec3x8::load(inp.x[0], inp.x[1], inp.x[2], i);
+    let p0 = Vec3x8::load(px, py, pz, i);
+    let cs = Vec3x8::load(&s.c[0], &s.c[1], &s.c[2], g);
+    let f = Vec3x8::load(&s.f[0], &s.f[1], &s.f[2], g);
+    let disp = p0 - x;
+    let mut t = p0 + cs.scale(inv) + (f.scale(inv) - disp).scale(F32s::splat(0.5)).scale(c.mu);
+    if VC {
+        let n = Vec3x8::load(&s.n[0], &s.n[1], &s.n[2], g);
+        let nl = n.length_sq().sqrt();
+        let nh = n.scale(one / nl.max(F32s::splat(f32::MIN_POSITIVE)));
+        let e = load(&s.gap, g) * inv;
+        let q = Vec3x8::load(inp.q[0], inp.q[1], inp.q[2], g);
+        let back = (t - q).length_sq().simd_ge(c.r2);
+        let beta = (load(inp.b, g) * c.h).min(one);
+        let amt = beta * (t - x).dot(nh) + beta * beta * e * F32s::splat(0.25);
+        let osc = t - nh.scale(amt);
+        t = Vec3x8::select(back, q, osc);
+    }
+    let out = Vec3x8::select(active, t, p0);
+    store(px, i, out.x);
+    store(py, i, out.y);
+    store(pz, i, out.z);
 }
 
 /// Scalar twin of the velocity-correction kernel.

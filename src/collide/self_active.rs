@@ -45,7 +45,7 @@
 use rayon::prelude::*;
 
 use super::neighbours::Neighbours;
-use super::response::{apply, ApplyInput, ApplyMode, ContactSums};
+use super::response::{apply_runs, ApplyInput, ApplyMode, ContactSums};
 use super::self_pairs::{PairContact, PairCtx};
 use crate::lanes::{SharedVec3, Vec3x8, LANES};
 
@@ -53,7 +53,7 @@ use crate::lanes::{SharedVec3, Vec3x8, LANES};
 const PAIR_CHUNK: usize = 2048;
 
 /// Particle blocks one parallel task handles in the correction pass at least.
-const APPLY_BLOCKS: usize = 64;
+pub(crate) const APPLY_BLOCKS: usize = 64;
 
 /// Touched blocks from which the correction runs in parallel (see [`ActiveSet::apply`]).
 pub(crate) const APPLY_PARALLEL_BLOCKS: usize = 17;
@@ -334,64 +334,81 @@ impl ActiveSet {
     /// The velocity-correction kernel on the touched blocks of the predicted positions `p`
     /// (full particle arrays, padded to the lane width), with start positions `x` and inverse
     /// masses `w`. The kernel leaves a particle without contacts as it is, so the other blocks
-    /// are skipped. Parallel over the blocks when `parallel`; same bits either way. The caller
-    /// asks for it from [`APPLY_PARALLEL_BLOCKS`] touched blocks (a folded 100x100 cloth
-    /// touches ~170 a substep). Session 6 tried 1 024 (serial on the fold): the timeline's
+    /// are skipped. Parallel over fixed groups of [`APPLY_BLOCKS`] blocks when `parallel`, each
+    /// group's touched blocks in one kernel call; serially, the runs of consecutive touched
+    /// blocks in one call; the same bits either way. The caller asks for the parallel path
+    /// from [`APPLY_PARALLEL_BLOCKS`] touched blocks and more than one worker (a folded
+    /// 100x100 cloth touches ~170 a substep).
+    ///
+    /// Session 9: the kernel was called once per touched block in parallel, and once per run
+    /// serially, and each call set up its constants from an input struct just written
+    /// (perf annotate: ~37% of the kernel's samples on the two loads at its entry), and one
+    /// thread took the parallel path too. Now one call takes all the runs (the constants set
+    /// up once) and one worker goes serial: timeline example, basic VcCPBD, 150 steps,
+    /// alternate runs, correction column over the run 11.4-11.7 -> 3.8-3.9 ms on one thread,
+    /// 7.6-7.8 -> 4.9-5.3 on two (4.2-4.4 all serial: too close, in the VM's noise, to undo
+    /// the finding below). Session 6 tried 1 024 (serial on the fold): the timeline's
     /// correction column fell from 0.070 to 0.039 ms a step on two threads, but the step did
     /// not get faster: the idle second thread went to sleep and the next parallel pass (update
     /// and predict, outside the stage's timer) paid for waking it (a 100x100 fold run,
     /// 150 steps, 14 alternate runs: step 2.697 ms a step with the parallel correction
     /// against 2.788 serial, collision 1.019 against 1.018; slow phase of the VM), not kept.
     pub(crate) fn apply(&self, x: [&[f32]; 3], w: &[f32], p: [&mut [f32]; 3], ap: ApplyParams, parallel: bool, simd: bool) {
-        // `run` blocks from compact block `k`, particle block `b`.
-        let one = |k: usize, b: usize, run: usize, p: [&mut [f32]; 3]| {
-            let g = b * LANES..(b + run) * LANES;
-            let inp = ApplyInput {
-                start: k * LANES,
-                x: [&x[0][g.clone()], &x[1][g.clone()], &x[2][g.clone()]],
-                w: &w[g],
-                q: [&self.pred[0], &self.pred[1], &self.pred[2]],
-                b: &self.damping,
-                sums: &self.sums,
-                friction: ap.friction,
-                h: ap.h,
-                r: ap.r,
-            };
-            apply(&inp, p, ap.mode, simd);
-        };
+        let inp = |x, w| self.apply_input(x, w, ap);
         let [px, py, pz] = p;
         if parallel {
+            // Fixed groups of APPLY_BLOCKS particle blocks; each group's touched blocks as
+            // runs of one (group-local particle block, compact block).
             let nb = self.slot_of_block.len();
+            let len = APPLY_BLOCKS * LANES;
             (
-                px[..nb * LANES].par_chunks_mut(LANES),
-                py[..nb * LANES].par_chunks_mut(LANES),
-                pz[..nb * LANES].par_chunks_mut(LANES),
+                px[..nb * LANES].par_chunks_mut(len),
+                py[..nb * LANES].par_chunks_mut(len),
+                pz[..nb * LANES].par_chunks_mut(len),
             )
                 .into_par_iter()
-                .with_min_len(APPLY_BLOCKS)
                 .enumerate()
-                .for_each(|(b, (a, c, d))| {
-                    let k = self.slot_of_block[b];
-                    if k != INACTIVE && self.hit[k as usize] {
-                        one(k as usize, b, 1, [a, c, d]);
-                    }
+                .for_each(|(c, (a, b, d))| {
+                    let g = c * len..c * len + a.len();
+                    let b0 = c * APPLY_BLOCKS;
+                    let runs = (0..a.len() / LANES).filter_map(|l| {
+                        let k = self.slot_of_block[b0 + l];
+                        (k != INACTIVE && self.hit[k as usize]).then_some((k as usize, l, 1))
+                    });
+                    let x = [&x[0][g.clone()], &x[1][g.clone()], &x[2][g.clone()]];
+                    apply_runs(&inp(x, &w[g]), [a, b, d], runs, ap.mode, simd);
                 });
         } else {
             // Runs of touched blocks consecutive both in the compact arrays and in the
-            // particle arrays go to the kernel in one call (element-wise: the same bits).
+            // particle arrays (element-wise: the same bits).
             let mut t = 0;
-            while t < self.touched.len() {
-                let k = self.touched[t] as usize;
+            let runs = std::iter::from_fn(|| {
+                let k = *self.touched.get(t)? as usize;
                 let b = self.blocks[k] as usize;
                 let mut run = 1;
                 while t + run < self.touched.len() && self.touched[t + run] as usize == k + run && self.blocks[k + run] as usize == b + run
                 {
                     run += 1;
                 }
-                let g = b * LANES..(b + run) * LANES;
-                one(k, b, run, [&mut px[g.clone()], &mut py[g.clone()], &mut pz[g]]);
                 t += run;
-            }
+                Some((k, b, run))
+            });
+            apply_runs(&inp(x, w), [px, py, pz], runs, ap.mode, simd);
+        }
+    }
+
+    /// The kernel's input over the particle arrays `x`, `w` (or a range of them).
+    fn apply_input<'a>(&'a self, x: [&'a [f32]; 3], w: &'a [f32], ap: ApplyParams) -> ApplyInput<'a> {
+        ApplyInput {
+            start: 0,
+            x,
+            w,
+            q: [&self.pred[0], &self.pred[1], &self.pred[2]],
+            b: &self.damping,
+            sums: &self.sums,
+            friction: ap.friction,
+            h: ap.h,
+            r: ap.r,
         }
     }
 }

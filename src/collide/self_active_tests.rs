@@ -325,12 +325,13 @@ fn consecutive_pair_passes_leave_no_stale_sums() {
     assert!(ended > 0 && kept > 0, "{ended} ended, {kept} kept contacts");
 }
 
-/// The correction pass over the touched blocks in parallel (1 and 2 threads) gives the bits of
-/// the serial runs (the step asks for it only from `APPLY_PARALLEL_BLOCKS` touched blocks).
+/// The correction pass over the touched blocks in parallel (1 and 2 threads, several groups
+/// of blocks) gives the bits of the serial runs (the step asks for it only from
+/// `APPLY_PARALLEL_BLOCKS` touched blocks).
 #[test]
 fn parallel_correction_equals_serial() {
     let mut rng = signed(21);
-    let (rows, cols, s) = (30, 17, 0.02f32);
+    let (rows, cols, s) = (70, 17, 0.02f32);
     let (mut data, x0) = folded(rows, cols, s, 1.02 * s, 0.3 * s, &mut rng);
     data.config = Some(SelfCollision::default());
     let n = rows * cols;
@@ -343,7 +344,11 @@ fn parallel_correction_equals_serial() {
     }
     let w = padded(&vec![1.0f32; n]);
     let (want, _) = compact(&mut data, &x, &p, &w, n, false, true);
-    assert!(data.touched_blocks() > 8, "{} touched blocks", data.touched_blocks());
+    assert!(
+        data.touched_blocks() > 2 * crate::collide::self_active::APPLY_BLOCKS,
+        "{} touched blocks",
+        data.touched_blocks()
+    );
     let st = data.state.as_ref().unwrap();
     let ap = data.active().unwrap().apply_params(0.005);
     let xs = [&x[0][..], &x[1][..], &x[2][..]];

@@ -423,7 +423,8 @@ impl SelfCollisionData {
     pub(crate) fn apply(&mut self, x: [&[f32]; 3], w: &[f32], p: [&mut [f32]; 3], ap: ApplyParams, parallel: bool, simd: bool) {
         let t0 = Instant::now();
         if let Some(st) = self.state.as_ref().filter(|s| s.ready) {
-            let parallel = parallel && st.active.touched() >= APPLY_PARALLEL_BLOCKS;
+            // On one worker the serial path (runs of blocks, one kernel call) is the faster.
+            let parallel = parallel && st.active.touched() >= APPLY_PARALLEL_BLOCKS && rayon::current_num_threads() > 1;
             st.active.apply(x, w, p, ap, parallel, simd);
         }
         self.stats.phases.correction_s += t0.elapsed().as_secs_f64();
