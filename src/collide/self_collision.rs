@@ -373,8 +373,11 @@ impl SelfCollisionData {
 
     /// Where the speed clamp's chunks copy the predictions of the active blocks (the parallel
     /// form of [`SelfCollisionData::keep_predictions`], the same copy).
+    /// Only VcCPBD reads the box centres: the other responses get no sink (and the clamp
+    /// copies nothing).
     pub(crate) fn prediction_sink(&mut self) -> Option<PredictionSink<'_>> {
-        self.state.as_mut().map(|st| st.active.prediction_sink())
+        let vc = self.config.as_ref().is_some_and(|c| c.response == Response::Vccpbd);
+        self.state.as_mut().filter(|_| vc).map(|st| st.active.prediction_sink())
     }
 
     /// The pair pass: updates the near list, then fills the contact sums of the active blocks
