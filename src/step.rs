@@ -385,8 +385,9 @@ impl World {
             limit: TRAVEL_FACTOR * a.d / n_sub as f32,
             h,
         };
-        // Each chunk also copies the predictions of its active blocks (one parallel pass).
-        let sink = self.selfcol.prediction_sink();
+        // Each chunk also copies the predictions of its active blocks (one parallel pass),
+        // unless the correction derives them (no obstacles).
+        let sink = self.selfcol.prediction_sink(self.obstacles.is_empty());
         self.particles.for_chunks(parallel, |mut c| {
             clamp_speed(c.reborrow(), &cp, simd);
             if let Some(s) = &sink {
@@ -402,9 +403,11 @@ impl World {
         self.selfcol
             .pair_pass([&p.x, &p.y, &p.z], [&p.px, &p.py, &p.pz], &p.w, n, parallel, simd);
         let ap = a.apply_params(h);
+        let derive = self.selfcol.derives_centres(self.obstacles.is_empty());
         let p = &mut self.particles;
+        let v = derive.then_some([&p.vx[..], &p.vy[..], &p.vz[..]]);
         self.selfcol
-            .apply([&p.x, &p.y, &p.z], &p.w, [&mut p.px, &mut p.py, &mut p.pz], ap, parallel, simd);
+            .apply([&p.x, &p.y, &p.z], &p.w, v, [&mut p.px, &mut p.py, &mut p.pz], ap, parallel, simd);
     }
 }
 

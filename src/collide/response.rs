@@ -124,6 +124,10 @@ pub struct ApplyInput<'a> {
     pub w: &'a [f32],
     /// Predicted positions (box centres), global indexing.
     pub q: [&'a [f32]; 3],
+    /// Velocities of the substep, indexed like `x`: when given, the box centres are
+    /// `x + h v` (the predictions as predict and the speed clamp compute them) and `q` is
+    /// not read.
+    pub v: Option<[&'a [f32]; 3]>,
     /// Damping rates `b`, 1/s, global indexing.
     pub b: &'a [f32],
     /// Contact sums, global indexing.
@@ -180,6 +184,7 @@ pub(crate) fn apply_runs(inp: &ApplyInput<'_>, p: [&mut [f32]; 3], runs: impl It
                     start: k * LANES,
                     x: [&inp.x[0][g.clone()], &inp.x[1][g.clone()], &inp.x[2][g.clone()]],
                     w: &inp.w[g.clone()],
+                    v: inp.v.map(|v| [&v[0][g.clone()], &v[1][g.clone()], &v[2][g.clone()]]),
                     ..*inp
                 };
                 apply_scalar(&one, [&mut px[g.clone()], &mut py[g.clone()], &mut pz[g]], m == ApplyMode::Vccpbd);
@@ -235,7 +240,10 @@ fn lanes<const VC: bool>(c: &Consts, inp: &ApplyInput<'_>, p: [&mut [f32]; 3], i
         let nl = n.length_sq().sqrt();
         let nh = n.scale(one / nl.max(F32s::splat(f32::MIN_POSITIVE)));
         let e = load(&s.gap, g) * inv;
-        let q = Vec3x8::load(inp.q[0], inp.q[1], inp.q[2], g);
+        let q = match inp.v {
+            Some(v) => x + Vec3x8::load(v[0], v[1], v[2], i).scale(c.h),
+            None => Vec3x8::load(inp.q[0], inp.q[1], inp.q[2], g),
+        };
         let back = (t - q).length_sq().simd_ge(c.r2);
         let beta = (load(inp.b, g) * c.h).min(one);
         let amt = beta * (t - x).dot(nh) + beta * beta * e * F32s::splat(0.25);
@@ -274,7 +282,10 @@ fn apply_scalar(inp: &ApplyInput<'_>, p: [&mut [f32]; 3], vc: bool) {
             let il = 1.0 / nl.max(f32::MIN_POSITIVE);
             let nh = n.map(|c| c * il);
             let e = s.gap[g] * inv;
-            let q = [inp.q[0][g], inp.q[1][g], inp.q[2][g]];
+            let q = match inp.v {
+                Some(v) => [x[0] + v[0][i] * h, x[1] + v[1][i] * h, x[2] + v[2][i] * h],
+                None => [inp.q[0][g], inp.q[1][g], inp.q[2][g]],
+            };
             let tq = [t[0] - q[0], t[1] - q[1], t[2] - q[2]];
             if dot(tq, tq) >= r2 {
                 t = q;

@@ -66,7 +66,7 @@ proptest! {
         let run = |simd: bool, par: bool| {
             let mut p = base.clone();
             p.for_chunks(par, |c| {
-                let inp = ApplyInput { start: c.start, x: [&*c.x, &*c.y, &*c.z], w: c.w, q: [&q[0], &q[1], &q[2]], b: &b, sums: &s,
+                let inp = ApplyInput { start: c.start, x: [&*c.x, &*c.y, &*c.z], w: c.w, q: [&q[0], &q[1], &q[2]], v: None, b: &b, sums: &s,
                     friction: friction_pct as f32 / 100.0, h, r: r_milli as f32 * 1e-3 };
                 apply(&inp, [c.px, c.py, c.pz], mode, simd);
             });
@@ -102,6 +102,88 @@ proptest! {
     }
 }
 
+/// Box centres derived from the velocities (`x + h v`, as predict and the clamp compute the
+/// predictions) give the bits of the centres read from a copy, SIMD and scalar, in chunks
+/// and in runs; the box test sends some particles back to their centre.
+#[test]
+fn derived_box_centres_equal_the_copied_ones() {
+    let h = 0.01f32;
+    let mut base = cloud(300, 9);
+    for i in 0..base.padded_len() {
+        base.px[i] = base.x[i] + base.vx[i] * h;
+        base.py[i] = base.y[i] + base.vy[i] * h;
+        base.pz[i] = base.z[i] + base.vz[i] * h;
+    }
+    let len = base.padded_len();
+    let s = sums(len, 9);
+    let b = vec![30.0; len];
+    let q = [base.px.clone(), base.py.clone(), base.pz.clone()];
+    let run = |derive: bool, simd: bool, runs: bool| {
+        let mut p = base.clone();
+        let v = [base.vx.clone(), base.vy.clone(), base.vz.clone()];
+        let inp = |x, w, v, start| centres_input(x, w, derive.then_some(v), &q, &b, &s, start, h);
+        if runs {
+            let xs = [&base.x[..], &base.y[..], &base.z[..]];
+            let blocks = len / crate::lanes::LANES;
+            let runs = [(0, 0, 3), (3, 3, blocks - 3)].into_iter();
+            let i = inp(xs, &base.w[..], [&v[0][..], &v[1][..], &v[2][..]], 0);
+            super::apply_runs(&i, [&mut p.px[..], &mut p.py[..], &mut p.pz[..]], runs, ApplyMode::Vccpbd, simd);
+        } else {
+            p.for_chunks(false, |c| {
+                let g = c.start..c.start + c.x.len();
+                let vs = [&v[0][g.clone()], &v[1][g.clone()], &v[2][g]];
+                let i = centres_input([&*c.x, &*c.y, &*c.z], c.w, derive.then_some(vs), &q, &b, &s, c.start, h);
+                apply(&i, [c.px, c.py, c.pz], ApplyMode::Vccpbd, simd);
+            });
+        }
+        p
+    };
+    let want = run(false, false, false);
+    let back = (0..300)
+        .filter(|&i| base.w[i] > 0.0 && s.count[i] > 0.0 && want.px[i].to_bits() == q[0][i].to_bits())
+        .count();
+    assert!(back > 10, "{back} particles sent back to their box centre");
+    for (derive, simd, runs) in [
+        (true, false, false),
+        (true, true, false),
+        (true, false, true),
+        (true, true, true),
+        (false, true, true),
+    ] {
+        assert_eq!(
+            bits(&run(derive, simd, runs)),
+            bits(&want),
+            "derive {derive}, simd {simd}, runs {runs}"
+        );
+    }
+}
+
+/// The kernel's input of [`derived_box_centres_equal_the_copied_ones`].
+#[allow(clippy::too_many_arguments)]
+fn centres_input<'a>(
+    x: [&'a [f32]; 3],
+    w: &'a [f32],
+    v: Option<[&'a [f32]; 3]>,
+    q: &'a [Vec<f32>; 3],
+    b: &'a [f32],
+    sums: &'a ContactSums,
+    start: usize,
+    h: f32,
+) -> ApplyInput<'a> {
+    ApplyInput {
+        start,
+        x,
+        w,
+        q: [&q[0], &q[1], &q[2]],
+        v,
+        b,
+        sums,
+        friction: 0.3,
+        h,
+        r: 0.002,
+    }
+}
+
 #[test]
 fn apply_leaves_pinned_and_contactless_particles_alone() {
     let base = cloud(20, 5);
@@ -116,6 +198,7 @@ fn apply_leaves_pinned_and_contactless_particles_alone() {
             x: [&*c.x, &*c.y, &*c.z],
             w: c.w,
             q: [&base.px, &base.py, &base.pz],
+            v: None,
             b: &b,
             sums: &s,
             friction: 0.3,
@@ -148,6 +231,7 @@ fn vccpbd_puts_a_far_moved_particle_back_to_its_box_centre() {
             x: [&*c.x, &*c.y, &*c.z],
             w: c.w,
             q: [&q[0], &q[1], &q[2]],
+            v: None,
             b: &b,
             sums: &s,
             friction: 0.0,

@@ -353,8 +353,18 @@ impl ActiveSet {
     /// and predict, outside the stage's timer) paid for waking it (a 100x100 fold run,
     /// 150 steps, 14 alternate runs: step 2.697 ms a step with the parallel correction
     /// against 2.788 serial, collision 1.019 against 1.018; slow phase of the VM), not kept.
-    pub(crate) fn apply(&self, x: [&[f32]; 3], w: &[f32], p: [&mut [f32]; 3], ap: ApplyParams, parallel: bool, simd: bool) {
-        let inp = |x, w| self.apply_input(x, w, ap);
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn apply(
+        &self,
+        x: [&[f32]; 3],
+        w: &[f32],
+        v: Option<[&[f32]; 3]>,
+        p: [&mut [f32]; 3],
+        ap: ApplyParams,
+        parallel: bool,
+        simd: bool,
+    ) {
+        let inp = |x, w, v| self.apply_input(x, w, v, ap);
         let [px, py, pz] = p;
         if parallel {
             // Fixed groups of APPLY_BLOCKS particle blocks; each group's touched blocks as
@@ -376,7 +386,8 @@ impl ActiveSet {
                         (k != INACTIVE && self.hit[k as usize]).then_some((k as usize, l, 1))
                     });
                     let x = [&x[0][g.clone()], &x[1][g.clone()], &x[2][g.clone()]];
-                    apply_runs(&inp(x, &w[g]), [a, b, d], runs, ap.mode, simd);
+                    let v = v.map(|v| [&v[0][g.clone()], &v[1][g.clone()], &v[2][g.clone()]]);
+                    apply_runs(&inp(x, &w[g], v), [a, b, d], runs, ap.mode, simd);
                 });
         } else {
             // Runs of touched blocks consecutive both in the compact arrays and in the
@@ -393,16 +404,17 @@ impl ActiveSet {
                 t += run;
                 Some((k, b, run))
             });
-            apply_runs(&inp(x, w), [px, py, pz], runs, ap.mode, simd);
+            apply_runs(&inp(x, w, v), [px, py, pz], runs, ap.mode, simd);
         }
     }
 
     /// The kernel's input over the particle arrays `x`, `w` (or a range of them).
-    fn apply_input<'a>(&'a self, x: [&'a [f32]; 3], w: &'a [f32], ap: ApplyParams) -> ApplyInput<'a> {
+    fn apply_input<'a>(&'a self, x: [&'a [f32]; 3], w: &'a [f32], v: Option<[&'a [f32]; 3]>, ap: ApplyParams) -> ApplyInput<'a> {
         ApplyInput {
             start: 0,
             x,
             w,
+            v,
             q: [&self.pred[0], &self.pred[1], &self.pred[2]],
             b: &self.damping,
             sums: &self.sums,

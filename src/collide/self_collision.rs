@@ -145,6 +145,9 @@ pub struct SelfCollisionData {
     /// Rebuild the candidate lists every step (no reuse): the reference the tests hold the
     /// reuse to.
     pub(crate) fresh_every_step: bool,
+    /// Copy the box centres in the clamp even when the correction could derive them (tests
+    /// compare both).
+    pub(crate) copy_centres: bool,
 }
 
 #[derive(Clone, Debug)]
@@ -374,10 +377,20 @@ impl SelfCollisionData {
     /// Where the speed clamp's chunks copy the predictions of the active blocks (the parallel
     /// form of [`SelfCollisionData::keep_predictions`], the same copy).
     /// Only VcCPBD reads the box centres: the other responses get no sink (and the clamp
-    /// copies nothing).
-    pub(crate) fn prediction_sink(&mut self) -> Option<PredictionSink<'_>> {
+    /// copies nothing), and neither does a substep whose centres the correction derives from
+    /// the velocities (`derive`: nothing changes the predictions or the velocities between
+    /// predict and the clamp, i.e. no obstacles; then every free particle's prediction is
+    /// `x + h v`, computed alike by both, and the velocities stay until the update).
+    pub(crate) fn prediction_sink(&mut self, derive: bool) -> Option<PredictionSink<'_>> {
         let vc = self.config.as_ref().is_some_and(|c| c.response == Response::Vccpbd);
-        self.state.as_mut().filter(|_| vc).map(|st| st.active.prediction_sink())
+        let copy = vc && !self.derives_centres(derive);
+        self.state.as_mut().filter(|_| copy).map(|st| st.active.prediction_sink())
+    }
+
+    /// Whether the correction derives the box centres from the velocities when the step
+    /// allows it (`derive`; see [`SelfCollisionData::prediction_sink`]).
+    pub(crate) fn derives_centres(&self, derive: bool) -> bool {
+        derive && !self.copy_centres
     }
 
     /// The pair pass: updates the near list, then fills the contact sums of the active blocks
@@ -422,13 +435,25 @@ impl SelfCollisionData {
         ph.mid_refreshes += u64::from(mid == MidUpdate::Refreshed);
     }
 
-    /// The velocity-correction kernel on the active blocks of the predicted positions `p`.
-    pub(crate) fn apply(&mut self, x: [&[f32]; 3], w: &[f32], p: [&mut [f32]; 3], ap: ApplyParams, parallel: bool, simd: bool) {
+    /// The velocity-correction kernel on the active blocks of the predicted positions `p`;
+    /// with the substep's velocities `v`, the box centres are derived as `x + h v` instead of
+    /// read from the copy the clamp kept (see [`SelfCollisionData::prediction_sink`]).
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn apply(
+        &mut self,
+        x: [&[f32]; 3],
+        w: &[f32],
+        v: Option<[&[f32]; 3]>,
+        p: [&mut [f32]; 3],
+        ap: ApplyParams,
+        parallel: bool,
+        simd: bool,
+    ) {
         let t0 = Instant::now();
         if let Some(st) = self.state.as_ref().filter(|s| s.ready) {
             // On one worker the serial path (runs of blocks, one kernel call) is the faster.
             let parallel = parallel && st.active.touched() >= APPLY_PARALLEL_BLOCKS && rayon::current_num_threads() > 1;
-            st.active.apply(x, w, p, ap, parallel, simd);
+            st.active.apply(x, w, v, p, ap, parallel, simd);
         }
         self.stats.phases.correction_s += t0.elapsed().as_secs_f64();
     }
