@@ -38,7 +38,8 @@
 //!   the reuse saves; the measurements are in `self_verlet`). With the hash such slow steps
 //!   build no candidate lists at all (session 8): every block is active and the substeps
 //!   query their mid list from a hash of the predicted positions (`self_verlet`,
-//!   `self_near`). The hash query tests the
+//!   `self_near`), refreshed afterwards for the few particles that move past its bound
+//!   (`self_mid`, per-particle references; the same lists). The hash query tests the
 //!   rest-neighbour rule in its eight-lane mask (the `hash_rest` module), so only kept pairs
 //!   leave the lanes, and walks the cells over a half shell (the `hash_cells` module: each
 //!   pair tested once, the rows looked up once a cell; a falling step's query 1.45-1.84 ms

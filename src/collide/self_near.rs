@@ -41,6 +41,24 @@
 //! positions ([`MidSource::Hash`]): every pair within `r₁` but the rest neighbours, all
 //! blocks active. The argument above holds with "every pair" for "the candidates".
 //!
+//! Session 9: each of those mid queries was triggered by 1 to 9 of the 10 000 particles
+//! passing the bound (the 100x100 basic fold, 13 queries of ~1.35 ms on one thread). Each
+//! particle now keeps its own reference, and only the particles past the bound are refreshed:
+//! probed in the hash of the last query, their pairs merged into a short list beside the
+//! query's (module `self_mid`; the same near lists). A run then makes 4 queries and ~66
+//! refreshes (~0.1 ms each at first, then ~20 µs once the merge into the query's list went).
+//! Timeline example, basic VcCPBD, 150 steps, one thread, two alternate runs: pairs column
+//! 54.1-55.7 -> 43.6 ms, stage 105.5-107.6 -> 94.6-94.8. `MID_SKIN` 0.5 and 0.75 (more
+//! queries: the stale particles reach their cap sooner) measured slower (pairs 52-54 and
+//! 47 ms), 1.5 and a stale cap four times larger the same within noise.
+//!
+//! Tried in session 9 and not kept: the near list refreshed per particle the same way (an
+//! index of the mid list by particle, the moved particles' pairs re-tested against the other
+//! ends' references, exact with a near skin up to `d / 3`). The folded cloth's motion is
+//! collective at the near list's scale: ~760 refreshes a run with ~66 particles each (up to
+//! ~180), nearly every substep, each scanning all particles; pairs column 44.4-44.5 -> 57.5-58.0
+//! ms (adaptive skin) and 62-64 ms (skin fixed at `d / 3`, ~9 500 near pairs).
+//!
 //! With rebuilds that cheap the near skin is sized for `NEAR_LIFETIME = 5` substeps at the
 //! fastest particle's rate (20 before): with 20 one fast particle of the movement-speed fold
 //! set the skin to its cap and the substeps then tested ~40 000 near pairs for the rest of
