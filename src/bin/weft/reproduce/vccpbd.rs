@@ -33,6 +33,12 @@
 //! collision a step over the 12 hash rows (30.6-59.2x), the basic rows 0.66-0.79 (30.6-41.4x);
 //! one thread repeats within 1-3% here, two threads drift by up to 1.35 times between runs
 //! (medians of `--repeat 5`: 0.41-0.69 ms, slowest rows 38-53x depending on the spell).
+//! Session 9 (mid lists refreshed per particle, one correction call for all runs, no copy of
+//! the box centres), medians of `--repeat 3` on one thread: 0.425-0.630 ms over the 12 hash
+//! rows (41.9-74.0x), sum 5.97 ms against 7.53 at the session's start; the basic rows
+//! 0.564-0.630 (41.9-48.5x) are the only ones below 50x. Two threads swing between spells of
+//! the VM: basic rows 0.435-0.499 in good ones (basic VcCPBD 48.7-55.7x), 0.68-0.75 in slow
+//! ones (slower than one thread).
 //!
 //! A second table splits the collision time by phase (hash build, query, the rest of the step
 //! start, substep pair passes, substep corrections, the speed clamp) and gives the number of
