@@ -152,7 +152,8 @@ impl HashedMid {
     ) -> bool {
         let Some(hash) = self.hash.as_ref() else { return false };
         let covers = blocks.len() * LANES >= n && blocks.iter().enumerate().all(|(k, &b)| b as usize == k);
-        if self.built != Some((n, r.to_bits())) || !covers || at[0].len() < n {
+        let short = at.iter().any(|a| a.len() < n) || p.iter().any(|c| c.len() < n);
+        if self.built != Some((n, r.to_bits())) || !covers || short {
             return false;
         }
         let lim2 = lim * lim;
