@@ -46,7 +46,7 @@
 //! particle now keeps its own reference, and only the particles past the bound are refreshed:
 //! probed in the hash of the last query, their pairs merged into a short list beside the
 //! query's (module `self_mid`; the same near lists). A run then makes 4 queries and ~66
-//! refreshes (~0.1 ms each at first, then ~20 µs once the merge into the query's list went).
+//! refreshes (~0.1 ms each at first, ~40 µs once the merge into the query's list went).
 //! Timeline example, basic VcCPBD, 150 steps, one thread, two alternate runs: pairs column
 //! 54.1-55.7 -> 43.6 ms, stage 105.5-107.6 -> 94.6-94.8. `MID_SKIN` 0.5 and 0.75 (more
 //! queries: the stale particles reach their cap sooner) measured slower (pairs 52-54 and
