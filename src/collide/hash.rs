@@ -30,7 +30,10 @@
 //!
 //! # Choices
 //! * `table_size` is the smallest power of two `>= 2n` (at least 16): the paper's "about twice
-//!   the particle count", rounded to a power of two so the modulo is a mask.
+//!   the particle count", rounded to a power of two so the modulo is a mask. Session 9 tried
+//!   others on the 100x100 fold (`examples/self_collision_timeline`, one thread, two alternate
+//!   runs, query column over the run): `n / 2` 31.5-31.9 ms, `n` 27.4-27.9, `2 n` 26.3-26.6,
+//!   `4 n` 26.2-26.3 with a slower build (4.6-4.7 against 4.1-4.2 ms); `2 n` stays.
 //! * Bucket of cell `(cx, cy, cz)` = `mix(cy, cz) + cx` modulo `table_size`, `mix` being the
 //!   splitmix64 finalizer: the cells of one row along x sit in consecutive buckets, so a query
 //!   reads each row of its search box as one contiguous range of `cell_entries` (9 to 16 ranges
