@@ -37,8 +37,9 @@
 //! the box centres), medians of `--repeat 3` on one thread: 0.425-0.630 ms over the 12 hash
 //! rows (41.9-74.0x), sum 5.97 ms against 7.53 at the session's start; the basic rows
 //! 0.564-0.630 (41.9-48.5x) are the only ones below 50x. Two threads swing between spells of
-//! the VM: basic rows 0.435-0.499 in good ones (basic VcCPBD 48.7-55.7x), 0.68-0.75 in slow
-//! ones (slower than one thread).
+//! the VM: in good ones, `--repeat 5`, every run of every hash row at least 51.1x (basic
+//! VcCPBD 0.432-0.474 ms, the goal met for all three responses); in slow ones the basic rows
+//! take 0.68-0.75 ms (33-41x, slower than one thread).
 //!
 //! A second table splits the collision time by phase (hash build, query, the rest of the step
 //! start, substep pair passes, substep corrections, the speed clamp) and gives the number of
