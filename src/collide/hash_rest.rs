@@ -172,52 +172,6 @@ impl SpatialHash {
     }
 }
 
-impl SpatialHash {
-    /// Every particle `j != i` of the last build within `max_dist` of the point `p` (not
-    /// necessarily particle `i`'s position at the build) that is not a rest neighbour of
-    /// `i` (same cloth `cloth`, rest distance to `rest` at most `skip`): the rule of
-    /// [`SpatialHash::query_upper_unskipped`] for one particle, on both sides of it, tested
-    /// with the same operations (a pair decides alike whichever side tests it). Calls
-    /// `emit(j)` for each, in slot order, and returns `false`, calling nothing, when `p`'s
-    /// search box spans more than four cells an axis (a point far off the build's scale) or
-    /// no rest data is attached. `p` must be finite.
-    #[allow(clippy::too_many_arguments)]
-    pub(crate) fn probe_unskipped(
-        &self,
-        i: u32,
-        p: [f32; 3],
-        rest: [f32; 3],
-        cloth: u32,
-        max_dist: f32,
-        skip: f32,
-        mut emit: impl FnMut(u32),
-    ) -> bool {
-        if !self.rest.valid {
-            return false;
-        }
-        let q = Probe {
-            i,
-            p,
-            md2: max_dist * max_dist,
-            r: rest,
-            cloth,
-            s2: skip * skip,
-        };
-        let rc = &self.rest;
-        self.box_ranges(p, search_radius(max_dist), |b0, b1| {
-            for k in self.cell_start[b0] as usize..self.cell_start[b1] as usize {
-                let (dx, dy, dz) = (q.r[0] - rc.x[k], q.r[1] - rc.y[k], q.r[2] - rc.z[k]);
-                if rc.ids[k] != q.i
-                    && within(q.p[0], q.p[1], q.p[2], self.sx[k], self.sy[k], self.sz[k], q.md2)
-                    && !(rc.cloth[k] == q.cloth && dx * dx + dy * dy + dz * dz <= q.s2)
-                {
-                    emit(rc.ids[k]);
-                }
-            }
-        })
-    }
-}
-
 impl RestCopy {
     /// The scalar decision for slot `k` (the twin of the lanes).
     #[inline(always)]

@@ -261,8 +261,7 @@ impl SelfCollisionData {
     /// them apart), so the broadphase drops them once per step.
     #[inline]
     pub(crate) fn rest_skipped(&self, i: usize, j: usize, d: f32) -> bool {
-        let skip = REST_SKIP_FACTOR * d;
-        self.cloth_of[i] == self.cloth_of[j] && dist2(&self.rest, i, j) <= skip * skip
+        RestRule::of(&self.rest, &self.cloth_of, d).skips(i, j)
     }
 
     /// Copies the step's start positions and runs the broadphase on `x` with the reach
@@ -405,11 +404,7 @@ impl SelfCollisionData {
         };
         let q = QUERY_FACTOR * a.d;
         let source = if st.verlet.is_direct() {
-            MidSource::Hash(RestRule {
-                rest: [&self.rest[0], &self.rest[1], &self.rest[2]],
-                cloth_of: &self.cloth_of,
-                skip: REST_SKIP_FACTOR * a.d,
-            })
+            MidSource::Hash(RestRule::of(&self.rest, &self.cloth_of, a.d))
         } else {
             // The candidate lists reach `q` plus their skin.
             MidSource::Candidates {

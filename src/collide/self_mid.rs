@@ -31,7 +31,7 @@
 
 use super::hash::SpatialHash;
 use super::neighbours::{within, Neighbours};
-use super::self_collision::build_hash;
+use super::self_collision::{build_hash, REST_SKIP_FACTOR};
 use crate::lanes::LANES;
 
 /// Most stale particles (taken new references since the last full build) a refresh may
@@ -51,7 +51,17 @@ pub(crate) struct RestRule<'a> {
     pub skip: f32,
 }
 
-impl RestRule<'_> {
+impl<'a> RestRule<'a> {
+    /// The self-collision stage's rule for collision distance `d`: rest neighbours up to
+    /// `REST_SKIP_FACTOR d`.
+    pub(crate) fn of(rest: &'a [Vec<f32>; 3], cloth_of: &'a [u32], d: f32) -> Self {
+        RestRule {
+            rest: [&rest[0], &rest[1], &rest[2]],
+            cloth_of,
+            skip: REST_SKIP_FACTOR * d,
+        }
+    }
+
     /// Whether `(i, j)` are rest neighbours (the hash's rule, the same operations).
     #[inline]
     pub(crate) fn skips(&self, i: usize, j: usize) -> bool {
@@ -216,24 +226,30 @@ impl HashedMid {
         self.fresh.sort_unstable();
         self.fresh.dedup();
         // The added pairs without those with a moved end, merged with the new ones (which
-        // all have one): both ordered, no pair in both.
-        self.merged.clear();
-        let mut f = self.fresh.iter().copied().peekable();
-        for &(a, b) in &self.extra {
-            if self.is_moved[a as usize] || self.is_moved[b as usize] {
-                continue;
-            }
-            while let Some(x) = f.next_if(|&x| x < (a, b)) {
-                self.merged.push(x);
-            }
-            self.merged.push((a, b));
-        }
-        self.merged.extend(f);
-        std::mem::swap(&mut self.extra, &mut self.merged);
+        // all have one, so no pair is in both).
+        let is_moved = &self.is_moved;
+        self.extra.retain(|&(a, b)| !is_moved[a as usize] && !is_moved[b as usize]);
+        merge_unique(&mut self.extra, &self.fresh, &mut self.merged);
         for &i in &self.moved {
             self.is_moved[i as usize] = false;
         }
         self.refreshes += 1;
         true
     }
+}
+
+/// `a` with the pairs of `b` merged in, both ordered, a pair in both once (`tmp` the buffer).
+pub(crate) fn merge_unique(a: &mut Vec<(u32, u32)>, b: &[(u32, u32)], tmp: &mut Vec<(u32, u32)>) {
+    tmp.clear();
+    tmp.reserve(a.len() + b.len());
+    let mut f = b.iter().copied().peekable();
+    for &x in a.iter() {
+        while let Some(y) = f.next_if(|&y| y < x) {
+            tmp.push(y);
+        }
+        f.next_if_eq(&x);
+        tmp.push(x);
+    }
+    tmp.extend(f);
+    std::mem::swap(a, tmp);
 }

@@ -146,7 +146,7 @@
 //! 4-10 substeps. (Session 7 changed the rule: see "Mid list" above.)
 
 use super::neighbours::Neighbours;
-use super::self_mid::{HashedMid, RestRule};
+use super::self_mid::{merge_unique, HashedMid, RestRule};
 use super::self_near_scan::{collect, filter_pairs, filter_range, ScanScratch};
 use super::self_verlet::SAFE;
 use crate::lanes::{load, F32s, LANES};
@@ -352,22 +352,6 @@ impl NearList {
     pub(crate) fn ranges(&self) -> usize {
         self.scratch.bounds.len().saturating_sub(1)
     }
-}
-
-/// `a` with the pairs of `b` merged in, both ordered, a pair in both once (`tmp` the buffer).
-fn merge_unique(a: &mut Vec<(u32, u32)>, b: &[(u32, u32)], tmp: &mut Vec<(u32, u32)>) {
-    tmp.clear();
-    tmp.reserve(a.len() + b.len());
-    let mut f = b.iter().copied().peekable();
-    for &x in a.iter() {
-        while let Some(y) = f.next_if(|&y| y < x) {
-            tmp.push(y);
-        }
-        f.next_if_eq(&x);
-        tmp.push(x);
-    }
-    tmp.extend(f);
-    std::mem::swap(a, tmp);
 }
 
 /// The three coordinate arrays as slices.
