@@ -59,6 +59,10 @@
 //! ~180), nearly every substep, each scanning all particles; pairs column 44.4-44.5 -> 57.5-58.0
 //! ms (adaptive skin) and 62-64 ms (skin fixed at `d / 3`, ~9 500 near pairs).
 //!
+//! Session 10: a few fast particles (at most `FAST_MAX`) get the skin's cap while the rest of
+//! a folded cloth keeps a narrow skin (module `self_near_fast`, where the argument and the
+//! figures are).
+//!
 //! With rebuilds that cheap the near skin is sized for `NEAR_LIFETIME = 5` substeps at the
 //! fastest particle's rate (20 before): with 20 one fast particle of the movement-speed fold
 //! set the skin to its cap and the substeps then tested ~40 000 near pairs for the rest of
@@ -74,7 +78,7 @@
 //! candidate test of the near pairs 15 µs (~5 600 near pairs), zeroing and storing the sums
 //! 16 µs, the ~205 contacts themselves 4 µs. What changed, and why:
 //! * the displacement check and the copy of the build positions cover only the active
-//!   blocks ([`max_disp2_blocks`]): every near pair has both ends in them, and while the
+//!   blocks ([`max_disp2_blocks`](super::self_near_moves::max_disp2_blocks)): every near pair has both ends in them, and while the
 //!   cloth falls they are a few of the 1 250 blocks (the check ran over all 10 000
 //!   particles every substep);
 //! * the rebuild ([`collect_near`]) tests eight candidates of a particle at a time from a
@@ -147,9 +151,11 @@
 
 use super::neighbours::Neighbours;
 use super::self_mid::{merge_unique, HashedMid, RestRule};
-use super::self_near_scan::{collect, filter_pairs, filter_range, ScanScratch};
+use super::self_near_fast::{FastSet, FAST_MAX};
+use super::self_near_moves::{as_refs, copy_blocks, max_disp2_blocks};
+use super::self_near_scan::{collect, filter_pairs, filter_range, Reach, ScanScratch};
 use super::self_verlet::SAFE;
-use crate::lanes::{load, F32s, LANES};
+use crate::lanes::LANES;
 
 /// Largest near-list skin over the collision distance (the adaptive skin's cap) when the
 /// near list is built from the candidates directly.
@@ -179,6 +185,8 @@ pub(crate) struct NearList {
     /// Positions of the build (the active blocks' particles, block by block).
     at: [Vec<f32>; 3],
     skin: f32,
+    /// The particles with the wide skin (module `self_near_fast`).
+    pub(crate) fast: FastSet,
     valid: bool,
     subs_since: u32,
     /// Builds so far.
@@ -229,7 +237,9 @@ impl NearList {
 
     /// Makes the list hold for the predicted positions `p`: kept if no particle of the active
     /// `blocks` (ascending; every candidate pair has both ends in them) moved more than
-    /// `0.49 s₂` since the build, else rebuilt with a new skin from the mid list, itself
+    /// `0.49 s₂` since the build (`0.49` of the cap for the fast particles of a list built
+    /// from the mid list, module `self_near_fast`), else rebuilt with a new skin from the mid
+    /// list, itself
     /// rebuilt from `source` first when one of those particles moved more than
     /// `0.49 MID_SKIN d` since its build. Only the active blocks are checked and copied:
     /// before the fold they are a few, and the particles outside them have no candidate. The
@@ -254,16 +264,41 @@ impl NearList {
             MidSource::Hash(_) => true,
         };
         let cap = if use_mid { MID_NEAR_SKIN_MAX } else { NEAR_SKIN_MAX } * d;
+        let mut few = false;
         if self.valid && self.at[0].len() == blocks.len() * LANES {
-            let m2 = max_disp2_blocks(p, as_refs(&self.at), blocks, simd);
+            let at = as_refs(&self.at);
+            let m2 = max_disp2_blocks(p, at, blocks, self.fast.mask(), simd);
             let lim = 0.5 * SAFE * self.skin;
             self.subs_since += 1;
-            if m2 <= lim * lim {
+            // Every substep, so the fast particles' largest displacements include this one.
+            let fast_out = self.fast.passed(p, at);
+            if m2 <= lim * lim && !fast_out {
                 return MidUpdate::Kept;
             }
             // Aim at about NEAR_LIFETIME substeps between builds, within [d / 8, cap].
-            let rate = if m2.is_finite() { m2.sqrt() / self.subs_since as f32 } else { d };
-            self.skin = (NEAR_LIFETIME * rate).clamp(0.125 * d, cap);
+            let subs = self.subs_since as f32;
+            let skin_for = |m2: f32| {
+                let rate = if m2.is_finite() { m2.sqrt() / subs } else { d };
+                (NEAR_LIFETIME * rate).clamp(0.125 * d, cap)
+            };
+            self.skin = if use_mid {
+                // A few particles past the bound get the wide skin when that narrows the
+                // bulk's, or when they were fast and passed it again (module
+                // `self_near_fast`). Only from the mid list (a folded cloth): while the
+                // cloth falls its motion is collective and the split would only cost.
+                let split = self.fast.split(p, at, blocks, lim, simd);
+                let (all, bulk) = (skin_for(split.all), skin_for(split.bulk));
+                few = split.over <= FAST_MAX && split.all.is_finite() && (bulk < all || self.fast.kept_any());
+                if few {
+                    bulk
+                } else {
+                    all
+                }
+            } else if self.fast.mask().is_some() {
+                skin_for(max_disp2_blocks(p, at, blocks, None, simd))
+            } else {
+                skin_for(m2)
+            };
         } else if !self.valid {
             self.skin = 0.25 * d;
         }
@@ -271,22 +306,29 @@ impl NearList {
         // on it).
         self.skin = self.skin.min(cap);
         copy_blocks(p, blocks, &mut self.at);
+        if few {
+            self.fast.set(self.at[0].len(), self.skin, cap);
+        } else {
+            self.fast.clear();
+        }
         let r = d + self.skin;
         let mut mid = MidUpdate::Kept;
         match source {
             MidSource::Candidates { cand, .. } if !use_mid => {
                 self.mid_valid = false;
-                collect(cand, p, n, r * r, simd, parallel, &mut self.scratch, &mut self.pairs);
+                let reach = self.fast.reach(r);
+                collect(cand, p, n, reach, simd, parallel, &mut self.scratch, &mut self.pairs);
             }
             source => {
                 mid = self.update_mid(source, p, blocks, n, d, simd, parallel);
-                filter_pairs(&self.mid, p, n, r * r, simd, parallel, &mut self.scratch, &mut self.pairs);
+                let reach = self.fast.reach(r);
+                filter_pairs(&self.mid, p, n, reach, simd, parallel, &mut self.scratch, &mut self.pairs);
                 let extra = self.hashed.extra();
                 if !extra.is_empty() {
                     // The refreshes' pairs (module `self_mid`): filtered alike, then merged in
                     // order, a pair in both lists once.
                     self.extra_near.clear();
-                    filter_range(extra, p, r * r, simd, &self.scratch.xyz, &mut self.extra_near);
+                    filter_range(extra, p, reach, simd, &self.scratch.xyz, &mut self.extra_near);
                     merge_unique(&mut self.pairs, &self.extra_near, &mut self.merged);
                 }
             }
@@ -318,7 +360,7 @@ impl NearList {
         let lim = 0.5 * SAFE * MID_SKIN * d;
         let r = d * (1.0 + MID_NEAR_SKIN_MAX + MID_SKIN);
         if self.mid_valid && self.mid_at[0].len() == blocks.len() * LANES {
-            let m2 = max_disp2_blocks(p, as_refs(&self.mid_at), blocks, simd);
+            let m2 = max_disp2_blocks(p, as_refs(&self.mid_at), blocks, None, simd);
             if m2 <= lim * lim {
                 return MidUpdate::Kept;
             }
@@ -332,7 +374,7 @@ impl NearList {
         self.mid_rebuilds += 1;
         match source {
             MidSource::Candidates { cand, .. } => {
-                collect(cand, p, n, r * r, simd, parallel, &mut self.scratch, &mut self.mid);
+                collect(cand, p, n, Reach::plain(r), simd, parallel, &mut self.scratch, &mut self.mid);
                 self.hashed.forget();
                 self.mid_valid = true;
                 MidUpdate::Kept
@@ -351,66 +393,6 @@ impl NearList {
     #[cfg(test)]
     pub(crate) fn ranges(&self) -> usize {
         self.scratch.bounds.len().saturating_sub(1)
-    }
-}
-
-/// The three coordinate arrays as slices.
-fn as_refs(a: &[Vec<f32>; 3]) -> [&[f32]; 3] {
-    [&a[0][..], &a[1][..], &a[2][..]]
-}
-
-/// Copies the positions of the particles of `blocks` into `dst`, block by block (the layout
-/// [`max_disp2_blocks`] reads; past the arrays' end, zeros).
-fn copy_blocks(p: [&[f32]; 3], blocks: &[u32], dst: &mut [Vec<f32>; 3]) {
-    for (a, src) in dst.iter_mut().zip(p) {
-        a.clear();
-        for &b in blocks {
-            let g = b as usize * LANES;
-            match src.get(g..g + LANES) {
-                Some(s) => a.extend_from_slice(s),
-                None => a.extend((g..g + LANES).map(|i| src.get(i).copied().unwrap_or(0.0))),
-            }
-        }
-    }
-}
-
-/// Largest squared distance between `p_i` and its compact copy `at` over the particles of
-/// `blocks` (block `blocks[k]` at `at[8 k..8 k + 8]`), or infinity when one is NaN: one block
-/// at a time (`f32x8`) when `simd`, else one particle at a time (the twin; same value: `max`
-/// does not round).
-pub(crate) fn max_disp2_blocks(p: [&[f32]; 3], at: [&[f32]; 3], blocks: &[u32], simd: bool) -> f32 {
-    let mut m = 0.0f32;
-    let mut nan = false;
-    let len = p[0].len().min(p[1].len()).min(p[2].len());
-    let mut mv = F32s::splat(0.0);
-    let mut bad = F32s::splat(0.0);
-    for (k, &b) in blocks.iter().enumerate() {
-        let g = b as usize * LANES;
-        let c = k * LANES;
-        if simd && g + LANES <= len {
-            // Written out: `[0, 1, 2].map(..)` compiled to an out-of-line call per coordinate
-            // here (callgrind: ~110 of the ~1600 million instructions of the pair phase).
-            let vx = load(p[0], g) - load(at[0], c);
-            let vy = load(p[1], g) - load(at[1], c);
-            let vz = load(p[2], g) - load(at[2], c);
-            let d2 = vx * vx + vy * vy + vz * vz;
-            bad |= d2.is_nan();
-            mv = mv.max(d2);
-            continue;
-        }
-        for l in 0..LANES.min(len.saturating_sub(g)) {
-            let (vx, vy, vz) = (p[0][g + l] - at[0][c + l], p[1][g + l] - at[1][c + l], p[2][g + l] - at[2][c + l]);
-            let d2 = vx * vx + vy * vy + vz * vz;
-            nan |= d2.is_nan();
-            m = m.max(d2);
-        }
-    }
-    nan |= bad.any();
-    m = mv.to_array().into_iter().fold(m, f32::max);
-    if nan {
-        f32::INFINITY
-    } else {
-        m
     }
 }
 

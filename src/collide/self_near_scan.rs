@@ -10,12 +10,46 @@ use rayon::prelude::*;
 /// Reused buffers of the scans.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct ScanScratch {
-    /// The positions as `[x, y, z, 0]` (one load per candidate).
+    /// The positions and widenings as `[x, y, z, g]` (one load per candidate).
     pub(crate) xyz: Vec<[f32; 4]>,
     /// Particle ranges of the parallel scan ([`chunk_bounds`]).
     pub(crate) bounds: Vec<usize>,
     /// The pairs of each range (joined in order).
     chunks: Vec<Vec<(u32, u32)>>,
+}
+
+/// The radius of a scan: `r`, and `r + wide` for a pair with an end in `fast` (ascending
+/// particle ids; the near list's fast particles, module `self_near_fast`). With `fast` empty
+/// the radius is `r` to the bit.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Reach<'a> {
+    pub(crate) r: f32,
+    pub(crate) wide: f32,
+    pub(crate) fast: &'a [u32],
+}
+
+impl<'a> Reach<'a> {
+    /// The same radius `r` for every pair.
+    pub(crate) fn plain(r: f32) -> Self {
+        Reach { r, wide: 0.0, fast: &[] }
+    }
+
+    /// Particle `i`'s widening: `wide` if it is fast, else 0.
+    #[inline]
+    pub(crate) fn grow_of(&self, i: usize) -> f32 {
+        if self.fast.binary_search(&(i as u32)).is_ok() {
+            self.wide
+        } else {
+            0.0
+        }
+    }
+
+    /// The squared radius of pair `(i, j)` (the operations of the eight-lane scans).
+    #[inline]
+    pub(crate) fn r2(&self, i: usize, j: usize) -> f32 {
+        let rr = self.r + self.grow_of(i).max(self.grow_of(j));
+        rr * rr
+    }
 }
 
 /// [`collect_near`] into `out`; when `parallel`, over the ranges of [`chunk_bounds`], each
@@ -26,7 +60,7 @@ pub(crate) fn collect(
     cand: &Neighbours,
     p: [&[f32]; 3],
     n: usize,
-    r2: f32,
+    reach: Reach<'_>,
     simd: bool,
     parallel: bool,
     s: &mut ScanScratch,
@@ -36,14 +70,14 @@ pub(crate) fn collect(
     chunk_bounds(cand, n, &mut s.bounds);
     let m = s.bounds.len() - 1;
     if !parallel || m < 2 {
-        return collect_near(cand, p, n, r2, simd, &mut s.xyz, out);
+        return collect_near(cand, p, n, reach, simd, &mut s.xyz, out);
     }
     if simd {
-        fill_xyz(p, n, true, &mut s.xyz);
+        fill_xyz(p, n, reach, true, &mut s.xyz);
     }
     let (bounds, xyz) = (&s.bounds, &s.xyz[..]);
     join_chunks(&mut s.chunks, m, out, |c, buf| {
-        collect_range(cand, p, bounds[c]..bounds[c + 1], r2, simd, xyz, buf)
+        collect_range(cand, p, bounds[c]..bounds[c + 1], reach, simd, xyz, buf)
     });
 }
 
@@ -67,9 +101,9 @@ fn join_chunks(chunks: &mut Vec<Vec<(u32, u32)>>, m: usize, out: &mut Vec<(u32, 
 /// the number of threads; the list does not either).
 pub(crate) const FILTER_CHUNK: usize = 8192;
 
-/// Replaces `out` with the pairs of `pairs` closer than `sqrt(r2)` at `p`, or with a NaN
+/// Replaces `out` with the pairs of `pairs` within their radius of `reach` at `p`, or with a NaN
 /// distance, in their order (the test of [`collect_near`], pair by pair: the mid list to the
-/// near list). With `simd`, eight pairs at a time from a `[x, y, z, 0]` copy of `p` (its first
+/// near list). With `simd`, eight pairs at a time from a `[x, y, z, g]` copy of `p` (its first
 /// `n` particles; every id must be below `n`); in parallel over fixed chunks of pairs when
 /// `parallel`, joined in order: the same list either way.
 #[allow(clippy::too_many_arguments)]
@@ -77,7 +111,7 @@ pub(crate) fn filter_pairs(
     pairs: &[(u32, u32)],
     p: [&[f32]; 3],
     n: usize,
-    r2: f32,
+    reach: Reach<'_>,
     simd: bool,
     parallel: bool,
     s: &mut ScanScratch,
@@ -86,39 +120,71 @@ pub(crate) fn filter_pairs(
     out.clear();
     if simd {
         let n = n.min(p[0].len()).min(p[1].len()).min(p[2].len());
-        fill_xyz(p, n, parallel, &mut s.xyz);
+        fill_xyz(p, n, reach, parallel, &mut s.xyz);
     }
     let m = pairs.len().div_ceil(FILTER_CHUNK);
     if !parallel || m < 2 {
-        return filter_range(pairs, p, r2, simd, &s.xyz, out);
+        return filter_range(pairs, p, reach, simd, &s.xyz, out);
     }
     let xyz = &s.xyz[..];
     join_chunks(&mut s.chunks, m, out, |c, buf| {
         let part = &pairs[c * FILTER_CHUNK..((c + 1) * FILTER_CHUNK).min(pairs.len())];
-        filter_range(part, p, r2, simd, xyz, buf)
+        filter_range(part, p, reach, simd, xyz, buf)
     });
 }
 
 /// Appends to `out` the pairs of `pairs` within the radius (the work of [`filter_pairs`]):
 /// the difference `p_i - p_j` and its squared length computed as [`collect_range`] does.
-pub(crate) fn filter_range(pairs: &[(u32, u32)], p: [&[f32]; 3], r2: f32, simd: bool, xyz: &[[f32; 4]], out: &mut Vec<(u32, u32)>) {
+pub(crate) fn filter_range(
+    pairs: &[(u32, u32)],
+    p: [&[f32]; 3],
+    reach: Reach<'_>,
+    simd: bool,
+    xyz: &[[f32; 4]],
+    out: &mut Vec<(u32, u32)>,
+) {
+    // Without widening the radius is one vector for the whole scan (the per-lane radius
+    // slowed the scans of the fall by ~10%).
+    if reach.fast.is_empty() {
+        filter_range_with::<false>(pairs, p, reach, simd, xyz, out)
+    } else {
+        filter_range_with::<true>(pairs, p, reach, simd, xyz, out)
+    }
+}
+
+#[inline(always)]
+fn filter_range_with<const WIDE: bool>(
+    pairs: &[(u32, u32)],
+    p: [&[f32]; 3],
+    reach: Reach<'_>,
+    simd: bool,
+    xyz: &[[f32; 4]],
+    out: &mut Vec<(u32, u32)>,
+) {
     let mut k = 0;
+    let r2 = reach.r * reach.r;
     if simd {
+        let rv = F32s::splat(reach.r);
         let r2v = F32s::splat(r2);
         while k + LANES <= pairs.len() {
             let c = &pairs[k..k + LANES];
             // Sorted by `i`, eight pairs mostly share it: then one load, broadcast (the same
             // values as the gather).
             let a = if c.iter().all(|q| q.0 == c[0].0) {
-                let q = xyz[c[0].0 as usize];
-                [F32s::splat(q[0]), F32s::splat(q[1]), F32s::splat(q[2])]
+                xyz[c[0].0 as usize].map(F32s::splat)
             } else {
-                gather_xyz8(xyz, &idx8(|l| c[l].0))
+                gather_xyzw8(xyz, &idx8(|l| c[l].0))
             };
-            let b = gather_xyz8(xyz, &idx8(|l| c[l].1));
+            let b = gather_xyzw8(xyz, &idx8(|l| c[l].1));
             let v = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
             let d2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
-            let mut bits = (d2.simd_lt(r2v) | d2.is_nan()).to_bitmask();
+            let r2 = if WIDE {
+                let rr = rv + a[3].max(b[3]);
+                rr * rr
+            } else {
+                r2v
+            };
+            let mut bits = (d2.simd_lt(r2) | d2.is_nan()).to_bitmask();
             while bits != 0 {
                 out.push(c[bits.trailing_zeros() as usize]);
                 bits &= bits - 1;
@@ -130,7 +196,7 @@ pub(crate) fn filter_range(pairs: &[(u32, u32)], p: [&[f32]; 3], r2: f32, simd: 
         let (i, j) = (i as usize, j as usize);
         let v = [p[0][i] - p[0][j], p[1][i] - p[1][j], p[2][i] - p[2][j]];
         let d2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
-        if d2 < r2 || d2.is_nan() {
+        if d2 < if WIDE { reach.r2(i, j) } else { r2 } || d2.is_nan() {
             out.push((i as u32, j as u32));
         }
     }
@@ -141,17 +207,17 @@ pub(crate) fn filter_range(pairs: &[(u32, u32)], p: [&[f32]; 3], r2: f32, simd: 
 /// how the candidates are spread over the particles).
 pub(crate) const NEAR_CHUNK: usize = 8192;
 
-/// Replaces `out` with the candidate pairs `(i, j)` of `cand` (first `n` lists) closer than
-/// `sqrt(r2)` at `p`, or with a NaN distance (the exact test rejects those later, as the fresh
+/// Replaces `out` with the candidate pairs `(i, j)` of `cand` (first `n` lists) closer than their
+/// radius of `reach` at `p`, or with a NaN distance (the exact test rejects those later, as the fresh
 /// path does), in list order. With `simd`, eight candidates of one particle at a time: their
-/// positions come from `xyz`, a copy of `p` as `[x, y, z, 0]` made here (one 16-byte load a
+/// positions come from `xyz`, a copy of `p` as `[x, y, z, g]` made here (one 16-byte load a
 /// candidate instead of three scattered ones, transposed to `f32x8` in registers by
-/// [`gather_xyz8`]); the same operations as the scalar twin, so the same list.
+/// [`gather_xyzw8`]); the same operations as the scalar twin, so the same list.
 pub(crate) fn collect_near(
     cand: &Neighbours,
     p: [&[f32]; 3],
     n: usize,
-    r2: f32,
+    reach: Reach<'_>,
     simd: bool,
     xyz: &mut Vec<[f32; 4]>,
     out: &mut Vec<(u32, u32)>,
@@ -159,9 +225,9 @@ pub(crate) fn collect_near(
     out.clear();
     let n = near_len(cand, p, n);
     if simd {
-        fill_xyz(p, n, false, xyz);
+        fill_xyz(p, n, reach, false, xyz);
     }
-    collect_range(cand, p, 0..n, r2, simd, xyz, out);
+    collect_range(cand, p, 0..n, reach, simd, xyz, out);
 }
 
 /// The particles [`collect_near`] walks: the first `n` with a list and a position.
@@ -169,9 +235,10 @@ fn near_len(cand: &Neighbours, p: [&[f32]; 3], n: usize) -> usize {
     n.min(cand.len()).min(p[0].len()).min(p[1].len()).min(p[2].len())
 }
 
-/// Replaces `xyz` with `[x, y, z, 0]` of the first `n` particles of `p` (element-wise, in
-/// parallel over fixed blocks when `parallel`: the same values either way).
-fn fill_xyz(p: [&[f32]; 3], n: usize, parallel: bool, xyz: &mut Vec<[f32; 4]>) {
+/// Replaces `xyz` with `[x, y, z, g]` of the first `n` particles of `p`, `g` the particle's
+/// widening in `reach` (element-wise, in parallel over fixed blocks when `parallel`: the same
+/// values either way).
+fn fill_xyz(p: [&[f32]; 3], n: usize, reach: Reach<'_>, parallel: bool, xyz: &mut Vec<[f32; 4]>) {
     const BLOCK: usize = 2048;
     // Every entry is overwritten below: zero only new entries (a rebuild used to clear and
     // zero all `n`, ~9% of the near updates' instructions in callgrind).
@@ -187,6 +254,11 @@ fn fill_xyz(p: [&[f32]; 3], n: usize, parallel: bool, xyz: &mut Vec<[f32; 4]>) {
         xyz.par_chunks_mut(BLOCK).enumerate().for_each(|(b, d)| one(b, d));
     } else {
         xyz.chunks_mut(BLOCK).enumerate().for_each(|(b, d)| one(b, d));
+    }
+    for &i in reach.fast {
+        if let Some(d) = xyz.get_mut(i as usize) {
+            d[3] = reach.wide;
+        }
     }
 }
 
@@ -212,12 +284,30 @@ fn collect_range(
     cand: &Neighbours,
     p: [&[f32]; 3],
     range: std::ops::Range<usize>,
-    r2: f32,
+    reach: Reach<'_>,
     simd: bool,
     xyz: &[[f32; 4]],
     out: &mut Vec<(u32, u32)>,
 ) {
-    let r2v = F32s::splat(r2);
+    if reach.fast.is_empty() {
+        collect_range_with::<false>(cand, p, range, reach, simd, xyz, out)
+    } else {
+        collect_range_with::<true>(cand, p, range, reach, simd, xyz, out)
+    }
+}
+
+#[inline(always)]
+fn collect_range_with<const WIDE: bool>(
+    cand: &Neighbours,
+    p: [&[f32]; 3],
+    range: std::ops::Range<usize>,
+    reach: Reach<'_>,
+    simd: bool,
+    xyz: &[[f32; 4]],
+    out: &mut Vec<(u32, u32)>,
+) {
+    let r2 = reach.r * reach.r;
+    let (rv, r2v) = (F32s::splat(reach.r), F32s::splat(r2));
     for i in range {
         let list = cand.of(i);
         if list.is_empty() {
@@ -227,13 +317,20 @@ fn collect_range(
         let mut k = 0;
         if simd {
             let piv = [F32s::splat(pi[0]), F32s::splat(pi[1]), F32s::splat(pi[2])];
+            let gi = if WIDE { F32s::splat(reach.grow_of(i)) } else { F32s::splat(0.0) };
             while k + LANES <= list.len() {
                 let js = &list[k..k + LANES];
                 let idx = idx8(|l| js[l]);
-                let q = gather_xyz8(xyz, &idx);
+                let q = gather_xyzw8(xyz, &idx);
                 let v = [piv[0] - q[0], piv[1] - q[1], piv[2] - q[2]];
                 let d2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
-                let mut bits = (d2.simd_lt(r2v) | d2.is_nan()).to_bitmask();
+                let r2 = if WIDE {
+                    let rr = rv + gi.max(q[3]);
+                    rr * rr
+                } else {
+                    r2v
+                };
+                let mut bits = (d2.simd_lt(r2) | d2.is_nan()).to_bitmask();
                 while bits != 0 {
                     out.push((i as u32, js[bits.trailing_zeros() as usize]));
                     bits &= bits - 1;
@@ -245,18 +342,18 @@ fn collect_range(
             let ju = j as usize;
             let v = [pi[0] - p[0][ju], pi[1] - p[1][ju], pi[2] - p[2][ju]];
             let d2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
-            if d2 < r2 || d2.is_nan() {
+            if d2 < if WIDE { reach.r2(i, ju) } else { r2 } || d2.is_nan() {
                 out.push((i as u32, j));
             }
         }
     }
 }
 
-/// The x, y and z of eight entries of `xyz` (indices `idx`, bounds-checked) as three vectors,
-/// lane `l` from entry `idx[l]`. On AVX: eight 16-byte loads and an 8x4 transpose in
+/// The four components of eight entries of `xyz` (indices `idx`, bounds-checked) as four
+/// vectors, lane `l` from entry `idx[l]`. On AVX: eight 16-byte loads and an 8x4 transpose in
 /// registers (unpack and shuffle); elsewhere a portable array version. Pure data movement.
 #[inline(always)]
-pub(crate) fn gather_xyz8(xyz: &[[f32; 4]], idx: &Idx8) -> [F32s; 3] {
+pub(crate) fn gather_xyzw8(xyz: &[[f32; 4]], idx: &Idx8) -> [F32s; 4] {
     #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
     {
         use std::arch::x86_64::{__m128, __m256, _mm256_set_m128, _mm256_shuffle_ps, _mm256_unpackhi_ps, _mm256_unpacklo_ps};
@@ -264,7 +361,7 @@ pub(crate) fn gather_xyz8(xyz: &[[f32; 4]], idx: &Idx8) -> [F32s; 3] {
         let row = |l: usize| -> __m128 { bytemuck::cast(xyz[idx[l] as usize]) };
         let r = [row(0), row(1), row(2), row(3), row(4), row(5), row(6), row(7)];
         // SAFETY: the cfg guarantees AVX at compile time; register-only intrinsics.
-        let (x, y, z) = unsafe {
+        let (x, y, z, w) = unsafe {
             // Low halves hold rows 0..4, high halves rows 4..8.
             let a = _mm256_set_m128(r[4], r[0]);
             let b = _mm256_set_m128(r[5], r[1]);
@@ -278,14 +375,15 @@ pub(crate) fn gather_xyz8(xyz: &[[f32; 4]], idx: &Idx8) -> [F32s; 3] {
                 _mm256_shuffle_ps::<0x44>(t0, t1),
                 _mm256_shuffle_ps::<0xEE>(t0, t1),
                 _mm256_shuffle_ps::<0x44>(t2, t3),
+                _mm256_shuffle_ps::<0xEE>(t2, t3),
             )
         };
         let c = |v: __m256| -> F32s { bytemuck::cast(v) };
-        [c(x), c(y), c(z)]
+        [c(x), c(y), c(z), c(w)]
     }
     #[cfg(not(all(target_arch = "x86_64", target_feature = "avx")))]
     {
         let rows: [[f32; 4]; LANES] = std::array::from_fn(|l| xyz[idx[l] as usize]);
-        [0, 1, 2].map(|a| F32s::from(rows.map(|r| r[a])))
+        [0, 1, 2, 3].map(|a| F32s::from(rows.map(|r| r[a])))
     }
 }

@@ -2,7 +2,7 @@
 //! one on 1 and 2 threads, the block displacement check.
 
 use super::*;
-use crate::collide::self_near_scan::{chunk_bounds, collect, collect_near, filter_pairs, gather_xyz8, ScanScratch, FILTER_CHUNK};
+use crate::collide::self_near_scan::{chunk_bounds, collect, collect_near, filter_pairs, gather_xyzw8, Reach, ScanScratch, FILTER_CHUNK};
 use crate::lanes::Idx8;
 use crate::test_rng::signed;
 
@@ -17,22 +17,49 @@ fn simd_near_list_equals_scalar_and_brute_force() {
     let mut p = p;
     p[1][17] = f32::NAN;
     let pr = [&p[0][..], &p[1][..], &p[2][..]];
-    let r2 = 0.6f32 * 0.6;
-    let (mut a, mut b) = (Vec::new(), Vec::new());
-    collect_near(&cand, pr, n, r2, false, &mut Vec::new(), &mut a);
-    collect_near(&cand, pr, n, r2, true, &mut Vec::new(), &mut b);
-    assert_eq!(a, b);
-    let want: Vec<(u32, u32)> = cand
-        .pairs()
-        .filter(|&(i, j)| {
-            let (i, j) = (i as usize, j as usize);
-            let d2: f32 = (0..3).map(|k| (p[k][i] - p[k][j]) * (p[k][i] - p[k][j])).sum();
-            d2 < r2 || d2.is_nan()
-        })
-        .collect();
-    assert_eq!(a, want);
-    assert!(a.len() > 100 && a.len() < cand.total(), "{} of {}", a.len(), cand.total());
-    assert!(a.iter().any(|&(i, j)| i == 17 || j == 17), "NaN pairs are kept");
+    // One radius for all, then wider for the pairs with an end among a few fast particles
+    // (the near list's two skins).
+    for reach in [
+        Reach::plain(0.6),
+        Reach {
+            r: 0.6,
+            wide: 0.25,
+            fast: &[3, 17, 150, 299],
+        },
+    ] {
+        let (mut a, mut b) = (Vec::new(), Vec::new());
+        collect_near(&cand, pr, n, reach, false, &mut Vec::new(), &mut a);
+        collect_near(&cand, pr, n, reach, true, &mut Vec::new(), &mut b);
+        assert_eq!(a, b);
+        let want: Vec<(u32, u32)> = cand
+            .pairs()
+            .filter(|&(i, j)| {
+                let (i, j) = (i as usize, j as usize);
+                let d2: f32 = (0..3).map(|k| (p[k][i] - p[k][j]) * (p[k][i] - p[k][j])).sum();
+                let fast = [i, j].iter().any(|x| reach.fast.contains(&(*x as u32)));
+                let r = if fast { reach.r + reach.wide } else { reach.r };
+                d2 < r * r || d2.is_nan()
+            })
+            .collect();
+        assert_eq!(a, want);
+        assert!(a.len() > 100 && a.len() < cand.total(), "{} of {}", a.len(), cand.total());
+        assert!(a.iter().any(|&(i, j)| i == 17 || j == 17), "NaN pairs are kept");
+    }
+    let wide = |r| Reach {
+        r,
+        wide: 0.25,
+        fast: &[3, 150, 299],
+    };
+    let (mut plain, mut wider) = (Vec::new(), Vec::new());
+    collect_near(&cand, pr, n, Reach::plain(0.6), true, &mut Vec::new(), &mut plain);
+    collect_near(&cand, pr, n, wide(0.6), true, &mut Vec::new(), &mut wider);
+    let added: Vec<_> = wider.iter().filter(|q| !plain.contains(q)).collect();
+    assert!(
+        !added.is_empty()
+            && added
+                .iter()
+                .all(|&&(i, j)| [3, 150, 299].contains(&i) || [3, 150, 299].contains(&j))
+    );
 }
 
 #[test]
@@ -54,16 +81,24 @@ fn parallel_rebuild_over_ranges_equals_the_serial_list_on_1_and_2_threads() {
     assert!(bounds.len() > 4, "{bounds:?}");
     assert!(bounds.windows(2).all(|w| w[0] < w[1]) && bounds[0] == 0 && bounds[bounds.len() - 1] == n);
     let pr = [&p[0][..], &p[1][..], &p[2][..]];
-    let r2 = 0.7f32 * 0.7;
-    let mut want = Vec::new();
-    collect_near(&cand, pr, n, r2, false, &mut Vec::new(), &mut want);
-    assert!(want.len() > 1000 && want.iter().any(|&(i, _)| i == 123));
-    for threads in [1, 2] {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-        for (simd, parallel) in [(true, true), (false, true), (true, false)] {
-            let (mut scratch, mut got) = (ScanScratch::default(), Vec::new());
-            pool.install(|| collect(&cand, pr, n, r2, simd, parallel, &mut scratch, &mut got));
-            assert_eq!(got, want, "{threads} threads, simd {simd}, parallel {parallel}");
+    for reach in [
+        Reach::plain(0.7),
+        Reach {
+            r: 0.7,
+            wide: 0.2,
+            fast: &[50, 123, 200],
+        },
+    ] {
+        let mut want = Vec::new();
+        collect_near(&cand, pr, n, reach, false, &mut Vec::new(), &mut want);
+        assert!(want.len() > 1000 && want.iter().any(|&(i, _)| i == 123));
+        for threads in [1, 2] {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            for (simd, parallel) in [(true, true), (false, true), (true, false)] {
+                let (mut scratch, mut got) = (ScanScratch::default(), Vec::new());
+                pool.install(|| collect(&cand, pr, n, reach, simd, parallel, &mut scratch, &mut got));
+                assert_eq!(got, want, "{threads} threads, simd {simd}, parallel {parallel}");
+            }
         }
     }
     chunk_bounds(&cand, 0, &mut bounds);
@@ -87,8 +122,8 @@ fn block_displacement_simd_equals_scalar_and_flags_nan() {
     }
     let pr = [&p[0][..], &p[1][..], &p[2][..]];
     let ar = [&at[0][..], &at[1][..], &at[2][..]];
-    let s = max_disp2_blocks(pr, ar, &blocks, false);
-    assert_eq!(s.to_bits(), max_disp2_blocks(pr, ar, &blocks, true).to_bits());
+    let s = max_disp2_blocks(pr, ar, &blocks, None, false);
+    assert_eq!(s.to_bits(), max_disp2_blocks(pr, ar, &blocks, None, true).to_bits());
     // The largest over the listed particles only (block 1 is left out and moved far).
     let mut want = 0.0f32;
     for (k, &b) in blocks.iter().enumerate() {
@@ -105,26 +140,48 @@ fn block_displacement_simd_equals_scalar_and_flags_nan() {
     q[0][8 + 1] = 50.0;
     let qr = [&q[0][..], &q[1][..], &q[2][..]];
     assert_eq!(
-        max_disp2_blocks(qr, ar, &blocks, true).to_bits(),
+        max_disp2_blocks(qr, ar, &blocks, None, true).to_bits(),
         s.to_bits(),
         "block 1 is not checked"
     );
     q[2][3 * 8 + 5] = f32::NAN;
     for simd in [false, true] {
         let qr = [&q[0][..], &q[1][..], &q[2][..]];
-        assert_eq!(max_disp2_blocks(qr, ar, &blocks, simd), f32::INFINITY);
+        assert_eq!(max_disp2_blocks(qr, ar, &blocks, None, simd), f32::INFINITY);
+    }
+    // A mask leaves its zero slots out (the near list's fast particles), a NaN still counts.
+    let mut mask = vec![1.0f32; blocks.len() * LANES];
+    let mut q = p.clone();
+    q[0][3 * 8 + 2] += 7.0; // block 3, slot 2 * 8 + 2
+    mask[2 * LANES + 2] = 0.0;
+    for simd in [false, true] {
+        let qr = [&q[0][..], &q[1][..], &q[2][..]];
+        assert_eq!(
+            max_disp2_blocks(qr, ar, &blocks, Some(&mask), simd).to_bits(),
+            s.to_bits(),
+            "simd {simd}"
+        );
+        assert!(max_disp2_blocks(qr, ar, &blocks, None, simd) > 40.0);
+    }
+    q[1][3 * 8 + 2] = f32::NAN;
+    for simd in [false, true] {
+        let qr = [&q[0][..], &q[1][..], &q[2][..]];
+        assert_eq!(max_disp2_blocks(qr, ar, &blocks, Some(&mask), simd), f32::INFINITY);
     }
 }
 
 #[test]
-fn gather_xyz8_puts_entry_l_in_lane_l() {
-    let xyz: Vec<[f32; 4]> = (0..40).map(|i| [i as f32, 100.0 + i as f32, 200.0 + i as f32, -1.0]).collect();
+fn gather_xyzw8_puts_entry_l_in_lane_l() {
+    let xyz: Vec<[f32; 4]> = (0..40)
+        .map(|i| [i as f32, 100.0 + i as f32, 200.0 + i as f32, -1.0 - i as f32])
+        .collect();
     let idx: Idx8 = [3, 39, 0, 17, 17, 8, 25, 1];
-    let [x, y, z] = gather_xyz8(&xyz, &idx);
+    let [x, y, z, w] = gather_xyzw8(&xyz, &idx);
     for (l, &i) in idx.iter().enumerate() {
         assert_eq!(x.to_array()[l], i as f32);
         assert_eq!(y.to_array()[l], 100.0 + i as f32);
         assert_eq!(z.to_array()[l], 200.0 + i as f32);
+        assert_eq!(w.to_array()[l], -1.0 - i as f32);
     }
 }
 
@@ -220,8 +277,8 @@ fn near_through_mid(hashed: bool, parallel: bool, reach: f32) {
         };
         near.update(source, pr, &blocks, n, d, true, parallel);
         if near.rebuilds > before {
-            let r = d + near.skin;
-            collect(&cand, pr, n, r * r, false, false, &mut scratch, &mut want);
+            let reach = near.fast.reach(d + near.skin);
+            collect(&cand, pr, n, reach, false, false, &mut scratch, &mut want);
             assert_eq!(near.pairs, want, "call {call}");
             checked += 1;
             kept += usize::from(near.mid_rebuilds == mid_before);
@@ -282,7 +339,7 @@ fn refreshed_mid(parallel: bool) {
     let blocks: Vec<u32> = (0..n.div_ceil(LANES) as u32).collect();
     let mut near = NearList::default();
     let (mut scratch, mut want) = (ScanScratch::default(), Vec::new());
-    let (mut checked, mut refreshed, mut queried) = (0, 0, 0);
+    let (mut checked, mut refreshed, mut queried, mut with_fast) = (0, 0, 0, 0);
     for call in 0..400 {
         // Six fast particles (0.15 d a call along a fixed direction each), a new six every
         // 25 calls; the others drift by up to 0.004 d a call.
@@ -304,19 +361,99 @@ fn refreshed_mid(parallel: bool) {
             MidUpdate::Kept => {}
         }
         if near.rebuilds > before {
-            let r = d + near.skin;
-            collect(&all, pr, n, r * r, false, false, &mut scratch, &mut want);
+            let reach = near.fast.reach(d + near.skin);
+            collect(&all, pr, n, reach, false, false, &mut scratch, &mut want);
             assert_eq!(near.pairs, want, "call {call}");
             checked += 1;
+            with_fast += usize::from(!near.fast.ids().is_empty());
         }
     }
-    let msg = format!("{checked} near builds, {queried} mid queries, {refreshed} refreshes");
+    let msg = format!("{checked} near builds ({with_fast} with fast particles), {queried} mid queries, {refreshed} refreshes");
     assert!(checked > 100 && refreshed > 20 && queried >= 2, "{msg}");
     assert!(
         near.hashed.refreshes == refreshed && near.pairs.len() > 20,
         "{msg}, {} near pairs",
         near.pairs.len()
     );
+}
+
+/// A few particles that jump back and forth (0.2 d a call) among a slowly drifting crowd
+/// (the movement-speed fold, module `self_near_fast`): they get the wide skin, the crowd keeps
+/// a narrow one, the list built at each rebuild is the one of those radii from every pair,
+/// and every contact is in the list at every call. The narrow skin lists fewer pairs than the
+/// cap would and the crowd's rebuilds stay rare.
+#[test]
+fn jumping_particles_get_the_wide_skin_and_every_contact_stays_listed() {
+    let mut rng = signed(41);
+    let (n, d) = (400usize, 0.1f32);
+    let mut p: [Vec<f32>; 3] = std::array::from_fn(|_| (0..n).map(|_| 0.6 * rng()).collect());
+    let rest = [(0..n).map(|i| 100.0 * i as f32).collect::<Vec<f32>>(), vec![0.0; n], vec![0.0; n]];
+    let cloth_of = vec![0u32; n];
+    let rule = RestRule {
+        rest: [&rest[0], &rest[1], &rest[2]],
+        cloth_of: &cloth_of,
+        skip: 3.0 * d,
+    };
+    let mut all = Neighbours::new();
+    all.fill_serial(n, |i, buf| buf.extend((i + 1..n).map(|j| j as u32))).unwrap();
+    let blocks: Vec<u32> = (0..n.div_ceil(LANES) as u32).collect();
+    let jumpers = [5u32, 77, 222, 391];
+    let mut near = NearList::default();
+    let (mut scratch, mut want, mut capped) = (ScanScratch::default(), Vec::new(), Vec::new());
+    let (mut checked, mut with_fast) = (0, 0);
+    for call in 0..300 {
+        let sign = if call % 2 == 0 { 1.0 } else { -1.0 };
+        for (k, a) in p.iter_mut().enumerate() {
+            for (i, x) in a.iter_mut().enumerate() {
+                *x += if jumpers.contains(&(i as u32)) {
+                    sign * 0.2 * d * [0.6, -0.64, 0.48][k]
+                } else {
+                    0.004 * d * rng()
+                };
+            }
+        }
+        let pr = [&p[0][..], &p[1][..], &p[2][..]];
+        let before = near.rebuilds;
+        near.update(MidSource::Hash(rule), pr, &blocks, n, d, true, false);
+        if near.rebuilds > before {
+            collect(&all, pr, n, near.fast.reach(d + near.skin), false, false, &mut scratch, &mut want);
+            assert_eq!(near.pairs, want, "call {call}");
+            checked += 1;
+            // The jumpers past the bound, or kept from the last build (they passed it since);
+            // now and then a drifting particle that passed it too.
+            with_fast += usize::from(jumpers.iter().all(|j| near.fast.ids().contains(j)));
+        }
+        for (i, j) in all.pairs() {
+            let (i, j) = (i as usize, j as usize);
+            let d2: f32 = (0..3).map(|k| (p[k][i] - p[k][j]).powi(2)).sum();
+            if d2 < d * d {
+                assert!(
+                    near.pairs.binary_search(&(i as u32, j as u32)).is_ok(),
+                    "call {call}: contact ({i}, {j}) missed"
+                );
+            }
+        }
+    }
+    let pr = [&p[0][..], &p[1][..], &p[2][..]];
+    collect(
+        &all,
+        pr,
+        n,
+        Reach::plain(d * (1.0 + MID_NEAR_SKIN_MAX)),
+        false,
+        false,
+        &mut scratch,
+        &mut capped,
+    );
+    let msg = format!(
+        "{checked} near builds, {with_fast} with the jumpers fast, skin {} d, {} near pairs against {} at the cap",
+        near.skin / d,
+        near.pairs.len(),
+        capped.len()
+    );
+    // Every build but the first has the jumpers fast.
+    assert!(with_fast + 1 == checked && checked >= 4, "{msg}");
+    assert!(checked < 30 && near.skin < 0.3 * d && near.pairs.len() < capped.len(), "{msg}");
 }
 
 #[test]
@@ -330,14 +467,23 @@ fn filter_pairs_simd_and_parallel_equal_the_scalar_filter() {
         .collect();
     assert!(pairs.len() > 3 * FILTER_CHUNK, "{} pairs", pairs.len());
     let pr = [&p[0][..], &p[1][..], &p[2][..]];
-    let r2 = 0.5f32 * 0.5;
+    let reach = Reach {
+        r: 0.5,
+        wide: 0.1,
+        fast: &[2, 77, 400],
+    };
     let want: Vec<(u32, u32)> = pairs
         .iter()
         .copied()
         .filter(|&(i, j)| {
             let (i, j) = (i as usize, j as usize);
             let d2: f32 = (0..3).map(|k| (p[k][i] - p[k][j]) * (p[k][i] - p[k][j])).sum();
-            d2 < r2 || d2.is_nan()
+            let r = if [i, j].iter().any(|&x| [2, 77, 400].contains(&x)) {
+                reach.r + reach.wide
+            } else {
+                reach.r
+            };
+            d2 < r * r || d2.is_nan()
         })
         .collect();
     assert!(want.len() > 100 && want.len() < pairs.len() && want.iter().any(|&(i, j)| i == 77 || j == 77));
@@ -345,7 +491,7 @@ fn filter_pairs_simd_and_parallel_equal_the_scalar_filter() {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         for (simd, parallel) in [(false, false), (true, false), (true, true), (false, true)] {
             let (mut s, mut got) = (ScanScratch::default(), vec![(9, 9)]);
-            pool.install(|| filter_pairs(&pairs, pr, n, r2, simd, parallel, &mut s, &mut got));
+            pool.install(|| filter_pairs(&pairs, pr, n, reach, simd, parallel, &mut s, &mut got));
             assert_eq!(got, want, "{threads} threads, simd {simd}, parallel {parallel}");
         }
     }
