@@ -283,16 +283,7 @@ fn near_through_mid(hashed: bool, parallel: bool, reach: f32) {
             checked += 1;
             kept += usize::from(near.mid_rebuilds == mid_before);
         }
-        for (i, j) in cand.pairs() {
-            let (i, j) = (i as usize, j as usize);
-            let d2: f32 = (0..3).map(|k| (p[k][i] - p[k][j]).powi(2)).sum();
-            if d2 < d * d {
-                assert!(
-                    near.pairs.binary_search(&(i as u32, j as u32)).is_ok(),
-                    "call {call}: contact ({i}, {j}) missed"
-                );
-            }
-        }
+        assert_contacts_listed(&cand, &p, d, &near.pairs, call);
     }
     let msg = format!("{checked} near builds, {} mid, {kept} from a kept mid list", near.mid_rebuilds);
     if reach >= 10.0 {
@@ -423,16 +414,7 @@ fn jumping_particles_get_the_wide_skin_and_every_contact_stays_listed() {
             // now and then a drifting particle that passed it too.
             with_fast += usize::from(jumpers.iter().all(|j| near.fast.ids().contains(j)));
         }
-        for (i, j) in all.pairs() {
-            let (i, j) = (i as usize, j as usize);
-            let d2: f32 = (0..3).map(|k| (p[k][i] - p[k][j]).powi(2)).sum();
-            if d2 < d * d {
-                assert!(
-                    near.pairs.binary_search(&(i as u32, j as u32)).is_ok(),
-                    "call {call}: contact ({i}, {j}) missed"
-                );
-            }
-        }
+        assert_contacts_listed(&all, &p, d, &near.pairs, call);
     }
     let pr = [&p[0][..], &p[1][..], &p[2][..]];
     collect(
@@ -493,6 +475,17 @@ fn filter_pairs_simd_and_parallel_equal_the_scalar_filter() {
             let (mut s, mut got) = (ScanScratch::default(), vec![(9, 9)]);
             pool.install(|| filter_pairs(&pairs, pr, n, reach, simd, parallel, &mut s, &mut got));
             assert_eq!(got, want, "{threads} threads, simd {simd}, parallel {parallel}");
+        }
+    }
+}
+
+/// Every pair of `cand` closer than `d` at `p` is in the (ordered) near list.
+fn assert_contacts_listed(cand: &Neighbours, p: &[Vec<f32>; 3], d: f32, near: &[(u32, u32)], call: usize) {
+    for (i, j) in cand.pairs() {
+        let (iu, ju) = (i as usize, j as usize);
+        let d2: f32 = (0..3).map(|k| (p[k][iu] - p[k][ju]).powi(2)).sum();
+        if d2 < d * d {
+            assert!(near.binary_search(&(i, j)).is_ok(), "call {call}: contact ({i}, {j}) missed");
         }
     }
 }
