@@ -264,7 +264,7 @@ impl NearList {
             MidSource::Hash(_) => true,
         };
         let cap = if use_mid { MID_NEAR_SKIN_MAX } else { NEAR_SKIN_MAX } * d;
-        let mut few = false;
+        let mut fast = false;
         if self.valid && self.at[0].len() == blocks.len() * LANES {
             let at = as_refs(&self.at);
             let m2 = max_disp2_blocks(p, at, blocks, self.fast.mask(), simd);
@@ -288,8 +288,9 @@ impl NearList {
                 // cloth falls its motion is collective and the split would only cost.
                 let split = self.fast.split(p, at, blocks, lim, simd);
                 let (all, bulk) = (skin_for(split.all), skin_for(split.bulk));
-                few = split.over <= FAST_MAX && split.all.is_finite() && (bulk < all || self.fast.kept_any());
-                if few {
+                let pays = split.over <= FAST_MAX && split.all.is_finite() && (bulk < all || self.fast.kept_any());
+                fast = pays && self.fast.set(blocks.len() * LANES, bulk, cap);
+                if fast {
                     bulk
                 } else {
                     all
@@ -306,9 +307,7 @@ impl NearList {
         // on it).
         self.skin = self.skin.min(cap);
         copy_blocks(p, blocks, &mut self.at);
-        if few {
-            self.fast.set(self.at[0].len(), self.skin, cap);
-        } else {
+        if !fast {
             self.fast.clear();
         }
         let r = d + self.skin;

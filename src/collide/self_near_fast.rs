@@ -204,8 +204,8 @@ impl FastSet {
     /// and forth may be near its build position at the rebuild; dropped, it would force the
     /// next one). The skin is `wide` against the bulk's `skin` (`slots` in the build copy).
     /// With more than [`FAST_MAX`] of them, none past the bound, or `wide <= skin`, there is
-    /// no fast set.
-    pub(crate) fn set(&mut self, slots: usize, skin: f32, wide: f32) {
+    /// no fast set. Returns whether there is one.
+    pub(crate) fn set(&mut self, slots: usize, skin: f32, wide: f32) -> bool {
         let lim2 = self.lim2;
         self.over.sort_unstable();
         let over = &self.over;
@@ -221,7 +221,7 @@ impl FastSet {
         self.prev.extend(kept.map(|((&i, &c), _)| (i, c)));
         self.clear();
         if self.over.is_empty() || self.prev.len() > FAST_MAX || wide <= skin {
-            return;
+            return false;
         }
         // In particle order (`Reach` searches the ids).
         self.prev.sort_unstable();
@@ -234,6 +234,7 @@ impl FastSet {
             self.mask[c as usize] = 0.0;
         }
         (self.wide, self.skin) = (wide, skin);
+        true
     }
 }
 
@@ -280,7 +281,7 @@ mod tests {
         assert!(s.all >= 0.24 && s.bulk > 0.0 && s.bulk <= 0.01, "{s:?}");
         let mut f = FastSet::default();
         f.split(pr, ar, &blocks, 0.1, true);
-        f.set(at[0].len(), 0.1, 0.4);
+        assert!(f.set(at[0].len(), 0.1, 0.4));
         assert_eq!(f.ids(), &[3, 70, 73]);
         let reach = f.reach(1.0);
         assert!((0..n).all(|i| reach.grow_of(i) == if [3, 70, 73].contains(&i) { 0.3f32 } else { 0.0 }));
@@ -313,7 +314,7 @@ mod tests {
         // More than FAST_MAX past the bound: no fast set.
         let s = f.split(pr, ar, &blocks, 0.0, true);
         assert!(s.over > FAST_MAX);
-        f.set(at[0].len(), 0.1, 0.4);
+        assert!(!f.set(at[0].len(), 0.1, 0.4));
         assert!(f.ids().is_empty());
     }
 }
