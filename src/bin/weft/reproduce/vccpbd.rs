@@ -40,9 +40,12 @@
 //! the VM: in good ones, `--repeat 5`, every run of every hash row at least 51.1x (basic
 //! VcCPBD 0.432-0.474 ms, the goal met for all three responses); in slow ones the basic rows
 //! take 0.68-0.75 ms (33-41x, slower than one thread). Session 10 (two near skins,
-//! `self_near_fast`), two alternate runs of `--repeat 3` on one thread: the movement-speed rows
-//! 3-8% faster (basic 0.597-0.613 ms, 46.2-47.5x), the 12 rows' sum 5.76-5.87 ms against
-//! 5.91-5.95; the basic rows are still the only ones below 50x.
+//! `self_near_fast`), two rounds of two alternate runs of `--repeat 3` on one thread: the
+//! movement-speed rows 2-8% faster (basic 0.590-0.613 ms, 46.2-48.0x), the others within -2%
+//! to +3%; the 12 rows' sum 5.69-5.87 ms against 5.70-5.95 (the VM's speed moved between the
+//! rounds). The basic rows are still the only ones below 50x (basic PBD at 49.3-50.7x in the
+//! faster round, VcCPBD 42.7-44.1x). Two threads, a good spell, `--repeat 3`: every run of
+//! every hash row at least 50.2x (basic VcCPBD 0.434-0.482 ms).
 //!
 //! A second table splits the collision time by phase (hash build, query, the rest of the step
 //! start, substep pair passes, substep corrections, the speed clamp) and gives the number of
