@@ -281,7 +281,10 @@ impl NearList {
                 let rate = if m2.is_finite() { m2.sqrt() / subs } else { d };
                 (NEAR_LIFETIME * rate).clamp(0.125 * d, cap)
             };
-            self.skin = if use_mid {
+            // Without a fast set and with the skin at its floor anyway (the settled cloth's
+            // rebuilds after tens of substeps) the bulk's skin cannot be narrower: no split.
+            let floor = m2.is_finite() && self.fast.mask().is_none() && skin_for(m2) <= 0.125 * d;
+            self.skin = if use_mid && !floor {
                 // A few particles past the bound get the wide skin when that narrows the
                 // bulk's, or when they were fast and passed it again (module
                 // `self_near_fast`). Only from the mid list (a folded cloth): while the

@@ -49,7 +49,9 @@
 //! * callgrind, timeline 150 steps: basic VcCPBD 3 856 -> 3 874 million instructions, cotton
 //!   VcCPBD 3 557 -> 3 581 (+0.7%: the split at each rebuild, the masked check, a loop of the
 //!   fall's scans that got an instruction longer a particle); three alternate timeline runs
-//!   of cotton VcCPBD: stage 65.5-68.6 -> 68.2-69.0 ms, PBD 66.0-68.2 -> 66.6-67.2.
+//!   of cotton VcCPBD: stage 65.5-68.6 -> 68.2-69.0 ms, PBD 66.0-68.2 -> 66.6-67.2. No split
+//!   when there is no fast set and the skin is at its floor anyway (the settled cloth's
+//!   rebuilds; the same decisions): cotton VcCPBD 3 581 -> 3 570 million.
 //!
 //! So the movement-speed rows gain 2-8% and the other responses lose up to ~3%, within or
 //! near their noise; kept because it removes the movement-speed fold's pathology (its pair
