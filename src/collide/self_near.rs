@@ -401,3 +401,7 @@ impl NearList {
 #[cfg(test)]
 #[path = "self_near_tests.rs"]
 mod tests;
+
+#[cfg(test)]
+#[path = "self_near_prop_tests.rs"]
+mod prop_tests;
