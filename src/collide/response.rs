@@ -165,22 +165,8 @@ pub(crate) type Run = (usize, usize, usize);
 pub(crate) fn apply_runs(inp: &ApplyInput<'_>, p: [&mut [f32]; 3], runs: impl Iterator<Item = Run>, mode: ApplyMode, simd: bool) {
     let [px, py, pz] = p;
     match (mode, simd) {
-        (ApplyMode::Plain, true) => {
-            let c = Consts::new(inp);
-            for (k, b, len) in runs {
-                for l in 0..len {
-                    lanes::<false>(&c, inp, [&mut *px, &mut *py, &mut *pz], (b + l) * LANES, (k + l) * LANES);
-                }
-            }
-        }
-        (ApplyMode::Vccpbd, true) => {
-            let c = Consts::new(inp);
-            for (k, b, len) in runs {
-                for l in 0..len {
-                    lanes::<true>(&c, inp, [&mut *px, &mut *py, &mut *pz], (b + l) * LANES, (k + l) * LANES);
-                }
-            }
-        }
+        (ApplyMode::Plain, true) => runs_simd::<false>(inp, [px, py, pz], runs),
+        (ApplyMode::Vccpbd, true) => runs_simd::<true>(inp, [px, py, pz], runs),
         (m, false) => {
             for (k, b, len) in runs {
                 let g = b * LANES..(b + len) * LANES;
@@ -193,6 +179,17 @@ pub(crate) fn apply_runs(inp: &ApplyInput<'_>, p: [&mut [f32]; 3], runs: impl It
                 };
                 apply_scalar(&one, [&mut px[g.clone()], &mut py[g.clone()], &mut pz[g]], m == ApplyMode::Vccpbd);
             }
+        }
+    }
+}
+
+/// The eight-lane kernel over runs of blocks (see [`apply_runs`]), its constants set up once.
+fn runs_simd<const VC: bool>(inp: &ApplyInput<'_>, p: [&mut [f32]; 3], runs: impl Iterator<Item = Run>) {
+    let [px, py, pz] = p;
+    let c = Consts::new(inp);
+    for (k, b, len) in runs {
+        for l in 0..len {
+            lanes::<VC>(&c, inp, [&mut *px, &mut *py, &mut *pz], (b + l) * LANES, (k + l) * LANES);
         }
     }
 }

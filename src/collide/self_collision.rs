@@ -466,7 +466,6 @@ impl SelfCollisionData {
     }
 }
 
-#[inline(always)]
 /// Builds `hash` on `x` (first `n`) with cells of `reach` (times [`CELL_FACTOR`]) and
 /// attaches the cloths' `rest` positions and `cloth_of` ids for the rest rule of its
 /// self-collision query; `parallel` false builds serially (the same hash).
@@ -487,6 +486,7 @@ pub(crate) fn build_hash(
     hash.attach_rest(rest, cloth_of)
 }
 
+#[inline(always)]
 fn dist2(a: &[impl AsRef<[f32]>; 3], i: usize, j: usize) -> f32 {
     let d = |k: usize| a[k].as_ref()[i] - a[k].as_ref()[j];
     let (dx, dy, dz) = (d(0), d(1), d(2));

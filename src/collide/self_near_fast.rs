@@ -90,7 +90,7 @@ pub(crate) struct FastSet {
     /// Each one's largest squared displacement at the checks since the build.
     peak: Vec<f32>,
     /// The new set while it is made.
-    prev: Vec<(u32, u32)>,
+    next: Vec<(u32, u32)>,
     /// Per slot of the build copy: 0 for a fast particle, else 1 (empty while there is none).
     mask: Vec<f32>,
     /// The fast particles' skin, and the bulk's at the build.
@@ -231,18 +231,18 @@ impl FastSet {
             .zip(&self.slots)
             .zip(&self.peak)
             .filter(|&((&i, &c), &peak)| peak > lim2 && (c as usize) < slots && over.binary_search_by_key(&i, |o| o.0).is_err());
-        self.prev.clear();
-        self.prev.extend(over.iter().copied());
-        self.prev.extend(kept.map(|((&i, &c), _)| (i, c)));
+        self.next.clear();
+        self.next.extend(over.iter().copied());
+        self.next.extend(kept.map(|((&i, &c), _)| (i, c)));
         self.clear();
-        if self.over.is_empty() || self.prev.len() > FAST_MAX || wide <= skin {
+        if self.over.is_empty() || self.next.len() > FAST_MAX || wide <= skin {
             return false;
         }
         // In particle order (`Reach` searches the ids).
-        self.prev.sort_unstable();
+        self.next.sort_unstable();
         self.mask.clear();
         self.mask.resize(slots, 1.0);
-        for &(i, c) in &self.prev {
+        for &(i, c) in &self.next {
             self.ids.push(i);
             self.slots.push(c);
             self.peak.push(0.0);
