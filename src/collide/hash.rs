@@ -54,7 +54,7 @@
 //!   tested against all particles instead (correct, slow).
 
 use super::neighbours::{check_positions, CHUNK};
-use crate::lanes::LANES;
+use crate::lanes::{load, F32s, LANES};
 use crate::{Result, WeftError};
 use rayon::prelude::*;
 
@@ -179,12 +179,55 @@ impl SpatialHash {
         (self.row_base(cy, cz).wrapping_add(cx as i64 as u64) & mask) as usize
     }
 
-    #[inline(always)]
+    /// The bucket of one point, or `NO_BUCKET` when a coordinate is not finite (the
+    /// reference of [`SpatialHash::fill_buckets`]).
+    #[cfg(test)]
     fn bucket_of_point(&self, x: f32, y: f32, z: f32) -> u32 {
         if x.is_finite() && y.is_finite() && z.is_finite() {
             self.bucket(self.coord(x), self.coord(y), self.coord(z)) as u32
         } else {
             NO_BUCKET
+        }
+    }
+
+    /// The buckets of particles `start..start + out.len()` into `out` (the bucket of each
+    /// particle's cell, `NO_BUCKET` for a non-finite one). The cell coordinates are computed
+    /// eight particles at a time when `simd` (`floor` then the saturating conversion of `as
+    /// i32`: the same integers as [`SpatialHash::coord`]), else one by one (the twin). The
+    /// particles of a cloth row often share the cell row `(cy, cz)` (a row along x shares it
+    /// all along), so the row's hashed base is reused from the particle before when it is the
+    /// same row: the same value without the two 64-bit multiplications.
+    fn fill_buckets(&self, p: [&[f32]; 3], start: usize, out: &mut [u32], simd: bool) {
+        let mut rows = RowMemo::new(self);
+        let mut k = 0;
+        if simd {
+            let inv = F32s::splat(self.inv_spacing);
+            let inf = F32s::splat(f32::INFINITY);
+            while k + LANES <= out.len() {
+                let i = start + k;
+                let (x, y, z) = (load(p[0], i), load(p[1], i), load(p[2], i));
+                // `|v| < inf` fails exactly when `v` is not finite.
+                let finite = x.abs().simd_lt(inf) & y.abs().simd_lt(inf) & z.abs().simd_lt(inf);
+                let bad = !finite.to_bitmask();
+                let c = [x, y, z].map(|v| (v * inv).floor().trunc_int().to_array());
+                for l in 0..LANES {
+                    out[k + l] = if bad & (1 << l) != 0 {
+                        NO_BUCKET
+                    } else {
+                        rows.bucket(c[0][l], c[1][l], c[2][l])
+                    };
+                }
+                k += LANES;
+            }
+        }
+        for (k, b) in out.iter_mut().enumerate().skip(k) {
+            let i = start + k;
+            let (x, y, z) = (p[0][i], p[1][i], p[2][i]);
+            *b = if x.is_finite() && y.is_finite() && z.is_finite() {
+                rows.bucket(self.coord(x), self.coord(y), self.coord(z))
+            } else {
+                NO_BUCKET
+            };
         }
     }
 
@@ -217,12 +260,10 @@ impl SpatialHash {
         self.prepare(x, y, z, n, spacing)?;
         let mut buckets = std::mem::take(&mut self.bucket_of);
         let this = &*self;
-        buckets.par_chunks_mut(CHUNK).enumerate().for_each(|(c, out)| {
-            for (k, b) in out.iter_mut().enumerate() {
-                let i = c * CHUNK + k;
-                *b = this.bucket_of_point(x[i], y[i], z[i]);
-            }
-        });
+        buckets
+            .par_chunks_mut(CHUNK)
+            .enumerate()
+            .for_each(|(c, out)| this.fill_buckets([x, y, z], c * CHUNK, out, true));
         self.bucket_of = buckets;
         self.counting_sort(x, y, z);
         Ok(())
@@ -231,9 +272,9 @@ impl SpatialHash {
     /// Serial twin of [`SpatialHash::build`]; produces identical tables.
     pub fn build_serial(&mut self, x: &[f32], y: &[f32], z: &[f32], n: usize, spacing: f32) -> Result<()> {
         self.prepare(x, y, z, n, spacing)?;
-        for i in 0..n {
-            self.bucket_of[i] = self.bucket_of_point(x[i], y[i], z[i]);
-        }
+        let mut buckets = std::mem::take(&mut self.bucket_of);
+        self.fill_buckets([x, y, z], 0, &mut buckets, false);
+        self.bucket_of = buckets;
         self.counting_sort(x, y, z);
         Ok(())
     }
@@ -282,6 +323,38 @@ impl SpatialHash {
                 self.slot_of[i] = k as u32;
             }
         }
+    }
+}
+
+/// The last cell row's hashed base (see [`SpatialHash::fill_buckets`]).
+struct RowMemo<'a> {
+    hash: &'a SpatialHash,
+    mask: u64,
+    last: Option<(i32, i32, u64)>,
+}
+
+impl<'a> RowMemo<'a> {
+    fn new(hash: &'a SpatialHash) -> Self {
+        RowMemo {
+            hash,
+            mask: hash.table_size as u64 - 1,
+            last: None,
+        }
+    }
+
+    /// [`SpatialHash::bucket`] of cell `(cx, cy, cz)`, the row's base reused when the row is
+    /// the last one's.
+    #[inline(always)]
+    fn bucket(&mut self, cx: i32, cy: i32, cz: i32) -> u32 {
+        let base = match self.last {
+            Some((ly, lz, base)) if ly == cy && lz == cz => base,
+            _ => {
+                let base = self.hash.row_base(cy, cz);
+                self.last = Some((cy, cz, base));
+                base
+            }
+        };
+        (base.wrapping_add(cx as i64 as u64) & self.mask) as u32
     }
 }
 

@@ -298,4 +298,43 @@ mod tests {
         assert_eq!(b.pairs().count(), 10);
         assert!((0..5).all(|i| b.of(i).iter().all(|&j| j as usize > i)));
     }
+
+    /// The row memo of `fill_buckets` gives every particle the bucket of its own point: runs
+    /// of one row (a cloth row along x), rows that change every particle, rows that come back
+    /// after another, non-finite particles between them, and chunk starts inside a run.
+    #[test]
+    fn buckets_with_the_row_memo_are_each_points_bucket() {
+        let mut rng = signed(9);
+        let n = 600;
+        let mut p: [Vec<f32>; 3] = [vec![0.0; n], vec![0.0; n], vec![0.0; n]];
+        let [px, py, pz] = &mut p;
+        for (i, ((x, y), z)) in px.iter_mut().zip(py.iter_mut()).zip(pz.iter_mut()).enumerate() {
+            let (row, rand) = (i / 40 % 3, rng());
+            *x = 0.01 * i as f32 - 2.0;
+            *y = if i % 7 == 0 { rand } else { 0.1 * row as f32 };
+            *z = if i % 11 == 0 { -rand } else { 0.3 - 0.1 * row as f32 };
+        }
+        p[1][17] = f32::NAN;
+        p[2][18] = f32::INFINITY;
+        p[0][19] = f32::NEG_INFINITY;
+        // Finite but past the cell coordinates' range: both paths saturate like `as i32`.
+        (p[0][23], p[1][24], p[2][25], p[0][26]) = (3e38, -1e20, 2.2e9 * 0.05, -2.2e9 * 0.05);
+        let mut h = SpatialHash::new(n);
+        h.build_serial(&p[0], &p[1], &p[2], n, 0.05).unwrap();
+        let want: Vec<u32> = (0..n).map(|i| h.bucket_of_point(p[0][i], p[1][i], p[2][i])).collect();
+        assert_eq!(want.iter().filter(|&&b| b == NO_BUCKET).count(), 3);
+        for simd in [false, true] {
+            let mut got = vec![0u32; n];
+            h.fill_buckets([&p[0], &p[1], &p[2]], 0, &mut got, simd);
+            assert_eq!(got, want, "simd {simd}");
+            for start in [1, 18, 41, 333] {
+                let mut part = vec![0u32; n - start];
+                h.fill_buckets([&p[0], &p[1], &p[2]], start, &mut part, simd);
+                assert_eq!(part, want[start..], "from {start}, simd {simd}");
+            }
+        }
+        assert_eq!(h.bucket_of, want, "the build's own buckets");
+        h.build(&p[0], &p[1], &p[2], n, 0.05).unwrap();
+        assert_eq!(h.bucket_of, want, "parallel build");
+    }
 }

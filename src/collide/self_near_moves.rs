@@ -41,30 +41,44 @@ fn max_disp2_with<const MASKED: bool>(p: [&[f32]; 3], at: [&[f32]; 3], blocks: &
     let mut m = 0.0f32;
     let mut nan = false;
     let len = p[0].len().min(p[1].len()).min(p[2].len());
+    let compact = blocks.len() * LANES;
+    if at.iter().any(|a| a.len() < compact) || (MASKED && mask.len() < compact) {
+        // Not the layout of a build: report "moved too far" (a rebuild) rather than guess.
+        return f32::INFINITY;
+    }
     let mut mv = F32s::splat(0.0);
     let mut bad = F32s::splat(0.0);
-    for (k, &b) in blocks.iter().enumerate() {
+    // The compact arrays by block (eight lanes each; without a mask, `x` stands in for it and
+    // is not read), so their loads need no bounds checks.
+    fn chunks(a: &[f32], compact: usize) -> std::slice::ChunksExact<'_, f32> {
+        a[..compact].chunks_exact(LANES)
+    }
+    let compact_blocks = chunks(at[0], compact)
+        .zip(chunks(at[1], compact))
+        .zip(chunks(at[2], compact))
+        .zip(chunks(if MASKED { mask } else { at[0] }, compact));
+    for (&b, (((ax, ay), az), w)) in blocks.iter().zip(compact_blocks) {
         let g = b as usize * LANES;
-        let c = k * LANES;
         if simd && g + LANES <= len {
             // Written out: `[0, 1, 2].map(..)` compiled to an out-of-line call per coordinate
             // here (callgrind: ~110 of the ~1600 million instructions of the pair phase).
-            let vx = load(p[0], g) - load(at[0], c);
-            let vy = load(p[1], g) - load(at[1], c);
-            let vz = load(p[2], g) - load(at[2], c);
+            let vx = load(p[0], g) - lanes8(ax);
+            let vy = load(p[1], g) - lanes8(ay);
+            let vz = load(p[2], g) - lanes8(az);
             let mut d2 = vx * vx + vy * vy + vz * vz;
             if MASKED {
-                d2 *= load(mask, c);
+                d2 *= lanes8(w);
             }
             bad |= d2.is_nan();
-            mv = mv.max(d2);
+            // NaN lanes are flagged above, so the plain `max` (no NaN ordering) is enough.
+            mv = mv.fast_max(d2);
             continue;
         }
         for l in 0..LANES.min(len.saturating_sub(g)) {
-            let (vx, vy, vz) = (p[0][g + l] - at[0][c + l], p[1][g + l] - at[1][c + l], p[2][g + l] - at[2][c + l]);
+            let (vx, vy, vz) = (p[0][g + l] - ax[l], p[1][g + l] - ay[l], p[2][g + l] - az[l]);
             let mut d2 = vx * vx + vy * vy + vz * vz;
             if MASKED {
-                d2 *= mask[c + l];
+                d2 *= w[l];
             }
             nan |= d2.is_nan();
             m = m.max(d2);
@@ -77,4 +91,12 @@ fn max_disp2_with<const MASKED: bool>(p: [&[f32]; 3], at: [&[f32]; 3], blocks: &
     } else {
         m
     }
+}
+
+/// The eight values of a lane-width chunk.
+#[inline(always)]
+fn lanes8(c: &[f32]) -> F32s {
+    let mut a = [0.0f32; LANES];
+    a.copy_from_slice(c);
+    F32s::from(a)
 }
