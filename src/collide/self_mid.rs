@@ -18,11 +18,25 @@
 //!   build: the hash holds an old position for them), which the hash's hits skip.
 //!
 //! The new pairs are sorted, the repeats (both ends in `F`) dropped, and merged with the
-//! kept ones: `M` is again exactly the set above, so the near lists built from it, and every
-//! result, are the bits of a full query each time (tested: the near list against the build
-//! from every pair at each substep, and the runs against the fresh path). When the stale
-//! particles would exceed [`STALE_MAX`] (or a position is not finite, or a probe falls far
-//! off the hash's scale) the caller makes a full build, which empties them.
+//! kept ones: the list holds `M` again (with the build's pairs of the stale particles, which
+//! may no longer be within `r₁`: the near filter drops them), so the near lists built from
+//! it, and every result, are the bits of a full query each time (tested: the near list
+//! against the build from every pair at each substep, and the runs against the fresh path).
+//! When a position is not finite, or a probe falls far off the hash's scale, the caller
+//! makes a full build.
+//!
+//! # Rehash (session 11)
+//! Each refresh tests its particles against every stale one, so the stale particles are
+//! capped (`n / STALE_SHARE`, at least `STALE_MIN`). Past the cap the caller used to make a
+//! full build: a hash of the predicted positions and a query of every particle (~1.6-1.9
+//! ms on the folded 100x100 cloth, one thread), although only 12 to 77 particles had moved
+//! (instrumented: the three full builds after the first of a basic VcCPBD run, steps 48, 55
+//! and 61). Now the hash is built again from the references (~0.06 ms), the moved
+//! particles' new ones included, so it holds every reference exactly and none is stale; the
+//! build's pairs keep those with no stale or moved end (their references are the build's),
+//! the refreshes' pairs (each has a stale end) are folded in, and the moved particles are
+//! probed in the new hash. The list is then exactly `M` (tested against every pair at each
+//! rehash). A full build is still made when more particles than the cap move at once.
 //!
 //! # Why
 //! On the 100x100 fold (basic VcCPBD, 150 steps, one thread) the 13 mid queries of a run were
@@ -90,6 +104,8 @@ pub(crate) struct HashedMid {
     merged: Vec<(u32, u32)>,
     /// Refreshes so far.
     pub(crate) refreshes: u64,
+    /// Refreshes that built the hash again from the references (see [`HashedMid::refresh`]).
+    pub(crate) rehashes: u64,
 }
 
 impl HashedMid {
@@ -148,7 +164,10 @@ impl HashedMid {
     /// The refresh (see the module docs): the particles of `blocks` (here every block of the
     /// `n` particles, block `k` at `at[8 k..]`) farther than `lim` from their reference `at`
     /// take `p` as their new reference, and their pairs within `r` of the references are
-    /// added to [`HashedMid::extra`]. Returns `false` when a full build is needed instead.
+    /// added to [`HashedMid::extra`]. When the stale particles would pass their cap, the hash
+    /// is built again from the references instead (a *rehash*, see the module docs): `mid`,
+    /// the pairs of the last full build, becomes the whole list and the extra pairs go.
+    /// Returns `false` when a full build is needed instead.
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn refresh(
         &mut self,
@@ -159,11 +178,12 @@ impl HashedMid {
         lim: f32,
         r: f32,
         rule: RestRule<'_>,
+        mid: &mut Vec<(u32, u32)>,
+        parallel: bool,
     ) -> bool {
-        let Some(hash) = self.hash.as_ref() else { return false };
         let covers = blocks.len() * LANES >= n && blocks.iter().enumerate().all(|(k, &b)| b as usize == k);
         let short = at.iter().any(|a| a.len() < n) || p.iter().any(|c| c.len() < n);
-        if self.built != Some((n, r.to_bits())) || !covers || short {
+        if self.hash.is_none() || self.built != Some((n, r.to_bits())) || !covers || short {
             return false;
         }
         let lim2 = lim * lim;
@@ -178,14 +198,17 @@ impl HashedMid {
                 self.moved.push(i as u32);
             }
         }
+        let cap = (n / STALE_SHARE).max(STALE_MIN);
         let new_stale = self.moved.iter().filter(|&&i| !self.is_stale[i as usize]).count();
-        if self.stale.len() + new_stale > (n / STALE_SHARE).max(STALE_MIN) {
+        let rehash = self.stale.len() + new_stale > cap;
+        if rehash && self.moved.len() > cap {
+            // Many particles at once: the full query is the cheaper way.
             return false;
         }
         for &i in &self.moved {
             let i = i as usize;
             self.is_moved[i] = true;
-            if !self.is_stale[i] {
+            if !rehash && !self.is_stale[i] {
                 self.is_stale[i] = true;
                 self.stale.push(i as u32);
             }
@@ -193,8 +216,46 @@ impl HashedMid {
                 at[k][i] = p[k][i];
             }
         }
-        // The new pairs of each moved particle: the hash for the partners it holds exactly,
-        // the stale particles one by one.
+        let ok = if rehash {
+            self.rehash(at, n, r, rule, mid, parallel)
+        } else {
+            self.probe_moved(at, r, rule)
+        };
+        if !ok {
+            // A build or a probe failed (far off the hash's scale): the caller builds afresh
+            // (which takes every reference anew, so the ones taken above do not matter).
+            for &i in &self.moved {
+                self.is_moved[i as usize] = false;
+            }
+            self.built = None;
+            return false;
+        }
+        self.fresh.sort_unstable();
+        self.fresh.dedup();
+        // The added pairs without those with a moved end, merged with the new ones (which
+        // all have one, so no pair is in both).
+        let is_moved = &self.is_moved;
+        self.extra.retain(|&(a, b)| !is_moved[a as usize] && !is_moved[b as usize]);
+        merge_unique(&mut self.extra, &self.fresh, &mut self.merged);
+        if rehash {
+            // The extra pairs all have an end that was stale (none is in `mid` any more):
+            // folded in, `mid` is the whole list again.
+            merge_unique(mid, &self.extra, &mut self.merged);
+            self.extra.clear();
+            self.rehashes += 1;
+        }
+        for &i in &self.moved {
+            self.is_moved[i as usize] = false;
+        }
+        self.refreshes += 1;
+        true
+    }
+
+    /// The new pairs of each moved particle into `fresh`: through the hash for the partners
+    /// it holds exactly, the stale particles one by one. Returns `false` when a probe falls
+    /// far off the hash's scale.
+    fn probe_moved(&mut self, at: &[Vec<f32>; 3], r: f32, rule: RestRule<'_>) -> bool {
+        let Some(hash) = self.hash.as_ref() else { return false };
         self.fresh.clear();
         let mut ok = true;
         for &i in &self.moved {
@@ -214,27 +275,39 @@ impl HashedMid {
                 }
             }
         }
-        if !ok {
-            // A probe fell far off the hash's scale: the caller builds afresh (which takes
-            // every reference anew, so the ones taken above do not matter).
-            for &i in &self.moved {
-                self.is_moved[i as usize] = false;
-            }
-            self.built = None;
+        ok
+    }
+
+    /// The rehash: the hash built again from the references `at` (the moved particles' new
+    /// ones included), so it holds every reference exactly and no particle is stale; `mid`
+    /// keeps the pairs of the last full build whose ends are neither stale nor moved (their
+    /// references are still the build's), and the moved particles are probed in the new hash
+    /// into `fresh`. The pairs with a stale end that did not move are in `extra` already.
+    fn rehash(&mut self, at: &[Vec<f32>; 3], n: usize, r: f32, rule: RestRule<'_>, mid: &mut Vec<(u32, u32)>, parallel: bool) -> bool {
+        let Some(hash) = self.hash.as_mut() else { return false };
+        let refs = [&at[0][..], &at[1][..], &at[2][..]];
+        if build_hash(hash, refs, n, r, rule.rest, rule.cloth_of, parallel).is_err() {
             return false;
         }
-        self.fresh.sort_unstable();
-        self.fresh.dedup();
-        // The added pairs without those with a moved end, merged with the new ones (which
-        // all have one, so no pair is in both).
-        let is_moved = &self.is_moved;
-        self.extra.retain(|&(a, b)| !is_moved[a as usize] && !is_moved[b as usize]);
-        merge_unique(&mut self.extra, &self.fresh, &mut self.merged);
-        for &i in &self.moved {
-            self.is_moved[i as usize] = false;
+        let (is_stale, is_moved) = (&self.is_stale, &self.is_moved);
+        let old = |i: u32| is_stale[i as usize] || is_moved[i as usize];
+        mid.retain(|&(a, b)| !old(a) && !old(b));
+        for &s in &self.stale {
+            self.is_stale[s as usize] = false;
         }
-        self.refreshes += 1;
-        true
+        self.stale.clear();
+        self.fresh.clear();
+        let mut ok = true;
+        for &i in &self.moved {
+            let iu = i as usize;
+            let ai = [at[0][iu], at[1][iu], at[2][iu]];
+            let rest_i = [rule.rest[0][iu], rule.rest[1][iu], rule.rest[2][iu]];
+            let fresh = &mut self.fresh;
+            ok &= hash.probe_unskipped(i, ai, rest_i, rule.cloth_of[iu], r, rule.skip, |j| {
+                fresh.push((i.min(j), i.max(j)));
+            });
+        }
+        ok
     }
 }
 

@@ -63,6 +63,14 @@
 //! a folded cloth keeps a narrow skin (module `self_near_fast`, where the argument and the
 //! figures are).
 //!
+//! Session 11: the full queries after the first were all made because the stale particles
+//! passed their cap, with 12 to 77 particles moved. The hash is now built again from the
+//! references instead (module `self_mid`, "Rehash"): one mid query a basic run instead of
+//! four. `weft reproduce vccpbd --size 100 --repeat 3`, one thread, two alternate runs
+//! against the session's starting build (so with the session's faster hash build and
+//! displacement check too): sum of the 12 hash rows 5.89 / 5.91 -> 5.61 / 5.65 ms, basic
+//! VcCPBD 0.570 / 0.566 -> 0.530 / 0.560, PBD 0.582 / 0.571 -> 0.527 / 0.545.
+//!
 //! With rebuilds that cheap the near skin is sized for `NEAR_LIFETIME = 5` substeps at the
 //! fastest particle's rate (20 before): with 20 one fast particle of the movement-speed fold
 //! set the skin to its cap and the substeps then tested ~40 000 near pairs for the rest of
@@ -367,7 +375,11 @@ impl NearList {
                 return MidUpdate::Kept;
             }
             if let MidSource::Hash(rule) = &source {
-                if m2.is_finite() && self.hashed.refresh(p, &mut self.mid_at, blocks, n, lim, r, *rule) {
+                if m2.is_finite()
+                    && self
+                        .hashed
+                        .refresh(p, &mut self.mid_at, blocks, n, lim, r, *rule, &mut self.mid, parallel)
+                {
                     return MidUpdate::Refreshed;
                 }
             }

@@ -2,6 +2,7 @@
 //! one on 1 and 2 threads, the block displacement check.
 
 use super::*;
+use crate::collide::neighbours::within;
 use crate::collide::self_near_scan::{chunk_bounds, collect, collect_near, filter_pairs, gather_xyzw8, Reach, ScanScratch, FILTER_CHUNK};
 use crate::lanes::Idx8;
 use crate::test_rng::signed;
@@ -298,7 +299,9 @@ fn near_through_mid(hashed: bool, parallel: bool, reach: f32) {
 /// every near build the near list equals the one built from every pair but the rest
 /// neighbours (two cloths on one rest grid, so many pairs are dropped by the rule), while a
 /// changing handful of particles moves fast and the rest drift; the stale particles pass
-/// their cap, so full builds happen too. Serially, in parallel, on 1 and 2 threads.
+/// their cap, so the hash is built again from the references (a rehash), after which the
+/// mid list is exactly the pairs within the mid radius of the references. Serially, in
+/// parallel, on 1 and 2 threads.
 #[test]
 fn refreshed_mid_list_gives_the_near_list_of_every_pair() {
     for (threads, parallel) in [(1, false), (1, true), (2, true)] {
@@ -330,8 +333,8 @@ fn refreshed_mid(parallel: bool) {
     let blocks: Vec<u32> = (0..n.div_ceil(LANES) as u32).collect();
     let mut near = NearList::default();
     let (mut scratch, mut want) = (ScanScratch::default(), Vec::new());
-    let (mut checked, mut refreshed, mut queried, mut with_fast) = (0, 0, 0, 0);
-    for call in 0..400 {
+    let (mut checked, mut refreshed, mut queried, mut with_fast, mut rehashed) = (0, 0, 0, 0, 0);
+    for call in 0..900 {
         // Six fast particles (0.15 d a call along a fixed direction each), a new six every
         // 25 calls; the others drift by up to 0.004 d a call.
         let fast = |i: usize| (i + 7 * (call / 25)).is_multiple_of(67);
@@ -345,11 +348,26 @@ fn refreshed_mid(parallel: bool) {
             }
         }
         let pr = [&p[0][..], &p[1][..], &p[2][..]];
-        let before = near.rebuilds;
+        let (before, rehashes) = (near.rebuilds, near.hashed.rehashes);
         match near.update(MidSource::Hash(rule), pr, &blocks, n, d, true, parallel) {
             MidUpdate::Refreshed => refreshed += 1,
             MidUpdate::Queried => queried += 1,
             MidUpdate::Kept => {}
+        }
+        if near.hashed.rehashes > rehashes {
+            // Every pair the rule keeps within the mid radius of the references, none other.
+            let r = d * (1.0 + MID_NEAR_SKIN_MAX + MID_SKIN);
+            let a = &near.mid_at;
+            let exact: Vec<(u32, u32)> = all
+                .pairs()
+                .filter(|&(i, j)| {
+                    let (i, j) = (i as usize, j as usize);
+                    within(a[0][i], a[1][i], a[2][i], a[0][j], a[1][j], a[2][j], r * r)
+                })
+                .collect();
+            assert!(near.hashed.extra().is_empty(), "call {call}: extra pairs folded in");
+            assert_eq!(near.mid, exact, "call {call}: the mid list after a rehash");
+            rehashed += 1;
         }
         if near.rebuilds > before {
             let reach = near.fast.reach(d + near.skin);
@@ -359,8 +377,11 @@ fn refreshed_mid(parallel: bool) {
             with_fast += usize::from(!near.fast.ids().is_empty());
         }
     }
-    let msg = format!("{checked} near builds ({with_fast} with fast particles), {queried} mid queries, {refreshed} refreshes");
-    assert!(checked > 100 && refreshed > 20 && queried >= 2, "{msg}");
+    let msg = format!(
+        "{checked} near builds ({with_fast} with fast particles), {queried} mid queries, {refreshed} refreshes \
+         ({rehashed} rehashes)"
+    );
+    assert!(checked > 100 && refreshed > 20 && queried >= 1 && rehashed >= 2, "{msg}");
     assert!(
         near.hashed.refreshes == refreshed && near.pairs.len() > 20,
         "{msg}, {} near pairs",
