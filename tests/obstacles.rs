@@ -99,6 +99,30 @@ proptest! {
     }
 }
 
+/// A case the property test above found in session 11 (a local run's random seed; CI's fixed
+/// seed does not reach it): one particle thrown at ~85 m/s at the open dress form, two
+/// substeps. The first substep stops it on the form; in the second it slides along the
+/// surface and ends 2.3 mm inside (the projection onto one crossed face's plane near a
+/// concave region; the contacts are generated once a substep). Not fixed yet: ignored so CI
+/// stays green, kept so it is not lost (`cargo test --release --test obstacles -- --ignored`).
+#[test]
+#[ignore = "known defect: a fast particle ends 2.3 mm inside the open dress form (see the doc comment)"]
+fn fast_particle_sliding_on_the_dress_form_stays_outside() {
+    let mut w = loose_world(2);
+    w.add_obstacle(obstacle(3)).unwrap();
+    let (mut x, mut y, mut z) = (vec![0.0f32; 16], vec![0.0f32; 16], vec![0.0f32; 16]);
+    (x[2], x[3], y[3], z[3]) = (0.162_332_79, 0.236_155_91, 0.776_302_04, 0.270_187_6);
+    let (mut vx, mut vy, mut vz) = (vec![0.0f32; 16], vec![0.0f32; 16], vec![0.0f32; 16]);
+    (vx[3], vy[3], vz[3]) = (-42.985_718, -50.062_504, -54.631_275);
+    w.set_positions([&x, &y, &z]).unwrap();
+    w.set_velocities([&vx, &vy, &vz]).unwrap();
+    for step in 0..3 {
+        w.step(1.0 / 60.0).unwrap();
+        let d = w.max_penetration();
+        assert!(d <= TOL, "step {step}: penetration {d} m");
+    }
+}
+
 fn drape(obstacle: Obstacle, rows: u32, spacing: f32, origin: [f32; 3], steps: usize) -> World {
     let desc = ClothDesc {
         rows,
