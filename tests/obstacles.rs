@@ -100,13 +100,13 @@ proptest! {
 }
 
 /// A case the property test above found in session 11 (a local run's random seed; CI's fixed
-/// seed does not reach it): one particle thrown at ~85 m/s at the open dress form, two
-/// substeps. The first substep stops it on the form; in the second it slides along the
-/// surface and ends 2.3 mm inside (the projection onto one crossed face's plane near a
-/// concave region; the contacts are generated once a substep). Not fixed yet: ignored so CI
-/// stays green, kept so it is not lost (`cargo test --release --test obstacles -- --ignored`).
+/// seed does not reach it): one particle thrown at ~85 m/s at the dress form, two substeps.
+/// The first substep stops it on the form; in the second it starts inside the thickness
+/// layer of the face it then crosses, and the response pushed its prediction, 2 mm behind
+/// that face but 20 mm behind a neighbouring one, along the first face's normal only: it
+/// ended 2.3 mm inside. A mesh contact crossed from inside the layer now returns the particle
+/// to its start (`collide::mesh_response`).
 #[test]
-#[ignore = "known defect: a fast particle ends 2.3 mm inside the open dress form (see the doc comment)"]
 fn fast_particle_sliding_on_the_dress_form_stays_outside() {
     let mut w = loose_world(2);
     w.add_obstacle(obstacle(3)).unwrap();

@@ -326,11 +326,21 @@ pub fn project_simd(slots: &[Slots], th: &[f32], start: usize, p: [&mut [f32]; 3
 /// The paper's response, applied once right after the contacts are found: for every obstacle's
 /// contact in order, move `p` back along its path (in the obstacle's frame, start `x - shift`)
 /// to the point that stands `Th` off the contact plane, or, when the path offers no such
-/// point (the particle started inside the layer), push it along the normal. The chosen
+/// point (the particle started inside the layer), back to its start if the path crossed a
+/// mesh's plane (`mesh[k]` for obstacle `k`: a push along one face's normal can enter a
+/// non-convex mesh through a neighbouring face), else push it along the normal. The chosen
 /// contact is the first crossing of the path, so the point reached lies before every crossing:
 /// outside the obstacle ([`resolve_position`](super::mesh_response::resolve_position)).
 /// Element-wise; the parallel and serial runs give the same bits.
-pub fn resolve_along_path(slots: &[Slots], shifts: &[[f32; 3]], th: &[f32], start: usize, x: [&[f32]; 3], p: [&mut [f32]; 3]) {
+pub fn resolve_along_path(
+    slots: &[Slots],
+    shifts: &[[f32; 3]],
+    mesh: &[bool],
+    th: &[f32],
+    start: usize,
+    x: [&[f32]; 3],
+    p: [&mut [f32]; 3],
+) {
     let [px, py, pz] = p;
     let mut i = 0;
     while i < px.len() {
@@ -340,7 +350,7 @@ pub fn resolve_along_path(slots: &[Slots], shifts: &[[f32; 3]], th: &[f32], star
         }
         let g = start + i;
         let mut q = [px[i], py[i], pz[i]];
-        for (s, u) in slots.iter().zip(shifts) {
+        for ((s, u), &mesh) in slots.iter().zip(shifts).zip(mesh) {
             let (c, n) = read_slot(&s.data, g);
             if n == [0.0; 3] {
                 continue;
@@ -350,6 +360,10 @@ pub fn resolve_along_path(slots: &[Slots], shifts: &[[f32; 3]], th: &[f32], star
             if hx > hp && hx >= th[g] {
                 let tau = ((hx - th[g]) / (hx - hp)).clamp(0.0, 1.0);
                 q = [0, 1, 2].map(|k| xr[k] + tau * (q[k] - xr[k]));
+            } else if mesh && hx > 0.0 && hp < 0.0 {
+                // A mesh's plane crossed from inside the layer: back to the start (see
+                // `resolve_position`; a convex shape keeps the push, which cannot enter it).
+                q = xr;
             } else if hp < th[g] {
                 let d = th[g] - hp;
                 q = [0, 1, 2].map(|k| q[k] + d * n[k]);

@@ -38,7 +38,7 @@ pub(super) fn slot_lanes(s: &[f32], b: usize) -> (Vec3x8, Vec3x8, F32s) {
 
 /// [`resolve_along_path`](super::resolve_along_path) eight particles at a time (bitwise equal
 /// to it); `start` and the chunk length are multiples of eight.
-pub fn resolve_simd(slots: &[Slots], shifts: &[[f32; 3]], th: &[f32], start: usize, x: [&[f32]; 3], p: [&mut [f32]; 3]) {
+pub fn resolve_simd(slots: &[Slots], shifts: &[[f32; 3]], mesh: &[bool], th: &[f32], start: usize, x: [&[f32]; 3], p: [&mut [f32]; 3]) {
     let [px, py, pz] = p;
     let (zero, one) = (F32s::splat(0.0), F32s::splat(1.0));
     for j in (0..px.len()).step_by(LANES) {
@@ -50,18 +50,23 @@ pub fn resolve_simd(slots: &[Slots], shifts: &[[f32; 3]], th: &[f32], start: usi
         let mut q = Vec3x8::load(px, py, pz, j);
         let t = load(th, g);
         let x0 = Vec3x8::load(x[0], x[1], x[2], j);
-        for (s, u) in slots.iter().zip(shifts) {
+        for ((s, u), &mesh) in slots.iter().zip(shifts).zip(mesh) {
             let (c, n, set) = slot_lanes(&s.data, b);
             let xr = x0 - Vec3x8::splat(*u);
             let (hx, hp) = (n.dot(xr - c), n.dot(q - c));
             let back = set & hx.simd_gt(hp) & hx.simd_ge(t);
-            let push = set & !back & hp.simd_lt(t);
+            let stay = if mesh {
+                set & !back & hx.simd_gt(zero) & hp.simd_lt(zero)
+            } else {
+                zero
+            };
+            let push = set & !back & !stay & hp.simd_lt(t);
             let tau = (hx - t) / (hx - hp);
             let tau = tau.simd_lt(zero).select(zero, tau);
             let tau = tau.simd_gt(one).select(one, tau);
             let along = xr + (q - xr).scale(tau);
             let out = q + n.scale(t - hp);
-            q = Vec3x8::select(back, along, Vec3x8::select(push, out, q));
+            q = Vec3x8::select(back, along, Vec3x8::select(stay, xr, Vec3x8::select(push, out, q)));
         }
         q.store(px, py, pz, j);
     }

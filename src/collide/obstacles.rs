@@ -198,13 +198,14 @@ impl ObstacleSet {
     /// response; [`k::resolve_along_path`]).
     pub(crate) fn resolve(&self, particles: &mut Particles, h: f32, parallel: bool, simd: bool) {
         let shifts: Vec<[f32; 3]> = self.list.iter().map(|o| o.velocity.map(|c| c * h)).collect();
+        let mesh: Vec<bool> = self.list.iter().map(|o| matches!(o.geometry, Geometry::Mesh(_))).collect();
         let (slots, th) = (&self.slots, &self.th);
         particles.for_chunks(parallel, |c| {
             let (x, p) = ([&*c.x, &*c.y, &*c.z], [c.px, c.py, c.pz]);
             if simd {
-                k::resolve_simd(slots, &shifts, th, c.start, x, p)
+                k::resolve_simd(slots, &shifts, &mesh, th, c.start, x, p)
             } else {
-                k::resolve_along_path(slots, &shifts, th, c.start, x, p)
+                k::resolve_along_path(slots, &shifts, &mesh, th, c.start, x, p)
             }
         });
     }
