@@ -123,6 +123,33 @@ fn fast_particle_sliding_on_the_dress_form_stays_outside() {
     }
 }
 
+/// A second case the property test found in session 11 (20 000 local cases; present before
+/// the session too): a particle thrown at the dress form comes to rest near the crease of
+/// the neck and the shoulder, and the soft constraints to the other particles (which fall
+/// from the origin) then drag it ~6 cm a step along the form. The contacts are found once a
+/// substep and the solver's projections use their planes only, so a drag across the crease
+/// ends 0.14 mm inside the neighbouring face (the test allows 0.1 mm); the next substep puts
+/// it out. Not fixed: finding the contacts again after the solver's sweeps would cost a
+/// second narrowphase a substep. Ignored so CI stays green, kept so it is not lost
+/// (`cargo test --release --test obstacles -- --ignored`).
+#[test]
+#[ignore = "known defect: a particle dragged across a concave crease ends 0.14 mm inside (see the doc comment)"]
+fn particle_dragged_across_the_neck_crease_stays_outside() {
+    let mut w = loose_world(1);
+    w.add_obstacle(obstacle(3)).unwrap();
+    let (mut x, mut y, mut z) = (vec![0.0f32; 16], vec![0.0f32; 16], vec![0.0f32; 16]);
+    (x[6], y[6], z[6]) = (0.499_123_07, 1.085_768_6, -0.231_846_42);
+    let (mut vx, mut vy, mut vz) = (vec![0.0f32; 16], vec![0.0f32; 16], vec![0.0f32; 16]);
+    (vx[6], vy[6], vz[6]) = (-56.157_734, -58.222_22, 29.142_21);
+    w.set_positions([&x, &y, &z]).unwrap();
+    w.set_velocities([&vx, &vy, &vz]).unwrap();
+    for step in 0..3 {
+        w.step(1.0 / 60.0).unwrap();
+        let d = w.max_penetration();
+        assert!(d <= TOL, "step {step}: penetration {d} m");
+    }
+}
+
 fn drape(obstacle: Obstacle, rows: u32, spacing: f32, origin: [f32; 3], steps: usize) -> World {
     let desc = ClothDesc {
         rows,
