@@ -196,7 +196,9 @@ impl SpatialHash {
     /// i32`: the same integers as [`SpatialHash::coord`]), else one by one (the twin). The
     /// particles of a cloth row often share the cell row `(cy, cz)` (a row along x shares it
     /// all along), so the row's hashed base is reused from the particle before when it is the
-    /// same row: the same value without the two 64-bit multiplications.
+    /// same row: the same value without the two 64-bit multiplications. Session 11, a build
+    /// of the falling 100x100 fold (step 20, one thread, 400 builds a round, three rounds):
+    /// 66-67 µs median before (one particle at a time, every row hashed), 42 after.
     fn fill_buckets(&self, p: [&[f32]; 3], start: usize, out: &mut [u32], simd: bool) {
         let mut rows = RowMemo::new(self);
         let mut k = 0;

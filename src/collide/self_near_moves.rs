@@ -49,7 +49,9 @@ fn max_disp2_with<const MASKED: bool>(p: [&[f32]; 3], at: [&[f32]; 3], blocks: &
     let mut mv = F32s::splat(0.0);
     let mut bad = F32s::splat(0.0);
     // The compact arrays by block (eight lanes each; without a mask, `x` stands in for it and
-    // is not read), so their loads need no bounds checks.
+    // is not read), so their loads need no bounds checks (session 11, with the plain `max`
+    // below: callgrind over the timeline example's 1 564 checks, 97.7 -> 72.9 million
+    // instructions).
     fn chunks(a: &[f32], compact: usize) -> std::slice::ChunksExact<'_, f32> {
         a[..compact].chunks_exact(LANES)
     }
