@@ -52,6 +52,16 @@
 //! branch on the distance mask (the branch is taken about half the time while falling):
 //! cell / particle ratio 0.37-0.41 against 0.41-0.42, within the noise, so the simpler
 //! branching kernel stays.
+//!
+//! Tried in session 11 and not kept (a falling step's query, step 20 of the basic fold,
+//! ~7.9 million instructions, ~12 lane groups a member at ~45% lane use; alternate runs of a
+//! micro-bench, 500-1000 queries each): each row range cut once into lane-width slices, so
+//! the loads need no bounds checks: 333-338 against 285-306 µs (the per-range setup outweighs
+//! the checks; a range is ~2.4 groups); the rows of a cell scanned once for a batch of up to
+//! eight members (each group loaded once): 158.4 against 158.6 million instructions for 20
+//! queries, the same time; the rows copied once a cell into one padded buffer that every
+//! member scans in full groups: 365-369 against 301-303 µs (1 468 against 1 391-1 421 at the
+//! impact, step 44): the copy costs more than the partial groups it saves.
 
 use super::SpatialHash;
 use crate::collide::neighbours::{search_radius, within, Neighbours};

@@ -37,6 +37,9 @@
 //! the refreshes' pairs (each has a stale end) are folded in, and the moved particles are
 //! probed in the new hash. The list is then exactly `M` (tested against every pair at each
 //! rehash). A full build is still made when more particles than the cap move at once.
+//! Rehashing without that compaction (the build's outdated pairs and the extra pairs kept
+//! as they are, still exact as a superset) measured slightly slower: timeline, basic VcCPBD,
+//! three alternate runs, 81.0-83.5 against 80.0-82.0 ms.
 //!
 //! # Why
 //! On the 100x100 fold (basic VcCPBD, 150 steps, one thread) the 13 mid queries of a run were

@@ -69,7 +69,10 @@
 //! four. `weft reproduce vccpbd --size 100 --repeat 3`, one thread, two alternate runs
 //! against the session's starting build (so with the session's faster hash build and
 //! displacement check too): sum of the 12 hash rows 5.89 / 5.91 -> 5.61 / 5.65 ms, basic
-//! VcCPBD 0.570 / 0.566 -> 0.530 / 0.560, PBD 0.582 / 0.571 -> 0.527 / 0.545.
+//! VcCPBD 0.570 / 0.566 -> 0.530 / 0.560, PBD 0.582 / 0.571 -> 0.527 / 0.545. With full
+//! queries that rare, `MID_SKIN` 0.5 and 0.75 were measured again (timeline, basic VcCPBD,
+//! one thread, two alternate runs): 89-90 and 84 ms against 79-80, also with the limit on
+//! particles moved at once raised to `n / 8`; and `NEAR_LIFETIME` 4 and 7: no gain. Both stay.
 //!
 //! With rebuilds that cheap the near skin is sized for `NEAR_LIFETIME = 5` substeps at the
 //! fastest particle's rate (20 before): with 20 one fast particle of the movement-speed fold
