@@ -49,7 +49,7 @@
 use super::hash::SpatialHash;
 use super::neighbours::{within, Neighbours};
 use super::self_collision::{build_hash, REST_SKIP_FACTOR};
-use crate::lanes::LANES;
+use crate::lanes::{load, F32s, LANES};
 
 /// Most stale particles (taken new references since the last full build) a refresh may
 /// leave, over the particle count, before a full build is cheaper (at least
@@ -183,6 +183,7 @@ impl HashedMid {
         rule: RestRule<'_>,
         mid: &mut Vec<(u32, u32)>,
         parallel: bool,
+        simd: bool,
     ) -> bool {
         let covers = blocks.len() * LANES >= n && blocks.iter().enumerate().all(|(k, &b)| b as usize == k);
         let short = at.iter().any(|a| a.len() < n) || p.iter().any(|c| c.len() < n);
@@ -190,16 +191,9 @@ impl HashedMid {
             return false;
         }
         let lim2 = lim * lim;
-        self.moved.clear();
-        for i in 0..n {
-            let (dx, dy, dz) = (p[0][i] - at[0][i], p[1][i] - at[1][i], p[2][i] - at[2][i]);
-            let d2 = dx * dx + dy * dy + dz * dz;
-            if !d2.is_finite() || !p[0][i].is_finite() || !p[1][i].is_finite() || !p[2][i].is_finite() {
-                return false;
-            }
-            if d2 > lim2 {
-                self.moved.push(i as u32);
-            }
+        let refs = [&at[0][..], &at[1][..], &at[2][..]];
+        if !moved_past(p, refs, n, lim2, simd, &mut self.moved) {
+            return false;
         }
         let cap = (n / STALE_SHARE).max(STALE_MIN);
         let new_stale = self.moved.iter().filter(|&&i| !self.is_stale[i as usize]).count();
@@ -314,6 +308,45 @@ impl HashedMid {
     }
 }
 
+/// The particles `i < n` farther than `√lim2` from `at` into `out`, ascending; `false` (and
+/// `out` unspecified) when a position or a distance is not finite. Eight particles at a time
+/// when `simd` (session 11: the refreshes' scan of every particle, ~20 instructions a
+/// particle one by one), else one by one (the twin; the same list, the same operations).
+pub(crate) fn moved_past(p: [&[f32]; 3], at: [&[f32]; 3], n: usize, lim2: f32, simd: bool, out: &mut Vec<u32>) -> bool {
+    out.clear();
+    let mut i = 0;
+    if simd {
+        let (lim, inf) = (F32s::splat(lim2), F32s::splat(f32::INFINITY));
+        while i + LANES <= n {
+            let (x, y, z) = (load(p[0], i), load(p[1], i), load(p[2], i));
+            let (dx, dy, dz) = (x - load(at[0], i), y - load(at[1], i), z - load(at[2], i));
+            let d2 = dx * dx + dy * dy + dz * dz;
+            // `|v| < inf` fails exactly when `v` is not finite.
+            let ok = d2.abs().simd_lt(inf) & x.abs().simd_lt(inf) & y.abs().simd_lt(inf) & z.abs().simd_lt(inf);
+            if ok.to_bitmask() != 0xff {
+                return false;
+            }
+            let mut bits = d2.simd_gt(lim).to_bitmask();
+            while bits != 0 {
+                out.push((i + bits.trailing_zeros() as usize) as u32);
+                bits &= bits - 1;
+            }
+            i += LANES;
+        }
+    }
+    for i in i..n {
+        let (dx, dy, dz) = (p[0][i] - at[0][i], p[1][i] - at[1][i], p[2][i] - at[2][i]);
+        let d2 = dx * dx + dy * dy + dz * dz;
+        if !d2.is_finite() || !p[0][i].is_finite() || !p[1][i].is_finite() || !p[2][i].is_finite() {
+            return false;
+        }
+        if d2 > lim2 {
+            out.push(i as u32);
+        }
+    }
+    true
+}
+
 /// `a` with the pairs of `b` merged in, both ordered, a pair in both once (`tmp` the buffer).
 pub(crate) fn merge_unique(a: &mut Vec<(u32, u32)>, b: &[(u32, u32)], tmp: &mut Vec<(u32, u32)>) {
     tmp.clear();
@@ -328,4 +361,52 @@ pub(crate) fn merge_unique(a: &mut Vec<(u32, u32)>, b: &[(u32, u32)], tmp: &mut 
     }
     tmp.extend(f);
     std::mem::swap(a, tmp);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::test_rng::signed;
+
+    /// The eight-lane scan lists the same particles as its twin (ascending; a particle exactly
+    /// at the bound is not past it) for every length around the lane width, and both report a
+    /// non-finite position or distance, in the lanes and in the tail.
+    #[test]
+    fn moved_past_simd_equals_scalar_and_stops_at_non_finite() {
+        let mut rng = signed(41);
+        for n in [0usize, 3, 8, 13, 40] {
+            let mut at: [Vec<f32>; 3] = std::array::from_fn(|_| (0..n).map(|_| rng()).collect());
+            let mut p = at.clone();
+            for i in 0..n {
+                p[i % 3][i] += if i % 4 == 0 { 0.5 } else { 0.1 * rng() };
+            }
+            if n > 5 {
+                // Exactly at the bound (0.25² = lim2, every operation exact): not past it.
+                for k in 0..3 {
+                    (at[k][5], p[k][5]) = (0.0, 0.0);
+                }
+                p[1][5] = 0.25;
+            }
+            let (pr, ar) = ([&p[0][..], &p[1][..], &p[2][..]], [&at[0][..], &at[1][..], &at[2][..]]);
+            let (mut a, mut b) = (Vec::new(), Vec::new());
+            assert!(moved_past(pr, ar, n, 0.0625, false, &mut a));
+            assert!(moved_past(pr, ar, n, 0.0625, true, &mut b));
+            assert_eq!(a, b, "n {n}");
+            let want: Vec<u32> = (0..n as u32).filter(|&i| i % 4 == 0).collect();
+            assert_eq!(a, want, "n {n}: the particles moved 0.5");
+        }
+        let n = 13;
+        for bad in [2usize, 11] {
+            for v in [f32::NAN, f32::INFINITY] {
+                let at = [vec![0.0f32; n], vec![0.0; n], vec![0.0; n]];
+                let mut p = at.clone();
+                p[2][bad] = v;
+                let (pr, ar) = ([&p[0][..], &p[1][..], &p[2][..]], [&at[0][..], &at[1][..], &at[2][..]]);
+                let mut out = Vec::new();
+                for simd in [false, true] {
+                    assert!(!moved_past(pr, ar, n, 1.0, simd, &mut out), "particle {bad} = {v}, simd {simd}");
+                }
+            }
+        }
+    }
 }

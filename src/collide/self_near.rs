@@ -381,7 +381,7 @@ impl NearList {
                 if m2.is_finite()
                     && self
                         .hashed
-                        .refresh(p, &mut self.mid_at, blocks, n, lim, r, *rule, &mut self.mid, parallel)
+                        .refresh(p, &mut self.mid_at, blocks, n, lim, r, *rule, &mut self.mid, parallel, simd)
                 {
                     return MidUpdate::Refreshed;
                 }
