@@ -318,7 +318,7 @@ impl ActiveSet {
             }
         }
         self.touched.sort_unstable();
-        let s = &mut self.sums;
+        let mut s = self.sums.rows();
         for &k in &self.last_written {
             if self.acc[k as usize].0[10] == 0.0 {
                 s.set(k as usize, &[0.0; 11]);
