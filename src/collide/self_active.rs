@@ -188,12 +188,11 @@ impl ActiveSet {
             }
         }
         let len = self.blocks.len() * LANES;
-        let s = &mut self.sums;
+        let mut rows = self.sums.rows();
         for &k in self.written.iter().chain(&self.last_written) {
-            if (k as usize) < s.len() {
-                s.set(k as usize, &[0.0; 11]);
-            }
+            rows.set(k as usize, &[0.0; 11]);
         }
+        let s = &mut self.sums;
         for v in s.c.iter_mut().chain(s.f.iter_mut()).chain(s.n.iter_mut()) {
             v.resize(len, 0.0);
         }

@@ -49,6 +49,7 @@
 use super::hash::SpatialHash;
 use super::neighbours::{within, Neighbours};
 use super::self_collision::{build_hash, REST_SKIP_FACTOR};
+use super::self_near_moves::as_refs;
 use crate::lanes::{load, F32s, LANES};
 
 /// Most stale particles (taken new references since the last full build) a refresh may
@@ -191,8 +192,7 @@ impl HashedMid {
             return false;
         }
         let lim2 = lim * lim;
-        let refs = [&at[0][..], &at[1][..], &at[2][..]];
-        if !moved_past(p, refs, n, lim2, simd, &mut self.moved) {
+        if !moved_past(p, as_refs(at), n, lim2, simd, &mut self.moved) {
             return false;
         }
         let cap = (n / STALE_SHARE).max(STALE_MIN);
@@ -282,8 +282,7 @@ impl HashedMid {
     /// into `fresh`. The pairs with a stale end that did not move are in `extra` already.
     fn rehash(&mut self, at: &[Vec<f32>; 3], n: usize, r: f32, rule: RestRule<'_>, mid: &mut Vec<(u32, u32)>, parallel: bool) -> bool {
         let Some(hash) = self.hash.as_mut() else { return false };
-        let refs = [&at[0][..], &at[1][..], &at[2][..]];
-        if build_hash(hash, refs, n, r, rule.rest, rule.cloth_of, parallel).is_err() {
+        if build_hash(hash, as_refs(at), n, r, rule.rest, rule.cloth_of, parallel).is_err() {
             return false;
         }
         let (is_stale, is_moved) = (&self.is_stale, &self.is_moved);
@@ -293,18 +292,8 @@ impl HashedMid {
             self.is_stale[s as usize] = false;
         }
         self.stale.clear();
-        self.fresh.clear();
-        let mut ok = true;
-        for &i in &self.moved {
-            let iu = i as usize;
-            let ai = [at[0][iu], at[1][iu], at[2][iu]];
-            let rest_i = [rule.rest[0][iu], rule.rest[1][iu], rule.rest[2][iu]];
-            let fresh = &mut self.fresh;
-            ok &= hash.probe_unskipped(i, ai, rest_i, rule.cloth_of[iu], r, rule.skip, |j| {
-                fresh.push((i.min(j), i.max(j)));
-            });
-        }
-        ok
+        // No particle is stale now: the probe finds every partner through the new hash.
+        self.probe_moved(at, r, rule)
     }
 }
 
