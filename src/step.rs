@@ -31,6 +31,8 @@
 //!   kinematic pins land exactly on their targets                     [embed::kinematic]
 //! ```
 
+use std::sync::atomic::{AtomicU64, Ordering};
+
 use crate::collide::response::MeanParts;
 use crate::collide::response::{clamp_speed, ClampParams};
 use crate::collide::self_collision::{mean_velocity, Active, TRAVEL_FACTOR};
@@ -199,8 +201,11 @@ impl World {
         // The speed clamp's mean velocity, summed by the predict pass chunk by chunk while the
         // velocities are in cache (the same sums as `mean_velocity`); obstacles change
         // velocities between predict and the clamp, so they keep the separate pass.
+        // Its time is self-collision time: summed over the chunks, shared by the threads
+        // (like the obstacles' velocity pass below), and added to the stage's.
+        let mean_ns = std::sync::atomic::AtomicU64::new(0);
         let mean_parts = (sc.is_some() && self.fuse_predict && !check && !has_obstacles).then(|| MeanParts::new(n));
-        let mean_sink = mean_parts.as_ref();
+        let mean_sink = mean_parts.as_ref().map(|m| (m, &mean_ns));
         let mut predicted_ahead = false;
         for s in 0..n_sub {
             let t = self.time + (s as f64) * (h as f64);
@@ -226,12 +231,12 @@ impl World {
                             dst.copy_from_slice(src);
                         }
                         predict(c.reborrow(), &pp, simd);
-                        add_mean(mean_sink, &c, n);
+                        add_mean(mean_sink, &c, n, simd);
                     });
                 } else {
                     self.particles.for_chunks(parallel, |mut c| {
                         predict(c.reborrow(), &pp, simd);
-                        add_mean(mean_sink, &c, n);
+                        add_mean(mean_sink, &c, n, simd);
                     });
                 }
             }
@@ -334,7 +339,7 @@ impl World {
                     }
                     if ahead {
                         predict(c.reborrow(), &pp_next, simd);
-                        add_mean(mean_sink, &c, n);
+                        add_mean(mean_sink, &c, n, simd);
                     }
                 });
                 predicted_ahead = ahead;
@@ -361,6 +366,8 @@ impl World {
             }
         }
         if sc.is_some() && !check {
+            let threads = if parallel { rayon::current_num_threads() as u64 } else { 1 };
+            sc_time += std::time::Duration::from_nanos(mean_ns.into_inner() / threads.max(1));
             self.selfcol.stats.time_s += sc_time.as_secs_f64();
             self.selfcol.stats.steps += 1;
         }
@@ -379,7 +386,7 @@ impl World {
     pub(crate) fn self_collision_clamp(&mut self, a: Active, n_sub: u32, h: f32, parallel: bool, simd: bool, mean: Option<[f32; 3]>) {
         let n = self.particles.count();
         let p = &self.particles;
-        let mean = mean.unwrap_or_else(|| mean_velocity([&p.vx, &p.vy, &p.vz], &p.w, n, parallel));
+        let mean = mean.unwrap_or_else(|| mean_velocity([&p.vx, &p.vy, &p.vz], &p.w, n, parallel, simd));
         let cp = ClampParams {
             mean,
             limit: TRAVEL_FACTOR * a.d / n_sub as f32,
@@ -411,10 +418,13 @@ impl World {
     }
 }
 
-/// Adds a chunk's predicted velocities to the mean-velocity sums, when they are kept.
-fn add_mean(sink: Option<&MeanParts>, c: &crate::particles::ParticleChunk<'_>, n: usize) {
-    if let Some(m) = sink {
-        m.add(c.start, [&c.vx[..], &c.vy[..], &c.vz[..]], c.w, n);
+/// Adds a chunk's predicted velocities to the mean-velocity sums, when they are kept, and
+/// the time it took to the nanoseconds counter beside them.
+fn add_mean(sink: Option<(&MeanParts, &AtomicU64)>, c: &crate::particles::ParticleChunk<'_>, n: usize, simd: bool) {
+    if let Some((m, ns)) = sink {
+        let t0 = std::time::Instant::now();
+        m.add(c.start, [&c.vx[..], &c.vy[..], &c.vz[..]], c.w, n, simd);
+        ns.fetch_add(t0.elapsed().as_nanos() as u64, Ordering::Relaxed);
     }
 }
 

@@ -423,18 +423,15 @@ pub(crate) const MEAN_CHUNK: usize = 4096;
 /// chunks of [`MEAN_CHUNK`] particles, added in chunk order, so parallel and serial give the
 /// same bits ([`MeanParts`]; the step also fills them inside its predict pass).
 ///
-/// Within a chunk, particle `i` is added to accumulator `i mod 4` (four independent f64 sums
-/// per coordinate, which the compiler keeps in one AVX register instead of a chain of
-/// dependent additions: about 4x faster at 10 000 particles, measured in the step's clamp),
-/// and the four are combined as `(s0 + s1) + (s2 + s3)`. This is a different summation order
-/// from the single running sum used before (so the mean, and thus a clamped velocity, may
-/// differ in the last bits from earlier versions); every path uses this one summation.
-pub(crate) fn mean_velocity(v: [&[f32]; 3], w: &[f32], n: usize, parallel: bool) -> [f32; 3] {
+/// Within a chunk the particles are summed in eight lanes, `f32` over blocks of 64 particles
+/// and `f64` across blocks ([`chunk_sums`]; session 12, four `f64` lanes before: the mean may
+/// differ in its last bits from earlier versions); every path uses this one summation.
+pub(crate) fn mean_velocity(v: [&[f32]; 3], w: &[f32], n: usize, parallel: bool, simd: bool) -> [f32; 3] {
     let parts = MeanParts::new(n);
     let chunks = n.div_ceil(MEAN_CHUNK);
     let one = |k: usize| {
         let (lo, hi) = (k * MEAN_CHUNK, ((k + 1) * MEAN_CHUNK).min(n));
-        parts.add(lo, [&v[0][lo..hi], &v[1][lo..hi], &v[2][lo..hi]], &w[lo..hi], n);
+        parts.add(lo, [&v[0][lo..hi], &v[1][lo..hi], &v[2][lo..hi]], &w[lo..hi], n, simd);
     };
     if parallel && chunks > 1 {
         (0..chunks).into_par_iter().for_each(one);
@@ -458,12 +455,12 @@ impl MeanParts {
 
     /// Adds the particles of a range starting at particle `start` (a multiple of
     /// [`MEAN_CHUNK`]; `v`, `w` the range's slices), those below `n` only. Every chunk must be
-    /// added by exactly one call.
-    pub(crate) fn add(&self, start: usize, v: [&[f32]; 3], w: &[f32], n: usize) {
+    /// added by exactly one call. Eight particles at a time when `simd` (the same bits).
+    pub(crate) fn add(&self, start: usize, v: [&[f32]; 3], w: &[f32], n: usize, simd: bool) {
         let len = w.len().min(n.saturating_sub(start));
         for lo in (0..len).step_by(MEAN_CHUNK) {
             let hi = (lo + MEAN_CHUNK).min(len);
-            let sums = chunk_sums([&v[0][lo..hi], &v[1][lo..hi], &v[2][lo..hi]], &w[lo..hi]);
+            let sums = chunk_sums([&v[0][lo..hi], &v[1][lo..hi], &v[2][lo..hi]], &w[lo..hi], simd);
             if let Some(slot) = self.0.get((start + lo) / MEAN_CHUNK) {
                 for (a, s) in slot.iter().zip(sums) {
                     a.store(s.to_bits(), Ordering::Relaxed);
@@ -489,37 +486,78 @@ impl MeanParts {
     }
 }
 
-/// `Σ vx, Σ vy, Σ vz, count` over the free particles of one chunk (four accumulators, see
-/// [`mean_velocity`]).
-fn chunk_sums(v: [&[f32]; 3], w: &[f32]) -> [f64; 4] {
-    let mut s = [[0.0f64; 4]; 3];
-    let mut count = 0usize;
-    let (xc, yc, zc) = (v[0], v[1], v[2]);
-    let quads = w
-        .chunks_exact(4)
-        .zip(xc.chunks_exact(4))
-        .zip(yc.chunks_exact(4))
-        .zip(zc.chunks_exact(4));
-    // `v` for a free particle, +0 for a pinned one, by masking the bits (no branch, so
-    // the four lanes add in one vector; adding +0 leaves a sum unchanged).
-    let keep = |free: bool, v: f32| f64::from_bits((v as f64).to_bits() & (free as u64).wrapping_neg());
-    for (((w4, x4), y4), z4) in quads {
-        for l in 0..4 {
-            let free = w4[l] > 0.0;
-            count += free as usize;
-            s[0][l] += keep(free, x4[l]);
-            s[1][l] += keep(free, y4[l]);
-            s[2][l] += keep(free, z4[l]);
+/// Lane-width groups a lane sums in `f32` before the sums are added to the `f64` ones
+/// ([`chunk_sums`]: a block of `F32_RUN LANES` particles).
+const F32_RUN: usize = 8;
+
+/// `Σ vx, Σ vy, Σ vz, count` over the free particles of one chunk (see [`mean_velocity`]):
+/// eight particles at a time when `simd`, else one by one (the twin; the same bits).
+///
+/// Particle `i` of the chunk goes to lane `i mod LANES`. The lanes add in `f32` over a block
+/// of `F32_RUN` groups, then each lane's block sum is added to the lane's `f64` sum; the
+/// lanes are combined at the end as a pairwise tree. A pinned particle adds `+0` (its bits
+/// masked, no branch). Each `f32` block sum has at most `F32_RUN` terms a lane, so the mean
+/// is within a few `f32` ulps of the velocities' magnitude of the exact mean: the order of
+/// the rounding of the clamp's own `v - mean`.
+fn chunk_sums(v: [&[f32]; 3], w: &[f32], simd: bool) -> [f64; 4] {
+    let mut s = [[0.0f64; LANES]; 3];
+    let mut count = 0u32;
+    let full = w.len() / LANES * LANES;
+    let mut acc = [[0.0f32; LANES]; 3];
+    let flush = |acc: &mut [[f32; LANES]; 3], s: &mut [[f64; LANES]; 3]| {
+        for (sc, ac) in s.iter_mut().zip(acc.iter_mut()) {
+            for (a, b) in sc.iter_mut().zip(ac.iter_mut()) {
+                *a += f64::from(*b);
+                *b = 0.0;
+            }
         }
+    };
+    let mut i = 0;
+    while i < full {
+        let end = (i + F32_RUN * LANES).min(full);
+        if simd {
+            let mut a = acc.map(F32s::from);
+            while i < end {
+                let free = load(w, i).simd_gt(F32s::ZERO);
+                count += free.to_bitmask().count_ones();
+                for (a, c) in a.iter_mut().zip(v) {
+                    *a += free & load(c, i);
+                }
+                i += LANES;
+            }
+            acc = a.map(|a| a.to_array());
+        } else {
+            while i < end {
+                for l in 0..LANES {
+                    let free = w[i + l] > 0.0;
+                    count += u32::from(free);
+                    for (a, c) in acc.iter_mut().zip(v) {
+                        a[l] += f32::from_bits(c[i + l].to_bits() & u32::from(free).wrapping_neg());
+                    }
+                }
+                i += LANES;
+            }
+        }
+        flush(&mut acc, &mut s);
     }
-    let tail = w.len() / 4 * 4;
-    for (l, i) in (tail..w.len()).enumerate() {
+    for (l, i) in (full..w.len()).enumerate() {
         let free = w[i] > 0.0;
-        count += free as usize;
-        for (acc, c) in s.iter_mut().zip([xc, yc, zc]) {
-            acc[l] += keep(free, c[i]);
+        count += u32::from(free);
+        for (a, c) in acc.iter_mut().zip(v) {
+            a[l] += f32::from_bits(c[i].to_bits() & u32::from(free).wrapping_neg());
         }
     }
-    let sum = |a: usize| (s[a][0] + s[a][1]) + (s[a][2] + s[a][3]);
-    [sum(0), sum(1), sum(2), count as f64]
+    flush(&mut acc, &mut s);
+    let sum = |a: &[f64; LANES]| {
+        let mut a = *a;
+        let mut k = LANES;
+        while k > 1 {
+            k /= 2;
+            for j in 0..k {
+                a[j] = a[2 * j] + a[2 * j + 1];
+            }
+        }
+        a[0]
+    };
+    [sum(&s[0]), sum(&s[1]), sum(&s[2]), f64::from(count)]
 }

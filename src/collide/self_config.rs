@@ -99,6 +99,8 @@ pub struct SelfCollisionStats {
     /// Percentage in the last measured state.
     pub last_pct: f64,
     /// Wall time spent in self-collision stages (broadphase, clamp, pairs, correction), s.
+    /// The clamp's mean velocity, summed inside the predict pass when there are no
+    /// obstacles, counts here too: its chunks' times summed, shared by the threads.
     pub time_s: f64,
     /// Steps that ran self-collision.
     pub steps: u64,

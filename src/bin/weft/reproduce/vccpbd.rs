@@ -138,7 +138,8 @@ struct Row {
     max_strain: f64,
     /// Collision wall time a step by phase, ms: hash build (or tree refit), broadphase
     /// query, rest of the step start (reuse check, active blocks), substep pair passes,
-    /// substep corrections; the speed clamp is the rest of `collision_ms`.
+    /// substep corrections; the speed clamp (with its mean velocity, summed in the predict
+    /// pass) is the rest of `collision_ms`.
     phase_ms: [f64; 5],
     /// Steps that ran the broadphase (the others reused the candidate lists or, slow steps
     /// with the hash, went without them).
