@@ -146,7 +146,10 @@ pub fn idx8(f: impl Fn(usize) -> u32) -> Idx8 {
 /// Gathers eight values of a read-only array (bounds-checked), built in registers: on AVX,
 /// `_mm256_set_ps` of eight scalar loads (an array on the stack, reloaded as a vector, cost
 /// a store-forwarding stall that made the self-collision candidate test twice as slow,
-/// measured). Pure data movement: no result bit depends on it.
+/// measured). Pure data movement: no result bit depends on it. The AVX2 hardware gather
+/// (`vgatherdps`, the indices checked against the length first) measured slower on this
+/// Zen 3 machine (session 12, self-collision timeline, basic VcCPBD, one thread, three
+/// alternate runs: pairs column 41.4-42.8 -> 44.4-46.3 ms).
 #[inline(always)]
 pub fn gather1(s: &[f32], idx: &Idx8) -> F32s {
     let g = |l: usize| s[idx[l] as usize];
