@@ -203,7 +203,7 @@ impl World {
         // velocities between predict and the clamp, so they keep the separate pass.
         // Its time is self-collision time: summed over the chunks, shared by the threads
         // (like the obstacles' velocity pass below), and added to the stage's.
-        let mean_ns = std::sync::atomic::AtomicU64::new(0);
+        let mean_ns = AtomicU64::new(0);
         let mean_parts = (sc.is_some() && self.fuse_predict && !check && !has_obstacles).then(|| MeanParts::new(n));
         let mean_sink = mean_parts.as_ref().map(|m| (m, &mean_ns));
         let mut predicted_ahead = false;

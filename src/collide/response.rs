@@ -504,6 +504,7 @@ fn chunk_sums(v: [&[f32]; 3], w: &[f32], simd: bool) -> [f64; 4] {
     let mut count = 0u32;
     let full = w.len() / LANES * LANES;
     let mut acc = [[0.0f32; LANES]; 3];
+    let keep = |free: bool, v: f32| f32::from_bits(v.to_bits() & u32::from(free).wrapping_neg());
     let flush = |acc: &mut [[f32; LANES]; 3], s: &mut [[f64; LANES]; 3]| {
         for (sc, ac) in s.iter_mut().zip(acc.iter_mut()) {
             for (a, b) in sc.iter_mut().zip(ac.iter_mut()) {
@@ -532,7 +533,7 @@ fn chunk_sums(v: [&[f32]; 3], w: &[f32], simd: bool) -> [f64; 4] {
                     let free = w[i + l] > 0.0;
                     count += u32::from(free);
                     for (a, c) in acc.iter_mut().zip(v) {
-                        a[l] += f32::from_bits(c[i + l].to_bits() & u32::from(free).wrapping_neg());
+                        a[l] += keep(free, c[i + l]);
                     }
                 }
                 i += LANES;
@@ -544,7 +545,7 @@ fn chunk_sums(v: [&[f32]; 3], w: &[f32], simd: bool) -> [f64; 4] {
         let free = w[i] > 0.0;
         count += u32::from(free);
         for (a, c) in acc.iter_mut().zip(v) {
-            a[l] += f32::from_bits(c[i].to_bits() & u32::from(free).wrapping_neg());
+            a[l] += keep(free, c[i]);
         }
     }
     flush(&mut acc, &mut s);
