@@ -82,6 +82,12 @@
 //! 58-62, 150-164 / 82-91, PBD 126-127 / 59-61; 5: 129-134 / 57-60, 131-141 / 66-70, PBD
 //! 121-123 / 56-57; 3: 128-174 / 57-78 (slower with every response).
 //!
+//! Session 12: the skin's floor (`d / 8`, where a settled cloth's skin sits) at `d / 16`
+//! lists fewer near pairs (timeline, basic VcCPBD, one thread, two runs: settled steps'
+//! pairs column 9.9-10.1 -> 8.9-9.1 ms; `d / 4` 11.7-12.3) but rebuilds more often while
+//! folding; `weft reproduce vccpbd --size 100 --repeat 3`, two alternate runs in a slow spell:
+//! sums of the 12 hash rows 6.11 / 6.06 ms at `d / 8` against 6.19 / 6.27 at `d / 16`. Kept.
+//!
 //! # Cost (issue #5, `examples/self_collision_timeline.rs`, basic VcCPBD 100x100, 1 thread)
 //! Measured per substep, averaged over the 1500 substeps, with timers around the parts
 //! (loaded shared machine, so roughly): the near-list update 36 µs (274 rebuilds, ~180 µs
