@@ -167,6 +167,28 @@ pub fn gather1(s: &[f32], idx: &Idx8) -> F32s {
     }
 }
 
+/// [`gather1`] without the bounds checks.
+///
+/// # Safety
+/// Every index of `idx` must be below `s.len()`.
+#[inline(always)]
+pub unsafe fn gather1_unchecked(s: &[f32], idx: &Idx8) -> F32s {
+    // SAFETY: the caller guarantees every index is in bounds.
+    let g = |l: usize| unsafe { *s.get_unchecked(idx[l] as usize) };
+    let v = [g(0), g(1), g(2), g(3), g(4), g(5), g(6), g(7)];
+    #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
+    {
+        use std::arch::x86_64::{__m256, _mm256_set_ps};
+        // SAFETY: the cfg guarantees AVX at compile time; register-only intrinsic.
+        let r: __m256 = unsafe { _mm256_set_ps(v[7], v[6], v[5], v[4], v[3], v[2], v[1], v[0]) };
+        bytemuck::cast(r)
+    }
+    #[cfg(not(all(target_arch = "x86_64", target_feature = "avx")))]
+    {
+        F32s::from(v)
+    }
+}
+
 /// Lane positions in a window of two lane groups: entry `l` (0..16) names element `l % 8` of
 /// the low (`l < 8`) or high group.
 pub type Pos8 = [u32; LANES];

@@ -4,7 +4,7 @@
 use super::neighbours::within;
 #[cfg(test)]
 use super::neighbours::Neighbours;
-use crate::lanes::{gather1, idx8, F32s, Vec3x8, LANES};
+use crate::lanes::{gather1_unchecked, idx8, F32s, Vec3x8, LANES};
 
 /// Everything the pair pass reads.
 pub(crate) struct PairCtx<'a> {
@@ -35,12 +35,16 @@ impl PairCtx<'_> {
         let s = self.start;
         let listed = |i: usize, j: usize| within(s[0][i], s[1][i], s[2][i], s[0][j], s[1][j], s[2][j], self.q2);
         let mut k = 0;
-        if simd {
+        // Every index below the arrays' length, checked once, so the gathers need no checks.
+        let len = self.p.iter().map(|a| a.len()).min().unwrap_or(0);
+        let top = pairs.iter().fold(0u32, |m, &(i, j)| m.max(i).max(j));
+        if simd && (top as usize) < len {
             let limv = F32s::splat(lim);
             while k + LANES <= pairs.len() {
                 let ii = idx8(|l| pairs[k + l].0);
                 let jj = idx8(|l| pairs[k + l].1);
-                let g = |a: &[f32], side: usize| gather1(a, if side == 0 { &ii } else { &jj });
+                // SAFETY: every index of `pairs` is at most `top < len` (checked above).
+                let g = |a: &[f32], side: usize| unsafe { gather1_unchecked(a, if side == 0 { &ii } else { &jj }) };
                 let v = Vec3x8 {
                     x: g(self.p[0], 0) - g(self.p[0], 1),
                     y: g(self.p[1], 0) - g(self.p[1], 1),
