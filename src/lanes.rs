@@ -30,6 +30,17 @@ pub fn load(s: &[f32], i: usize) -> F32s {
     F32s::from(a)
 }
 
+/// [`load`] without the bounds check.
+///
+/// # Safety
+/// `i + LANES <= s.len()`.
+#[inline(always)]
+pub unsafe fn load_unchecked(s: &[f32], i: usize) -> F32s {
+    debug_assert!(i + LANES <= s.len());
+    // SAFETY: the caller guarantees the eight values are inside `s`.
+    F32s::from(unsafe { std::ptr::read_unaligned(s.as_ptr().add(i).cast::<[f32; LANES]>()) })
+}
+
 /// Stores eight values at `i..i + 8`.
 #[inline(always)]
 pub fn store(s: &mut [f32], i: usize, v: F32s) {
@@ -134,6 +145,17 @@ pub type Idx8 = [u32; LANES];
 #[inline(always)]
 pub fn load_idx(s: &[u32], i: usize) -> Idx8 {
     s[i..i + LANES].try_into().expect("slice of lane width")
+}
+
+/// [`load_idx`] without the bounds check.
+///
+/// # Safety
+/// `i + LANES <= s.len()`.
+#[inline(always)]
+pub unsafe fn load_idx_unchecked(s: &[u32], i: usize) -> Idx8 {
+    debug_assert!(i + LANES <= s.len());
+    // SAFETY: the caller guarantees the eight values are inside `s`.
+    unsafe { std::ptr::read_unaligned(s.as_ptr().add(i).cast::<Idx8>()) }
 }
 
 /// Eight indices `f(0) .. f(7)`, written out (array `map` and `from_fn` can be compiled to

@@ -19,6 +19,18 @@ fn gather1_puts_entry_idx_l_in_lane_l() {
 }
 
 #[test]
+fn unchecked_loads_read_what_the_checked_ones_read() {
+    let s: Vec<f32> = (0..20).map(|i| 0.25 * i as f32).collect();
+    let u: Vec<u32> = (0..20).map(|i| 3 * i).collect();
+    for i in 0..=20 - LANES {
+        // SAFETY: `i + LANES <= 20`.
+        let (a, b) = unsafe { (load_unchecked(&s, i), load_idx_unchecked(&u, i)) };
+        assert_eq!(a.to_array(), load(&s, i).to_array());
+        assert_eq!(b, load_idx(&u, i));
+    }
+}
+
+#[test]
 fn pick16_reads_the_named_window_element() {
     let lo = F32s::from([0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0]);
     let hi = F32s::from([8.0, 9.0, 10.0, 11.0, 12.0, 13.0, 14.0, 15.0]);

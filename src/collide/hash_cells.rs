@@ -65,7 +65,7 @@
 
 use super::SpatialHash;
 use crate::collide::neighbours::{search_radius, within, Neighbours};
-use crate::lanes::{load_idx, F32s, Vec3x8, LANES};
+use crate::lanes::{load, load_idx, load_idx_unchecked, load_unchecked, F32s, Vec3x8, LANES};
 use crate::Result;
 use wide::u32x8;
 
@@ -90,6 +90,10 @@ struct Reach {
     md2: f32,
     r: f32,
     s2: f32,
+    /// The shortest of the slot arrays the lane scan reads (positions and rest data, each
+    /// padded by a lane group): a range ending at `e` with `e + LANES <= len` is scanned
+    /// without bounds checks.
+    len: usize,
 }
 
 impl SpatialHash {
@@ -104,6 +108,7 @@ impl SpatialHash {
             md2,
             r: search_radius(max_dist),
             s2,
+            len: self.scan_len(),
         };
         let ts = self.table_size;
         out.fill_pairs_parallel(self.n, ts.div_ceil(BUCKETS_PER_TASK), |t, buf| {
@@ -121,12 +126,31 @@ impl SpatialHash {
             md2,
             r: search_radius(max_dist),
             s2,
+            len: self.scan_len(),
         };
         out.fill_pairs_serial(self.n, |buf| {
             for b in 0..self.table_size {
                 self.bucket_pairs::<false>(b, k, buf);
             }
         })
+    }
+
+    /// The shortest of the slot arrays [`SpatialHash::pair_scan_lanes`] reads.
+    fn scan_len(&self) -> usize {
+        let rc = &self.rest;
+        [
+            self.sx.len(),
+            self.sy.len(),
+            self.sz.len(),
+            rc.x.len(),
+            rc.y.len(),
+            rc.z.len(),
+            rc.ids.len(),
+            rc.cloth.len(),
+        ]
+        .into_iter()
+        .min()
+        .unwrap_or(0)
     }
 
     /// Integer cell of the particle in slot `k`.
@@ -303,6 +327,7 @@ impl SpatialHash {
             md2: max_dist * max_dist,
             r: search_radius(max_dist),
             s2: skip * skip,
+            len: self.scan_len(),
         };
         self.box_ranges(p, k.r, |b0, b1| {
             for c in self.cell_start[b0] as usize..self.cell_start[b1] as usize {
@@ -317,20 +342,50 @@ impl SpatialHash {
     /// and rest distance, each computed like [`SpatialHash::pair_scan_scalar`] (no FMA).
     #[inline(always)]
     fn pair_scan_lanes(&self, q: &Probe, k: Reach, s: usize, e: usize, buf: &mut Vec<u32>) {
+        if e + LANES <= k.len {
+            self.pair_scan_lanes_with::<false>(q, k, s, e, buf);
+        } else {
+            self.pair_scan_lanes_with::<true>(q, k, s, e, buf);
+        }
+    }
+
+    /// [`SpatialHash::pair_scan_lanes`] with bounds-checked loads (`CHECKED`) or, when the
+    /// caller found `e + LANES <= k.len`, without.
+    #[inline(always)]
+    fn pair_scan_lanes_with<const CHECKED: bool>(&self, q: &Probe, k: Reach, s: usize, e: usize, buf: &mut Vec<u32>) {
+        // SAFETY (the unchecked loads): every group starts at `c < e` and `e + LANES <= k.len`,
+        // the shortest array read, so `c + LANES` stays inside each of them.
+        let ld = |a: &[f32], c: usize| if CHECKED { load(a, c) } else { unsafe { load_unchecked(a, c) } };
+        let ld_idx = |a: &[u32], c: usize| {
+            if CHECKED {
+                load_idx(a, c)
+            } else {
+                unsafe { load_idx_unchecked(a, c) }
+            }
+        };
         let rc = &self.rest;
         let (pv, m2) = (Vec3x8::splat(q.p), F32s::splat(k.md2));
         let mut c = s;
         while c < e {
-            let d = Vec3x8::load(&self.sx, &self.sy, &self.sz, c) - pv;
+            let d = Vec3x8 {
+                x: ld(&self.sx, c),
+                y: ld(&self.sy, c),
+                z: ld(&self.sz, c),
+            } - pv;
             let mut bits = (d.x * d.x + d.y * d.y + d.z * d.z).simd_le(m2).to_bitmask();
             if e - c < LANES {
                 bits &= (1u32 << (e - c)) - 1;
             }
             if bits != 0 {
-                let ids = u32x8::from(load_idx(&rc.ids, c));
-                let rd = Vec3x8::splat(q.r) - Vec3x8::load(&rc.x, &rc.y, &rc.z, c);
+                let ids = u32x8::from(ld_idx(&rc.ids, c));
+                let rd = Vec3x8::splat(q.r)
+                    - Vec3x8 {
+                        x: ld(&rc.x, c),
+                        y: ld(&rc.y, c),
+                        z: ld(&rc.z, c),
+                    };
                 let near = (rd.x * rd.x + rd.y * rd.y + rd.z * rd.z).simd_le(F32s::splat(k.s2)).to_bitmask();
-                let same = u32x8::from(load_idx(&rc.cloth, c)).simd_eq(u32x8::splat(q.cloth)).to_bitmask();
+                let same = u32x8::from(ld_idx(&rc.cloth, c)).simd_eq(u32x8::splat(q.cloth)).to_bitmask();
                 bits &= !(near & same) & !ids.simd_eq(u32x8::splat(q.i)).to_bitmask();
                 while bits != 0 {
                     let j = rc.ids[c + bits.trailing_zeros() as usize];
