@@ -53,6 +53,11 @@
 //! cell / particle ratio 0.37-0.41 against 0.41-0.42, within the noise, so the simpler
 //! branching kernel stays.
 //!
+//! Session 12: the lane scan loads without bounds checks (the slot arrays are padded by a
+//! lane group, so a range ending inside them can be checked once): callgrind over the basic
+//! fold's timeline, one thread, step start 573.6 -> 530.1 million instructions; three
+//! alternate runs, query column 27.2-27.3 -> 26.5-26.8 ms.
+//!
 //! Tried in session 11 and not kept (a falling step's query, step 20 of the basic fold,
 //! ~7.9 million instructions, ~12 lane groups a member at ~45% lane use; alternate runs of a
 //! micro-bench, 500-1000 queries each): each row range cut once into lane-width slices, so

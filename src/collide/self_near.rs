@@ -82,6 +82,15 @@
 //! 58-62, 150-164 / 82-91, PBD 126-127 / 59-61; 5: 129-134 / 57-60, 131-141 / 66-70, PBD
 //! 121-123 / 56-57; 3: 128-174 / 57-78 (slower with every response).
 //!
+//! Session 12: the pair pass's candidate test and the filter of the mid list gather without
+//! per-lane bounds checks, the largest index of their pairs checked once a scan
+//! (`lanes::gather1_unchecked`, `self_near_scan::gather_xyzw8_unchecked`): callgrind over the
+//! timeline, one thread, candidate test 158.2 -> 86.0 million instructions, filter 120.5 ->
+//! 101.7, pair phase 872.6 -> 783.6; three alternate runs, pairs column 43.6-44.8 -> 41.5-42.6
+//! ms. The candidate lists' scan keeps its checks (a check a list, or one over a range's
+//! entries, saved nothing: 118.4 -> 131.1 and 117.6 million); the AVX2 hardware gather was
+//! slower (see `lanes::gather1`).
+//!
 //! Session 12: the skin's floor (`d / 8`, where a settled cloth's skin sits) at `d / 16`
 //! lists fewer near pairs (timeline, basic VcCPBD, one thread, two runs: settled steps'
 //! pairs column 9.9-10.1 -> 8.9-9.1 ms; `d / 4` 11.7-12.3) but rebuilds more often while
