@@ -11,7 +11,8 @@
 //! pinned row (none by default, like the reproduction).
 //!
 //! Columns are ms for that step; `clamp` is the stage's total minus the listed phases (the speed
-//! clamp and bookkeeping); `rebuild` is 1 when the step ran the broadphase.
+//! clamp with its mean velocity, summed in the predict pass, and bookkeeping); `rebuild` is 1
+//! when the step ran the broadphase.
 
 use weft::collide::self_config::{Response, SelfBroadphase, SelfCollision};
 use weft::{Fabric, SolverParams};
