@@ -20,21 +20,26 @@
 //! (static friction when `|v_t| <= mu |v_n|`). A velocity leaving the face is unchanged.
 
 use super::narrow::Contact;
-
-#[inline]
-fn dot(a: [f32; 3], b: [f32; 3]) -> f32 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
+use super::shapes::{dot, sub};
 
 /// The corrected position of a particle whose step `x -> p` made contact `c` (module doc).
 pub fn resolve_position(x: [f32; 3], p: [f32; 3], c: &Contact, th: f32) -> [f32; 3] {
-    let m = c.normal;
-    let hx = dot(m, [x[0] - c.point[0], x[1] - c.point[1], x[2] - c.point[2]]);
-    let hp = dot(m, [p[0] - c.point[0], p[1] - c.point[1], p[2] - c.point[2]]);
+    resolve_against_plane(x, p, c.point, c.normal, th, true)
+}
+
+/// The response of one contact plane (point `point`, unit normal `m`, stand-off `th`) to the
+/// step `x -> p` (module doc). `stay`: a path that crossed the plane from inside the layer
+/// goes back to `x` (a mesh, where a push along one face's normal can enter the mesh through
+/// a neighbouring face); otherwise it is pushed (a convex shape, which the push cannot
+/// enter). [`resolve_position`] and the obstacle stage's kernels share it.
+#[inline]
+pub(crate) fn resolve_against_plane(x: [f32; 3], p: [f32; 3], point: [f32; 3], m: [f32; 3], th: f32, stay: bool) -> [f32; 3] {
+    let hx = dot(m, sub(x, point));
+    let hp = dot(m, sub(p, point));
     if hx > hp && hx >= th {
         let tau = ((hx - th) / (hx - hp)).clamp(0.0, 1.0);
         [0, 1, 2].map(|k| x[k] + tau * (p[k] - x[k]))
-    } else if hx > 0.0 && hp < 0.0 {
+    } else if stay && hx > 0.0 && hp < 0.0 {
         // Crossed the plane from inside the layer: stay at the start, which lies before the
         // crossing (the push below could carry a deep `p` through a neighbouring face).
         x

@@ -38,6 +38,7 @@
 //! SIMD and scalar kernels perform the same f32 operations in the same order, with no fused
 //! multiply-add, so they agree bit for bit (`tests.rs`).
 
+use super::mesh_response::resolve_against_plane;
 use super::shapes::{dot, sub, Shape};
 use crate::lanes::{F32s, Vec3x8, LANES};
 
@@ -330,7 +331,7 @@ pub fn project_simd(slots: &[Slots], th: &[f32], start: usize, p: [&mut [f32]; 3
 /// mesh's plane (`mesh[k]` for obstacle `k`: a push along one face's normal can enter a
 /// non-convex mesh through a neighbouring face), else push it along the normal. The chosen
 /// contact is the first crossing of the path, so the point reached lies before every crossing:
-/// outside the obstacle ([`resolve_position`](super::mesh_response::resolve_position)).
+/// outside the obstacle ([`resolve_against_plane`], which [`resolve_position`](super::mesh_response::resolve_position) uses too).
 /// Element-wise; the parallel and serial runs give the same bits.
 pub fn resolve_along_path(
     slots: &[Slots],
@@ -356,18 +357,7 @@ pub fn resolve_along_path(
                 continue;
             }
             let xr = [x[0][i] - u[0], x[1][i] - u[1], x[2][i] - u[2]];
-            let (hx, hp) = (dot(n, sub(xr, c)), dot(n, sub(q, c)));
-            if hx > hp && hx >= th[g] {
-                let tau = ((hx - th[g]) / (hx - hp)).clamp(0.0, 1.0);
-                q = [0, 1, 2].map(|k| xr[k] + tau * (q[k] - xr[k]));
-            } else if mesh && hx > 0.0 && hp < 0.0 {
-                // A mesh's plane crossed from inside the layer: back to the start (see
-                // `resolve_position`; a convex shape keeps the push, which cannot enter it).
-                q = xr;
-            } else if hp < th[g] {
-                let d = th[g] - hp;
-                q = [0, 1, 2].map(|k| q[k] + d * n[k]);
-            }
+            q = resolve_against_plane(xr, q, c, n, th[g], mesh);
         }
         (px[i], py[i], pz[i]) = (q[0], q[1], q[2]);
         i += 1;

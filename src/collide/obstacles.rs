@@ -57,6 +57,9 @@ const BLOCKS_PER_TASK: usize = 32;
 pub struct ObstacleSet {
     list: Vec<Obstacle>,
     slots: Vec<Slots>,
+    /// Whether each obstacle is a mesh (the response's rule for a path crossing a plane from
+    /// inside the layer, [`k::resolve_along_path`]), set with the slots.
+    mesh: Vec<bool>,
     th: Vec<f32>,
     reach: Vec<f32>,
     friction: f32,
@@ -115,6 +118,7 @@ impl ObstacleSet {
         }
         self.reach = self.th.iter().map(|&t| t + t.max(MIN_MARGIN)).collect();
         self.slots = vec![Slots::new(len / LANES); self.list.len()];
+        self.mesh = self.list.iter().map(|o| matches!(o.geometry, Geometry::Mesh(_))).collect();
         for o in &mut self.list {
             if let Geometry::Mesh(m) = &mut o.geometry {
                 m.memory = if m.face_memory { vec![NO_FACE; len] } else { Vec::new() };
@@ -198,14 +202,13 @@ impl ObstacleSet {
     /// response; [`k::resolve_along_path`]).
     pub(crate) fn resolve(&self, particles: &mut Particles, h: f32, parallel: bool, simd: bool) {
         let shifts: Vec<[f32; 3]> = self.list.iter().map(|o| o.velocity.map(|c| c * h)).collect();
-        let mesh: Vec<bool> = self.list.iter().map(|o| matches!(o.geometry, Geometry::Mesh(_))).collect();
-        let (slots, th) = (&self.slots, &self.th);
+        let (slots, th, mesh) = (&self.slots, &self.th, &self.mesh);
         particles.for_chunks(parallel, |c| {
             let (x, p) = ([&*c.x, &*c.y, &*c.z], [c.px, c.py, c.pz]);
             if simd {
-                k::resolve_simd(slots, &shifts, &mesh, th, c.start, x, p)
+                k::resolve_simd(slots, &shifts, mesh, th, c.start, x, p)
             } else {
-                k::resolve_along_path(slots, &shifts, &mesh, th, c.start, x, p)
+                k::resolve_along_path(slots, &shifts, mesh, th, c.start, x, p)
             }
         });
     }
