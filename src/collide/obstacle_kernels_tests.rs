@@ -125,11 +125,19 @@ proptest! {
     }
 }
 
+/// One obstacle's slots for one block: a floor contact (point at the origin, normal `+y`) at
+/// each of `lanes`.
+fn floor_slots(lanes: &[usize]) -> Vec<Slots> {
+    let mut s = Slots::new(1);
+    for &l in lanes {
+        s.write(l, [0.0; 3], [0.0, 1.0, 0.0]);
+    }
+    vec![s]
+}
+
 #[test]
 fn velocity_pass_removes_approach_and_applies_friction() {
-    let mut slots = vec![Slots::new(1)];
-    slots[0].write(0, [0.0; 3], [0.0, 1.0, 0.0]);
-    slots[0].write(1, [0.0; 3], [0.0, 1.0, 0.0]);
+    let mut slots = floor_slots(&[0, 1]);
     let th = vec![0.01; LANES];
     let (x, y, z) = (vec![0.0; LANES], vec![0.01, 0.5, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], vec![0.0; LANES]);
     let (mut vx, mut vy, mut vz) = (vec![3.0; LANES], vec![-1.0; LANES], vec![0.0; LANES]);
@@ -286,9 +294,7 @@ proptest! {
 /// for a convex shape; both backends alike. One that stays in front of the plane is pushed.
 #[test]
 fn a_crossing_from_inside_the_layer_returns_to_the_start_on_meshes_only() {
-    let mut slots = vec![Slots::new(1)];
-    slots[0].write(2, [0.0; 3], [0.0, 1.0, 0.0]);
-    slots[0].write(5, [0.0; 3], [0.0, 1.0, 0.0]);
+    let slots = floor_slots(&[2, 5]);
     let th = vec![0.01; LANES];
     // Lane 2 starts 4 mm above the plane (inside the 10 mm layer) and ends 30 mm behind it,
     // 0.2 m along; lane 5 ends 4 mm above it (inside the layer, no crossing).
@@ -324,8 +330,7 @@ fn a_crossing_from_inside_the_layer_returns_to_the_start_on_meshes_only() {
 /// zeros included, and do change touched ones.
 #[test]
 fn simd_passes_keep_untouched_lanes_bitwise() {
-    let mut slots = vec![Slots::new(1)];
-    slots[0].write(3, [0.0; 3], [0.0, 1.0, 0.0]);
+    let mut slots = floor_slots(&[3]);
     slots[0].set_approach(3, 1.0);
     let th = vec![0.01; LANES];
     let x = [vec![-0.0; LANES], vec![0.5; LANES], vec![-0.0; LANES]];
