@@ -54,7 +54,7 @@
 //!   tested against all particles instead (correct, slow).
 
 use super::neighbours::{check_positions, CHUNK};
-use crate::lanes::{load, F32s, LANES};
+use crate::lanes::{finite_lanes, load, F32s, LANES};
 use crate::{Result, WeftError};
 use rayon::prelude::*;
 
@@ -204,12 +204,10 @@ impl SpatialHash {
         let mut k = 0;
         if simd {
             let inv = F32s::splat(self.inv_spacing);
-            let inf = F32s::splat(f32::INFINITY);
             while k + LANES <= out.len() {
                 let i = start + k;
                 let (x, y, z) = (load(p[0], i), load(p[1], i), load(p[2], i));
-                // `|v| < inf` fails exactly when `v` is not finite.
-                let finite = x.abs().simd_lt(inf) & y.abs().simd_lt(inf) & z.abs().simd_lt(inf);
+                let finite = finite_lanes(x) & finite_lanes(y) & finite_lanes(z);
                 let bad = !finite.to_bitmask();
                 let c = [x, y, z].map(|v| (v * inv).floor().trunc_int().to_array());
                 for l in 0..LANES {

@@ -50,7 +50,7 @@ use super::hash::SpatialHash;
 use super::neighbours::{within, Neighbours};
 use super::self_collision::{build_hash, REST_SKIP_FACTOR};
 use super::self_near_moves::as_refs;
-use crate::lanes::{load, F32s, LANES};
+use crate::lanes::{finite_lanes, load, F32s, LANES};
 
 /// Most stale particles (taken new references since the last full build) a refresh may
 /// leave, over the particle count, before a full build is cheaper (at least
@@ -305,13 +305,12 @@ pub(crate) fn moved_past(p: [&[f32]; 3], at: [&[f32]; 3], n: usize, lim2: f32, s
     out.clear();
     let mut i = 0;
     if simd {
-        let (lim, inf) = (F32s::splat(lim2), F32s::splat(f32::INFINITY));
+        let lim = F32s::splat(lim2);
         while i + LANES <= n {
             let (x, y, z) = (load(p[0], i), load(p[1], i), load(p[2], i));
             let (dx, dy, dz) = (x - load(at[0], i), y - load(at[1], i), z - load(at[2], i));
             let d2 = dx * dx + dy * dy + dz * dz;
-            // `|v| < inf` fails exactly when `v` is not finite.
-            let ok = d2.abs().simd_lt(inf) & x.abs().simd_lt(inf) & y.abs().simd_lt(inf) & z.abs().simd_lt(inf);
+            let ok = finite_lanes(d2) & finite_lanes(x) & finite_lanes(y) & finite_lanes(z);
             if ok.to_bitmask() != 0xff {
                 return false;
             }

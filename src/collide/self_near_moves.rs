@@ -64,12 +64,12 @@ fn max_disp2_with<const MASKED: bool>(p: [&[f32]; 3], at: [&[f32]; 3], blocks: &
         if simd && g + LANES <= len {
             // Written out: `[0, 1, 2].map(..)` compiled to an out-of-line call per coordinate
             // here (callgrind: ~110 of the ~1600 million instructions of the pair phase).
-            let vx = load(p[0], g) - lanes8(ax);
-            let vy = load(p[1], g) - lanes8(ay);
-            let vz = load(p[2], g) - lanes8(az);
+            let vx = load(p[0], g) - load(ax, 0);
+            let vy = load(p[1], g) - load(ay, 0);
+            let vz = load(p[2], g) - load(az, 0);
             let mut d2 = vx * vx + vy * vy + vz * vz;
             if MASKED {
-                d2 *= lanes8(w);
+                d2 *= load(w, 0);
             }
             bad |= d2.is_nan();
             // NaN lanes are flagged above, so the plain `max` (no NaN ordering) is enough.
@@ -93,12 +93,4 @@ fn max_disp2_with<const MASKED: bool>(p: [&[f32]; 3], at: [&[f32]; 3], blocks: &
     } else {
         m
     }
-}
-
-/// The eight values of a lane-width chunk.
-#[inline(always)]
-fn lanes8(c: &[f32]) -> F32s {
-    let mut a = [0.0f32; LANES];
-    a.copy_from_slice(c);
-    F32s::from(a)
 }

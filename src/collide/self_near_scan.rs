@@ -165,7 +165,7 @@ fn filter_range_with<const WIDE: bool>(
     let r2 = reach.r * reach.r;
     // Every index below the copy's length, checked once, so the gathers need no checks
     // (session 12, with the pair pass's: see `PairCtx::near_candidates`).
-    let top = pairs.iter().fold(0u32, |m, &(i, j)| m.max(i).max(j));
+    let top = largest_id(pairs);
     if simd && (top as usize) < xyz.len() {
         let rv = F32s::splat(reach.r);
         let r2v = F32s::splat(r2);
@@ -353,6 +353,12 @@ fn collect_range_with<const WIDE: bool>(
             }
         }
     }
+}
+
+/// The largest particle id of `pairs` (0 when empty): one check of a scan's gathers.
+#[inline]
+pub(crate) fn largest_id(pairs: &[(u32, u32)]) -> u32 {
+    pairs.iter().fold(0u32, |m, &(i, j)| m.max(i).max(j))
 }
 
 /// The four components of eight entries of `xyz` (indices `idx`, bounds-checked) as four

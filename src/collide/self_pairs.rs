@@ -4,6 +4,7 @@
 use super::neighbours::within;
 #[cfg(test)]
 use super::neighbours::Neighbours;
+use super::self_near_scan::largest_id;
 use crate::lanes::{gather1_unchecked, idx8, F32s, Vec3x8, LANES};
 
 /// Everything the pair pass reads.
@@ -37,7 +38,7 @@ impl PairCtx<'_> {
         let mut k = 0;
         // Every index below the arrays' length, checked once, so the gathers need no checks.
         let len = self.p.iter().map(|a| a.len()).min().unwrap_or(0);
-        let top = pairs.iter().fold(0u32, |m, &(i, j)| m.max(i).max(j));
+        let top = largest_id(pairs);
         if simd && (top as usize) < len {
             let limv = F32s::splat(lim);
             while k + LANES <= pairs.len() {
