@@ -175,8 +175,13 @@ impl SpatialHash {
     /// row of its search box as one contiguous range of `cell_entries`.
     #[inline(always)]
     fn bucket(&self, cx: i32, cy: i32, cz: i32) -> usize {
-        let mask = self.table_size as u64 - 1;
-        (self.row_base(cy, cz).wrapping_add(cx as i64 as u64) & mask) as usize
+        self.in_row(self.row_base(cy, cz), cx)
+    }
+
+    /// The bucket of cell `cx` of the row whose hashed base is `base`.
+    #[inline(always)]
+    fn in_row(&self, base: u64, cx: i32) -> usize {
+        (base.wrapping_add(cx as i64 as u64) & (self.table_size as u64 - 1)) as usize
     }
 
     /// The bucket of one point, or `NO_BUCKET` when a coordinate is not finite (the
@@ -329,17 +334,12 @@ impl SpatialHash {
 /// The last cell row's hashed base (see [`SpatialHash::fill_buckets`]).
 struct RowMemo<'a> {
     hash: &'a SpatialHash,
-    mask: u64,
     last: Option<(i32, i32, u64)>,
 }
 
 impl<'a> RowMemo<'a> {
     fn new(hash: &'a SpatialHash) -> Self {
-        RowMemo {
-            hash,
-            mask: hash.table_size as u64 - 1,
-            last: None,
-        }
+        RowMemo { hash, last: None }
     }
 
     /// [`SpatialHash::bucket`] of cell `(cx, cy, cz)`, the row's base reused when the row is
@@ -354,7 +354,7 @@ impl<'a> RowMemo<'a> {
                 base
             }
         };
-        (base.wrapping_add(cx as i64 as u64) & self.mask) as u32
+        self.hash.in_row(base, cx) as u32
     }
 }
 
