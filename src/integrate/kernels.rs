@@ -67,6 +67,7 @@ fn predict_scalar(c: ParticleChunk<'_>, p: &PredictParams<'_>, has_g: bool, has_
     let h = p.h;
     let g = p.gravity.unwrap_or([0.0; 3]);
     let hc = p.h * p.drag.unwrap_or(0.0);
+    let force = p.force.filter(|_| has_f);
     for i in 0..c.x.len() {
         let w = c.w[i];
         let (mut vx, mut vy, mut vz) = (c.vx[i], c.vy[i], c.vz[i]);
@@ -76,8 +77,7 @@ fn predict_scalar(c: ParticleChunk<'_>, p: &PredictParams<'_>, has_g: bool, has_
             vy += gm[1] * h;
             vz += gm[2] * h;
         }
-        if has_f {
-            let f = p.force.expect("force arrays");
+        if let Some(f) = force {
             let j = c.start + i;
             let wh = w * h;
             vx += f[0][j] * wh;
