@@ -34,10 +34,13 @@
 //!   others on the 100x100 fold (`examples/self_collision_timeline`, one thread, two alternate
 //!   runs, query column over the run): `n / 2` 31.5-31.9 ms, `n` 27.4-27.9, `2 n` 26.3-26.6,
 //!   `4 n` 26.2-26.3 with a slower build (4.6-4.7 against 4.1-4.2 ms); `2 n` stays.
-//! * Bucket of cell `(cx, cy, cz)` = `mix(cy, cz) + cx` modulo `table_size`, `mix` being the
-//!   splitmix64 finalizer: the cells of one row along x sit in consecutive buckets, so a query
-//!   reads each row of its search box as one contiguous range of `cell_entries` (9 to 16 ranges
-//!   instead of 27 to 64 cells), while different rows land at random places.
+//! * Bucket of cell `(cx, cy, cz)` = `row(cy, cz) + cx` modulo `table_size`: the cells of one
+//!   row along x sit in consecutive buckets, so a query reads each row of its search box as one
+//!   contiguous range of `cell_entries` (9 to 16 ranges instead of 27 to 64 cells). The row's
+//!   base is linear, `cy a + cz b` (cells numbered in `(z, y, x)` order over the particles'
+//!   box, so neighbouring rows lie near each other in the slots), when that box has at most
+//!   four times `table_size` cells, and otherwise the splitmix64 finalizer of `(cy, cz)` (rows
+//!   at random places); the choice is made at each build from its positions (module `rows`).
 //! * The build also copies the positions into `cell_entries` order, so candidates are read
 //!   contiguously; the query checks that it is given the positions of the build. The
 //!   self-collision query ([`SpatialHash::query_upper_unskipped`], module `hash_rest`) also
@@ -67,7 +70,7 @@ pub struct SpatialHash {
     spacing: f32,
     inv_spacing: f32,
     table_size: usize,
-    /// `64 - log2(table_size)`: the bucket is the top bits of the mixed hash.
+    /// `64 - log2(table_size)`: the mixing hash's row base is its top bits.
     shift: u32,
     n: usize,
     non_finite: usize,
@@ -85,6 +88,8 @@ pub struct SpatialHash {
     slot_of: Vec<u32>,
     /// Rest data in cell order for the self-collision query (the `hash_rest` module).
     rest: rest::RestCopy,
+    /// Row strides of the linear row map, or `None` for the mixing hash (module `rows`).
+    strides: Option<(u64, u64)>,
 }
 
 /// The table size used for `n` particles: smallest power of two `>= max(2n, 16)`.
@@ -116,6 +121,7 @@ impl SpatialHash {
             sz: Vec::with_capacity(max_particles + LANES),
             slot_of: Vec::with_capacity(max_particles),
             rest: rest::RestCopy::default(),
+            strides: None,
         }
     }
 
@@ -158,16 +164,6 @@ impl SpatialHash {
     #[inline(always)]
     fn coord(&self, v: f32) -> i32 {
         (v * self.inv_spacing).floor() as i32
-    }
-
-    /// Bucket of cell `(0, cy, cz)`: a 64-bit mix of the row, top `log2(table_size)` bits.
-    #[inline(always)]
-    fn row_base(&self, cy: i32, cz: i32) -> u64 {
-        // The splitmix64 finalizer of the packed pair: every input bit reaches every top bit.
-        let mut h = ((cy as u32 as u64) << 32) | cz as u32 as u64;
-        h = (h ^ (h >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        h = (h ^ (h >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        (h ^ (h >> 31)) >> self.shift
     }
 
     /// Bucket of the cell `(cx, cy, cz)`: the row's hashed base plus `cx`, modulo the table
@@ -263,6 +259,7 @@ impl SpatialHash {
     /// Particles with a non-finite coordinate are put in no cell (see the module docs).
     pub fn build(&mut self, x: &[f32], y: &[f32], z: &[f32], n: usize, spacing: f32) -> Result<()> {
         self.prepare(x, y, z, n, spacing)?;
+        self.choose_rows([x, y, z], n, true);
         let mut buckets = std::mem::take(&mut self.bucket_of);
         let this = &*self;
         buckets
@@ -277,6 +274,7 @@ impl SpatialHash {
     /// Serial twin of [`SpatialHash::build`]; produces identical tables.
     pub fn build_serial(&mut self, x: &[f32], y: &[f32], z: &[f32], n: usize, spacing: f32) -> Result<()> {
         self.prepare(x, y, z, n, spacing)?;
+        self.choose_rows([x, y, z], n, false);
         let mut buckets = std::mem::take(&mut self.bucket_of);
         self.fill_buckets([x, y, z], 0, &mut buckets, false);
         self.bucket_of = buckets;
@@ -366,3 +364,6 @@ mod rest;
 
 #[path = "hash_cells.rs"]
 mod cells;
+
+#[path = "hash_rows.rs"]
+mod rows;
