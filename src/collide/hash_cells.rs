@@ -67,6 +67,14 @@
 //! queries, the same time; the rows copied once a cell into one padded buffer that every
 //! member scans in full groups: 365-369 against 301-303 µs (1 468 against 1 391-1 421 at the
 //! impact, step 44): the copy costs more than the partial groups it saves.
+//!
+//! Tried in session 13 and not kept: the members of a cell in the lanes (up to eight, loaded
+//! once) and each candidate of the half shell broadcast against them, one lane group a
+//! candidate for the whole cell. Most candidates of a cloth lie within reach of some member,
+//! so nearly every one also ran the rest test; callgrind of 20 falling-step queries 754 ->
+//! 821 million instructions, and in the timeline (three alternate runs) the query column
+//! 24.5-25.9 -> 26.0-27.7 ms, slower at every falling step, although a warm-cache micro-bench
+//! had it 3-10% faster.
 
 use super::SpatialHash;
 use crate::collide::neighbours::{search_radius, within, Neighbours};
