@@ -83,6 +83,12 @@
 //! and 13 mid queries of ~1.35 ms each came). The tree keeps the wide lists (its query is the
 //! slow part either way).
 //!
+//! Tried in session 13 and not kept: going direct also on a fast step (up to 1.5 d a step)
+//! when the last build's candidates were dense (at least 2, 3 or 4 pairs a particle: the
+//! steps of the impact, whose queries keep 47 000-110 000 pairs). Timeline, basic VcCPBD, one
+//! thread, two runs each: query column 22.8-23.0 -> 19.5-20.8 ms, pairs 38.9-39.1 ->
+//! 42.4-44.5, stage 77.2-77.6 -> 78.0-79.1.
+//!
 //! The hashed mid list is copied to pairs for the near rebuilds' eight-lane filter (with ~7
 //! partners a particle the scan over lists ran its scalar tail): 7.49-7.85 -> 7.43 ms (sum
 //! above). Tried and not kept: `MID_SKIN` 1.5 and 2 (fewer mid queries, larger mid lists):
