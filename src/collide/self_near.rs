@@ -91,6 +91,12 @@
 //! entries, saved nothing: 118.4 -> 131.1 and 117.6 million); the AVX2 hardware gather was
 //! slower (see `lanes::gather1`).
 //!
+//! Session 13: the eight-pair groups of the candidate test, the mid-list filter and the
+//! candidate lists' scan are read as fixed-size arrays (`as_chunks`), so taking their indices
+//! needs no per-lane bounds checks: callgrind over the timeline, one thread, candidate test
+//! 86.0 -> 63.6 million instructions, filter 103.1 -> 99.6, scan 118.4 -> 116.3, pair phase
+//! 781.9 -> 753.8; three alternate runs, pairs column 39.1-39.7 -> 38.5-38.8 ms.
+//!
 //! Session 12: the skin's floor (`d / 8`, where a settled cloth's skin sits) at `d / 16`
 //! lists fewer near pairs (timeline, basic VcCPBD, one thread, two runs: settled steps'
 //! pairs column 9.9-10.1 -> 8.9-9.1 ms; `d / 4` 11.7-12.3) but rebuilds more often while

@@ -161,7 +161,7 @@ fn filter_range_with<const WIDE: bool>(
     xyz: &[[f32; 4]],
     out: &mut Vec<(u32, u32)>,
 ) {
-    let mut k = 0;
+    let mut done = 0;
     let r2 = reach.r * reach.r;
     // Every index below the copy's length, checked once, so the gathers need no checks
     // (session 12, with the pair pass's: see `PairCtx::near_candidates`).
@@ -169,8 +169,7 @@ fn filter_range_with<const WIDE: bool>(
     if simd && (top as usize) < xyz.len() {
         let rv = F32s::splat(reach.r);
         let r2v = F32s::splat(r2);
-        while k + LANES <= pairs.len() {
-            let c = &pairs[k..k + LANES];
+        for c in pairs.as_chunks::<LANES>().0 {
             // SAFETY (both gathers): every index of `pairs` is at most `top < xyz.len()`.
             // Sorted by `i`, eight pairs mostly share it: then one load, broadcast (the same
             // values as the gather).
@@ -193,10 +192,10 @@ fn filter_range_with<const WIDE: bool>(
                 out.push(c[bits.trailing_zeros() as usize]);
                 bits &= bits - 1;
             }
-            k += LANES;
+            done += LANES;
         }
     }
-    for &(i, j) in &pairs[k..] {
+    for &(i, j) in &pairs[done..] {
         let (i, j) = (i as usize, j as usize);
         let v = [p[0][i] - p[0][j], p[1][i] - p[1][j], p[2][i] - p[2][j]];
         let d2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
@@ -322,8 +321,7 @@ fn collect_range_with<const WIDE: bool>(
         if simd {
             let piv = [F32s::splat(pi[0]), F32s::splat(pi[1]), F32s::splat(pi[2])];
             let gi = if WIDE { F32s::splat(reach.grow_of(i)) } else { F32s::splat(0.0) };
-            while k + LANES <= list.len() {
-                let js = &list[k..k + LANES];
+            for js in list.as_chunks::<LANES>().0 {
                 let idx = idx8(|l| js[l]);
                 // Checked here: a per-list check before the loop measured more instructions
                 // (callgrind over the timeline: 118.4 -> 131.1 million; the lists are short).

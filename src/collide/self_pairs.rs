@@ -35,15 +35,16 @@ impl PairCtx<'_> {
         let lim = self.d * self.d * 1.0001;
         let s = self.start;
         let listed = |i: usize, j: usize| within(s[0][i], s[1][i], s[2][i], s[0][j], s[1][j], s[2][j], self.q2);
-        let mut k = 0;
+        let mut done = 0;
         // Every index below the arrays' length, checked once, so the gathers need no checks.
         let len = self.p.iter().map(|a| a.len()).min().unwrap_or(0);
         let top = largest_id(pairs);
         if simd && (top as usize) < len {
             let limv = F32s::splat(lim);
-            while k + LANES <= pairs.len() {
-                let ii = idx8(|l| pairs[k + l].0);
-                let jj = idx8(|l| pairs[k + l].1);
+            for (g8, group) in pairs.as_chunks::<LANES>().0.iter().enumerate() {
+                let k = g8 * LANES;
+                let ii = idx8(|l| group[l].0);
+                let jj = idx8(|l| group[l].1);
                 // SAFETY: every index of `pairs` is at most `top < len` (checked above).
                 let g = |a: &[f32], side: usize| unsafe { gather1_unchecked(a, if side == 0 { &ii } else { &jj }) };
                 let v = Vec3x8 {
@@ -53,16 +54,16 @@ impl PairCtx<'_> {
                 };
                 let mut bits = v.length_sq().simd_lt(limv).to_bitmask();
                 while bits != 0 {
-                    let (i, j) = pairs[k + bits.trailing_zeros() as usize];
+                    let (i, j) = group[bits.trailing_zeros() as usize];
                     bits &= bits - 1;
                     if listed(i as usize, j as usize) {
                         out.push((i, j));
                     }
                 }
-                k += LANES;
+                done = k + LANES;
             }
         }
-        for &(i, j) in &pairs[k..] {
+        for &(i, j) in &pairs[done..] {
             let (iu, ju) = (i as usize, j as usize);
             let v = [
                 self.p[0][iu] - self.p[0][ju],
