@@ -47,6 +47,17 @@ pub fn store(s: &mut [f32], i: usize, v: F32s) {
     s[i..i + LANES].copy_from_slice(&v.to_array());
 }
 
+/// Stores eight values at `i..i + 8` without a bounds check.
+///
+/// # Safety
+/// `i + LANES <= s.len()`.
+#[inline(always)]
+pub unsafe fn store_unchecked(s: &mut [f32], i: usize, v: F32s) {
+    debug_assert!(i + LANES <= s.len());
+    // SAFETY: the caller guarantees the eight values are inside `s`.
+    unsafe { std::ptr::write_unaligned(s.as_mut_ptr().add(i).cast::<[f32; LANES]>(), v.to_array()) }
+}
+
 /// Eight 3-vectors, one per lane.
 #[derive(Clone, Copy, Debug)]
 pub struct Vec3x8 {
