@@ -42,6 +42,13 @@
 //!   first-contact order (perf annotate put the loads of that loop on top): one thread,
 //!   `--repeat 3`, sum of the 12 tethered hash rows 16.50-16.92 ms against 16.52-16.64.
 
+//!
+//! Tried in session 13 and not kept: the contacts computed without bounds checks (the
+//! candidates' largest id checked once against every array `pair_contact` reads): callgrind
+//! over the timeline, one thread, pair phase 728.0 -> 711.1 million instructions, but seven
+//! alternate runs gave the same pairs column (38.9-40.2 against 38.2-41.0 ms): the contacts'
+//! scattered loads, not their checks, set the pace.
+
 use rayon::prelude::*;
 
 use super::neighbours::Neighbours;
