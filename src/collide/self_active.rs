@@ -41,7 +41,6 @@
 //! * finishing and storing the sums block by block in ascending order instead of in
 //!   first-contact order (perf annotate put the loads of that loop on top): one thread,
 //!   `--repeat 3`, sum of the 12 tethered hash rows 16.50-16.92 ms against 16.52-16.64.
-
 //!
 //! Tried in session 13 and not kept: the contacts computed without bounds checks (the
 //! candidates' largest id checked once against every array `pair_contact` reads): callgrind
