@@ -82,6 +82,9 @@ use crate::lanes::{load, load_idx, load_idx_unchecked, load_unchecked, F32s, Vec
 use crate::Result;
 use wide::u32x8;
 
+#[path = "hash_members.rs"]
+mod members;
+
 /// Buckets walked by one parallel task (fixed, so the split does not depend on the threads).
 const BUCKETS_PER_TASK: usize = 1024;
 
@@ -166,43 +169,6 @@ impl SpatialHash {
         .unwrap_or(0)
     }
 
-    /// Integer cell of the particle in slot `k`.
-    #[inline(always)]
-    fn cell_of_slot(&self, k: usize) -> [i32; 3] {
-        [self.coord(self.sx[k]), self.coord(self.sy[k]), self.coord(self.sz[k])]
-    }
-
-    /// Whether the particle in slot `k` lies in cell `home` with its search box (radius `r`)
-    /// inside the 27 cells around it. Cell coordinates below `2^22` in magnitude are compared
-    /// as `f32` (integers there are exact, so this equals the integer test), others as `i64`.
-    #[inline(always)]
-    fn member(&self, k: usize, home: [i32; 3], r: f32) -> bool {
-        let p = [self.sx[k], self.sy[k], self.sz[k]];
-        let inv = self.inv_spacing;
-        let mut ok = true;
-        for a in 0..3 {
-            let c = (p[a] * inv).floor();
-            if c.is_nan() || c.abs() >= 4_194_304.0 {
-                return self.member_wide(p, home, r);
-            }
-            let lo = ((p[a] - r) * inv).floor();
-            let hi = ((p[a] + r) * inv).floor();
-            ok &= c as i32 == home[a] && lo >= c - 1.0 && hi <= c + 1.0;
-        }
-        ok
-    }
-
-    /// [`SpatialHash::member`] for far coordinates, on saturated integer cells.
-    #[cold]
-    fn member_wide(&self, p: [f32; 3], home: [i32; 3], r: f32) -> bool {
-        (0..3).all(|a| {
-            let c = i64::from(home[a]);
-            let lo = i64::from(self.coord((p[a] - r).max(-f32::MAX)));
-            let hi = i64::from(self.coord((p[a] + r).min(f32::MAX)));
-            i64::from(self.coord(p[a])) == c && lo >= c - 1 && hi <= c + 1
-        })
-    }
-
     /// The probe of the particle in slot `k`.
     #[inline(always)]
     fn probe_of(&self, k: usize) -> Probe {
@@ -225,8 +191,17 @@ impl SpatialHash {
         let home = self.cell_of_slot(s);
         let mut ranges = [(0usize, 0usize); 9];
         let mut nr = 0;
+        let mut members = 0u32;
         for slot in s..e {
-            if !self.member(slot, home, k.r) {
+            let is_member = if SIMD {
+                if (slot - s) % LANES == 0 {
+                    members = self.member_lanes(slot, e, home, k.r);
+                }
+                members & (1 << ((slot - s) % LANES)) != 0
+            } else {
+                self.member(slot, home, k.r)
+            };
+            if !is_member {
                 self.full_box::<SIMD>(slot, k, buf);
                 continue;
             }

@@ -97,3 +97,44 @@ fn cells_query_needs_the_rest_data_and_checks_its_arguments() {
     assert!(h.query_upper_unskipped_cells(0.06, 0.01, &mut got).is_err(), "beyond the spacing");
     assert!(h.query_upper_unskipped_cells_serial(0.03, f32::NAN, &mut got).is_err());
 }
+
+/// The lanes' member test gives every slot the scalar test's answer: a crumpled lattice
+/// (buckets of more than eight particles), particles exactly on cell faces, and saturated or
+/// far coordinates (the lanes' scalar fallback).
+#[test]
+fn member_lanes_equal_the_scalar_member_test() {
+    let h = 0.01f32;
+    let mut scenes = vec![lattices(14, h, 1.0, 0.5, 17), lattices(12, h, 0.0, 1.0, 1)];
+    let mut far = lattices(6, h, 1.0, 0.5, 5);
+    for (i, v) in [(3usize, 1e30f32), (4, -1e30), (9, 3e5), (10, 4.2e4)] {
+        far.0[i % 3][i] = v;
+    }
+    scenes.push(far);
+    let mut checked = 0;
+    for (p, rest, cloth) in &scenes {
+        let n = cloth.len();
+        let mut hs = SpatialHash::new(n);
+        hs.build(&p[0], &p[1], &p[2], n, 3.0 * h).unwrap();
+        hs.attach_rest([&rest[0], &rest[1], &rest[2]], cloth).unwrap();
+        let r = search_radius(3.0 * h);
+        let mut big = false;
+        for b in 0..hs.table_size {
+            let (s, e) = (hs.cell_start[b] as usize, hs.cell_start[b + 1] as usize);
+            if s == e {
+                continue;
+            }
+            big |= e - s > LANES;
+            let home = hs.cell_of_slot(s);
+            for k in (s..e).step_by(LANES) {
+                let bits = hs.member_lanes(k, e, home, r);
+                for slot in k..e.min(k + LANES) {
+                    assert_eq!(bits & (1 << (slot - k)) != 0, hs.member(slot, home, r), "slot {slot}");
+                    checked += 1;
+                }
+                assert_eq!(bits >> (e.min(k + LANES) - k), 0, "no bits past the bucket");
+            }
+        }
+        assert!(big || n < 300, "a bucket of more than eight particles");
+    }
+    assert!(checked > 600, "{checked}");
+}
