@@ -97,6 +97,15 @@
 //! 86.0 -> 63.6 million instructions, filter 103.1 -> 99.6, scan 118.4 -> 116.3, pair phase
 //! 781.9 -> 753.8; three alternate runs, pairs column 39.1-39.7 -> 38.5-38.8 ms.
 //!
+//! Session 13: while the cloth falls (near list straight from the candidate lists) the near
+//! rebuilds, about four a step, walked all 10 000 lists, most of them empty, and tested each
+//! short list's entries one by one; the candidates are now copied once a build into pairs
+//! and filtered eight at a time like the mid list (the same list, in the same order). Timer
+//! probes over the timeline's segments (one thread): the near rebuilds of steps 0-40 took
+//! ~3.5 of the segment's 4.3 ms of pairs column; three alternate runs, steps 0-45's pairs
+//! 8.40-8.57 -> 7.92-8.18 ms. (Session 8 had tried the same copy and seen no change in the
+//! reproduction's sums, then dominated by other phases.)
+//!
 //! Session 12: the skin's floor (`d / 8`, where a settled cloth's skin sits) at `d / 16`
 //! lists fewer near pairs (timeline, basic VcCPBD, one thread, two runs: settled steps'
 //! pairs column 9.9-10.1 -> 8.9-9.1 ms; `d / 4` 11.7-12.3) but rebuilds more often while
@@ -237,6 +246,10 @@ pub(crate) struct NearList {
     extra_near: Vec<(u32, u32)>,
     merged: Vec<(u32, u32)>,
     scratch: ScanScratch,
+    /// The candidate lists as pairs, in list order, for the near rebuilds straight from them
+    /// (made at the first such rebuild after [`NearList::invalidate`]).
+    cand_pairs: Vec<(u32, u32)>,
+    cand_pairs_valid: bool,
 }
 
 /// Where a mid list comes from.
@@ -265,6 +278,7 @@ impl NearList {
     pub(crate) fn invalidate(&mut self) {
         self.valid = false;
         self.mid_valid = false;
+        self.cand_pairs_valid = false;
     }
 
     /// Makes the list hold for the predicted positions `p`: kept if no particle of the active
@@ -351,7 +365,14 @@ impl NearList {
             MidSource::Candidates { cand, .. } if !use_mid => {
                 self.mid_valid = false;
                 let reach = self.fast.reach(r);
-                collect(cand, p, n, reach, simd, parallel, &mut self.scratch, &mut self.pairs);
+                if !self.cand_pairs_valid {
+                    self.cand_pairs.clear();
+                    let m = n.min(cand.len());
+                    self.cand_pairs
+                        .extend((0..m).flat_map(|i| cand.of(i).iter().map(move |&j| (i as u32, j))));
+                    self.cand_pairs_valid = true;
+                }
+                filter_pairs(&self.cand_pairs, p, n, reach, simd, parallel, &mut self.scratch, &mut self.pairs);
             }
             source => {
                 mid = self.update_mid(source, p, blocks, n, d, simd, parallel);
