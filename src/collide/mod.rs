@@ -48,7 +48,6 @@ pub mod self_collision;
 pub mod self_config;
 mod self_mid;
 mod self_near;
-mod self_near_fast;
 mod self_near_moves;
 mod self_near_scan;
 mod self_pairs;

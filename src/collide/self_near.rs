@@ -59,9 +59,26 @@
 //! ~180), nearly every substep, each scanning all particles; pairs column 44.4-44.5 -> 57.5-58.0
 //! ms (adaptive skin) and 62-64 ms (skin fixed at `d / 3`, ~9 500 near pairs).
 //!
-//! Session 10: a few fast particles (at most `FAST_MAX`) get the skin's cap while the rest of
-//! a folded cloth keeps a narrow skin (module `self_near_fast`, where the argument and the
-//! figures are).
+//! Session 10 gave a few fast particles (at most 16) the skin's cap while the rest of a folded
+//! cloth kept a narrow skin (a module `self_near_fast`, removed in session 13, below): on the
+//! movement-speed fold a handful of edge particles had set the skin to its cap `d / 2`.
+//!
+//! Session 13: the cap on the mid path lowered to the floor, `d / 8`, so the skin there is
+//! one number and the mid radius `d (1 + 1/8 + 1) = 2.125 d` instead of `2.5 d`: ~28% fewer
+//! mid pairs for every near rebuild to filter (the filter and the mid list's upkeep were
+//! ~11 of the ~15 ms of the fold's pairs column, steps 46-70, timer probes), against more
+//! rebuilds when a few particles move fast (cheap now). The split of session 10 could then
+//! never pay, so it went (with the scans' per-pair widening and the masked displacement
+//! check). Timeline, one thread, alternate runs, pairs column over the run: VcCPBD
+//! 37.4-37.7 -> 34.1-35.5 ms (caps `d / 4` and `3 d / 16`: 38.4-38.6 and 35.2-35.7 against
+//! 34.7-35.1 in a faster spell), PBD 37.6-37.7 -> 34.8-34.9, movement speed 44.5-46.0 ->
+//! 41.3-42.0; a floor of `d / 16` under the same cap was slower (VcCPBD 35.9-36.2, movement
+//! speed 51.6-51.7); `MID_SKIN` 0.75 and 1.25 at the new cap: 38.8-39.4 and 33.8-34.3 against
+//! 34.0-34.5, so 1 stays. `weft reproduce vccpbd --size 100 --repeat 3`, two alternate runs
+//! (a fast spell): sum of the 12 hash rows 5.12 / 5.09 -> 5.00 / 5.02 ms, basic VcCPBD 0.491 /
+//! 0.490 -> 0.484 / 0.473 ms (49.3-49.4x -> 50.1-51.2x); the movement-speed rows of cotton
+//! and polyester 3-8% slower (0.398-0.401 -> 0.419-0.431 and 0.417-0.420 -> 0.432-0.434 ms,
+//! still 68-76x), the others faster or the same.
 //!
 //! Session 11: the full queries after the first were all made because the stale particles
 //! passed their cap, with 12 to 77 particles moved. The hash is now built again from the
@@ -192,7 +209,6 @@
 
 use super::neighbours::Neighbours;
 use super::self_mid::{merge_unique, HashedMid, RestRule};
-use super::self_near_fast::{FastSet, FAST_MAX};
 use super::self_near_moves::{as_refs, copy_blocks, max_disp2_blocks};
 use super::self_near_scan::{collect, filter_pairs, filter_range, Reach, ScanScratch};
 use super::self_verlet::SAFE;
@@ -202,8 +218,12 @@ use crate::lanes::LANES;
 /// near list is built from the candidates directly.
 pub(crate) const NEAR_SKIN_MAX: f32 = 1.0;
 
-/// The cap when it is built from the mid list (the mid radius allows for it).
-pub(crate) const MID_NEAR_SKIN_MAX: f32 = 0.5;
+/// The cap when it is built from the mid list (the mid radius allows for it): the floor, so
+/// on the mid path the skin is `d / 8` (session 13, see the module docs).
+pub(crate) const MID_NEAR_SKIN_MAX: f32 = NEAR_SKIN_FLOOR;
+
+/// Smallest near-list skin over the collision distance (where a settled cloth's skin sits).
+pub(crate) const NEAR_SKIN_FLOOR: f32 = 0.125;
 
 /// Substeps the near skin is sized to last, at the fastest particle's rate since the last
 /// build (20 before the mid list made rebuilds cheap; see the module docs).
@@ -226,8 +246,6 @@ pub(crate) struct NearList {
     /// Positions of the build (the active blocks' particles, block by block).
     at: [Vec<f32>; 3],
     skin: f32,
-    /// The particles with the wide skin (module `self_near_fast`).
-    pub(crate) fast: FastSet,
     valid: bool,
     subs_since: u32,
     /// Builds so far.
@@ -283,8 +301,7 @@ impl NearList {
 
     /// Makes the list hold for the predicted positions `p`: kept if no particle of the active
     /// `blocks` (ascending; every candidate pair has both ends in them) moved more than
-    /// `0.49 s₂` since the build (`0.49` of the cap for the fast particles of a list built
-    /// from the mid list, module `self_near_fast`), else rebuilt with a new skin from the mid
+    /// `0.49 s₂` since the build, else rebuilt with a new skin from the mid
     /// list, itself
     /// rebuilt from `source` first when one of those particles moved more than
     /// `0.49 MID_SKIN d` since its build. Only the active blocks are checked and copied:
@@ -310,45 +327,16 @@ impl NearList {
             MidSource::Hash(_) => true,
         };
         let cap = if use_mid { MID_NEAR_SKIN_MAX } else { NEAR_SKIN_MAX } * d;
-        let mut fast = false;
         if self.valid && self.at[0].len() == blocks.len() * LANES {
-            let at = as_refs(&self.at);
-            let m2 = max_disp2_blocks(p, at, blocks, self.fast.mask(), simd);
+            let m2 = max_disp2_blocks(p, as_refs(&self.at), blocks, simd);
             let lim = 0.5 * SAFE * self.skin;
             self.subs_since += 1;
-            // Every substep, so the fast particles' largest displacements include this one.
-            let fast_out = self.fast.passed(p, at);
-            if m2 <= lim * lim && !fast_out {
+            if m2 <= lim * lim {
                 return MidUpdate::Kept;
             }
-            // Aim at about NEAR_LIFETIME substeps between builds, within [d / 8, cap].
-            let subs = self.subs_since as f32;
-            let skin_for = |m2: f32| {
-                let rate = if m2.is_finite() { m2.sqrt() / subs } else { d };
-                (NEAR_LIFETIME * rate).clamp(0.125 * d, cap)
-            };
-            // Without a fast set and with the skin at its floor anyway (the settled cloth's
-            // rebuilds after tens of substeps) the bulk's skin cannot be narrower: no split.
-            let floor = m2.is_finite() && self.fast.mask().is_none() && skin_for(m2) <= 0.125 * d;
-            self.skin = if use_mid && !floor {
-                // A few particles past the bound get the wide skin when that narrows the
-                // bulk's, or when they were fast and passed it again (module
-                // `self_near_fast`). Only from the mid list (a folded cloth): while the
-                // cloth falls its motion is collective and the split would only cost.
-                let split = self.fast.split(p, at, blocks, lim, simd);
-                let (all, bulk) = (skin_for(split.all), skin_for(split.bulk));
-                let pays = split.over <= FAST_MAX && split.all.is_finite() && (bulk < all || self.fast.kept_any());
-                fast = pays && self.fast.set(blocks.len() * LANES, bulk, cap);
-                if fast {
-                    bulk
-                } else {
-                    all
-                }
-            } else if self.fast.mask().is_some() {
-                skin_for(max_disp2_blocks(p, at, blocks, None, simd))
-            } else {
-                skin_for(m2)
-            };
+            // Aim at about NEAR_LIFETIME substeps between builds, within [floor, cap].
+            let rate = if m2.is_finite() { m2.sqrt() / self.subs_since as f32 } else { d };
+            self.skin = (NEAR_LIFETIME * rate).clamp(NEAR_SKIN_FLOOR * d, cap);
         } else if !self.valid {
             self.skin = 0.25 * d;
         }
@@ -356,15 +344,12 @@ impl NearList {
         // on it).
         self.skin = self.skin.min(cap);
         copy_blocks(p, blocks, &mut self.at);
-        if !fast {
-            self.fast.clear();
-        }
         let r = d + self.skin;
+        let reach = Reach::plain(r);
         let mut mid = MidUpdate::Kept;
         match source {
             MidSource::Candidates { cand, .. } if !use_mid => {
                 self.mid_valid = false;
-                let reach = self.fast.reach(r);
                 if !self.cand_pairs_valid {
                     self.cand_pairs.clear();
                     let m = n.min(cand.len());
@@ -376,7 +361,6 @@ impl NearList {
             }
             source => {
                 mid = self.update_mid(source, p, blocks, n, d, simd, parallel);
-                let reach = self.fast.reach(r);
                 filter_pairs(&self.mid, p, n, reach, simd, parallel, &mut self.scratch, &mut self.pairs);
                 let extra = self.hashed.extra();
                 if !extra.is_empty() {
@@ -415,7 +399,7 @@ impl NearList {
         let lim = 0.5 * SAFE * MID_SKIN * d;
         let r = d * (1.0 + MID_NEAR_SKIN_MAX + MID_SKIN);
         if self.mid_valid && self.mid_at[0].len() == blocks.len() * LANES {
-            let m2 = max_disp2_blocks(p, as_refs(&self.mid_at), blocks, None, simd);
+            let m2 = max_disp2_blocks(p, as_refs(&self.mid_at), blocks, simd);
             if m2 <= lim * lim {
                 return MidUpdate::Kept;
             }
@@ -448,10 +432,11 @@ impl NearList {
         }
     }
 
-    /// Number of particle ranges of the last parallel scan (0 or 1: built serially).
+    /// Parts the last rebuild's scan ran in (particle ranges of the candidate lists or
+    /// fixed chunks of pairs; 0 or 1: built serially).
     #[cfg(test)]
     pub(crate) fn ranges(&self) -> usize {
-        self.scratch.bounds.len().saturating_sub(1)
+        self.scratch.parts
     }
 }
 

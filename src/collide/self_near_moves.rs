@@ -25,41 +25,28 @@ pub(crate) fn copy_blocks(p: [&[f32]; 3], blocks: &[u32], dst: &mut [Vec<f32>; 3
 }
 
 /// Largest squared distance between `p_i` and its compact copy `at` over the particles of
-/// `blocks` (block `blocks[k]` at `at[8 k..8 k + 8]`), each times its entry of `mask` (the
-/// layout of `at`; 0 leaves a particle out, 1 keeps it) when there is one, or infinity when
-/// one is NaN: one block at a time (`f32x8`) when `simd`, else one particle at a time (the
-/// twin; same value: `max` does not round, nor do the products by 0 and 1).
-pub(crate) fn max_disp2_blocks(p: [&[f32]; 3], at: [&[f32]; 3], blocks: &[u32], mask: Option<&[f32]>, simd: bool) -> f32 {
-    // Two loops, so the check without a mask costs what it did before there was one.
-    match mask {
-        Some(w) => max_disp2_with::<true>(p, at, blocks, w, simd),
-        None => max_disp2_with::<false>(p, at, blocks, &[], simd),
-    }
-}
-
-fn max_disp2_with<const MASKED: bool>(p: [&[f32]; 3], at: [&[f32]; 3], blocks: &[u32], mask: &[f32], simd: bool) -> f32 {
+/// `blocks` (block `blocks[k]` at `at[8 k..8 k + 8]`), or infinity when one is NaN: one block
+/// at a time (`f32x8`) when `simd`, else one particle at a time (the twin; same value: `max`
+/// does not round).
+pub(crate) fn max_disp2_blocks(p: [&[f32]; 3], at: [&[f32]; 3], blocks: &[u32], simd: bool) -> f32 {
     let mut m = 0.0f32;
     let mut nan = false;
     let len = p[0].len().min(p[1].len()).min(p[2].len());
     let compact = blocks.len() * LANES;
-    if at.iter().any(|a| a.len() < compact) || (MASKED && mask.len() < compact) {
+    if at.iter().any(|a| a.len() < compact) {
         // Not the layout of a build: report "moved too far" (a rebuild) rather than guess.
         return f32::INFINITY;
     }
     let mut mv = F32s::splat(0.0);
     let mut bad = F32s::splat(0.0);
-    // The compact arrays by block (eight lanes each; without a mask, `x` stands in for it and
-    // is not read), so their loads need no bounds checks (session 11, with the plain `max`
-    // below: callgrind over the timeline example's 1 564 checks, 97.7 -> 72.9 million
-    // instructions).
+    // The compact arrays by block (eight lanes each), so their loads need no bounds checks
+    // (session 11, with the plain `max` below: callgrind over the timeline example's 1 564
+    // checks, 97.7 -> 72.9 million instructions).
     fn chunks(a: &[f32], compact: usize) -> std::slice::ChunksExact<'_, f32> {
         a[..compact].chunks_exact(LANES)
     }
-    let compact_blocks = chunks(at[0], compact)
-        .zip(chunks(at[1], compact))
-        .zip(chunks(at[2], compact))
-        .zip(chunks(if MASKED { mask } else { at[0] }, compact));
-    for (&b, (((ax, ay), az), w)) in blocks.iter().zip(compact_blocks) {
+    let compact_blocks = chunks(at[0], compact).zip(chunks(at[1], compact)).zip(chunks(at[2], compact));
+    for (&b, ((ax, ay), az)) in blocks.iter().zip(compact_blocks) {
         let g = b as usize * LANES;
         if simd && g + LANES <= len {
             // Written out: `[0, 1, 2].map(..)` compiled to an out-of-line call per coordinate
@@ -67,10 +54,7 @@ fn max_disp2_with<const MASKED: bool>(p: [&[f32]; 3], at: [&[f32]; 3], blocks: &
             let vx = load(p[0], g) - load(ax, 0);
             let vy = load(p[1], g) - load(ay, 0);
             let vz = load(p[2], g) - load(az, 0);
-            let mut d2 = vx * vx + vy * vy + vz * vz;
-            if MASKED {
-                d2 *= load(w, 0);
-            }
+            let d2 = vx * vx + vy * vy + vz * vz;
             bad |= d2.is_nan();
             // NaN lanes are flagged above, so the plain `max` (no NaN ordering) is enough.
             mv = mv.fast_max(d2);
@@ -78,10 +62,7 @@ fn max_disp2_with<const MASKED: bool>(p: [&[f32]; 3], at: [&[f32]; 3], blocks: &
         }
         for l in 0..LANES.min(len.saturating_sub(g)) {
             let (vx, vy, vz) = (p[0][g + l] - ax[l], p[1][g + l] - ay[l], p[2][g + l] - az[l]);
-            let mut d2 = vx * vx + vy * vy + vz * vz;
-            if MASKED {
-                d2 *= w[l];
-            }
+            let d2 = vx * vx + vy * vy + vz * vz;
             nan |= d2.is_nan();
             m = m.max(d2);
         }

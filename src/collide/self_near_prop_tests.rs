@@ -1,17 +1,16 @@
 //! Property test of the near list's exactness under random motion: a drifting crowd, a few
-//! particles jumping back and forth (the fast set of module `self_near_fast`), and now and
-//! then a jump of everyone; from the hash (the mid list refreshed per particle) or from
+//! particles jumping back and forth, and now and then a jump of everyone; from the hash (the mid list refreshed per particle) or from
 //! candidate lists with and without a mid list.
 
 use super::*;
-use crate::collide::self_near_scan::{collect, ScanScratch};
+use crate::collide::self_near_scan::{collect, Reach, ScanScratch};
 use crate::test_rng::signed;
 use proptest::prelude::*;
 
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(32))]
     /// At every call every pair closer than `d` is in the near list, and at every build the
-    /// list is the one built from every candidate with the fast set's radii.
+    /// list is the one built from every candidate with the list's radius.
     #[test]
     fn near_list_holds_every_contact_under_random_motion(n in 40usize..200, seed in 1u64..u64::MAX,
             jumpers in 0usize..6, jump_pct in 5u32..45, drift_pct in 0u32..3, source in 0u8..3) {
@@ -50,7 +49,7 @@ proptest! {
             };
             near.update(src, pr, &blocks, n, d, true, false);
             if near.rebuilds > before {
-                collect(&all, pr, n, near.fast.reach(d + near.skin), false, false, &mut scratch, &mut want);
+                collect(&all, pr, n, Reach::plain(d + near.skin), false, false, &mut scratch, &mut want);
                 prop_assert_eq!(&near.pairs, &want, "call {}", call);
             }
             for (i, j) in all.pairs() {

@@ -10,45 +10,26 @@ use rayon::prelude::*;
 /// Reused buffers of the scans.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct ScanScratch {
-    /// The positions and widenings as `[x, y, z, g]` (one load per candidate).
+    /// The positions as `[x, y, z, 0]` (one 16-byte load per candidate).
     pub(crate) xyz: Vec<[f32; 4]>,
     /// Particle ranges of the parallel scan ([`chunk_bounds`]).
     pub(crate) bounds: Vec<usize>,
+    /// Parts the last scan ran in (1: serially).
+    pub(crate) parts: usize,
     /// The pairs of each range (joined in order).
     chunks: Vec<Vec<(u32, u32)>>,
 }
 
-/// The radius of a scan: `r`, and `r + wide` for a pair with an end in `fast` (ascending
-/// particle ids; the near list's fast particles, module `self_near_fast`). With `fast` empty
-/// the radius is `r` to the bit.
+/// The radius of a scan.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct Reach<'a> {
+pub(crate) struct Reach {
     pub(crate) r: f32,
-    pub(crate) wide: f32,
-    pub(crate) fast: &'a [u32],
 }
 
-impl<'a> Reach<'a> {
-    /// The same radius `r` for every pair.
+impl Reach {
+    /// The radius `r` for every pair.
     pub(crate) fn plain(r: f32) -> Self {
-        Reach { r, wide: 0.0, fast: &[] }
-    }
-
-    /// Particle `i`'s widening: `wide` if it is fast, else 0.
-    #[inline]
-    pub(crate) fn grow_of(&self, i: usize) -> f32 {
-        if self.fast.binary_search(&(i as u32)).is_ok() {
-            self.wide
-        } else {
-            0.0
-        }
-    }
-
-    /// The squared radius of pair `(i, j)` (the operations of the eight-lane scans).
-    #[inline]
-    pub(crate) fn r2(&self, i: usize, j: usize) -> f32 {
-        let rr = self.r + self.grow_of(i).max(self.grow_of(j));
-        rr * rr
+        Reach { r }
     }
 }
 
@@ -60,7 +41,7 @@ pub(crate) fn collect(
     cand: &Neighbours,
     p: [&[f32]; 3],
     n: usize,
-    reach: Reach<'_>,
+    reach: Reach,
     simd: bool,
     parallel: bool,
     s: &mut ScanScratch,
@@ -70,10 +51,12 @@ pub(crate) fn collect(
     chunk_bounds(cand, n, &mut s.bounds);
     let m = s.bounds.len() - 1;
     if !parallel || m < 2 {
+        s.parts = 1;
         return collect_near(cand, p, n, reach, simd, &mut s.xyz, out);
     }
+    s.parts = m;
     if simd {
-        fill_xyz(p, n, reach, true, &mut s.xyz);
+        fill_xyz(p, n, true, &mut s.xyz);
     }
     let (bounds, xyz) = (&s.bounds, &s.xyz[..]);
     join_chunks(&mut s.chunks, m, out, |c, buf| {
@@ -103,7 +86,7 @@ pub(crate) const FILTER_CHUNK: usize = 8192;
 
 /// Replaces `out` with the pairs of `pairs` within their radius of `reach` at `p`, or with a NaN
 /// distance, in their order (the test of [`collect_near`], pair by pair: the mid list to the
-/// near list). With `simd`, eight pairs at a time from a `[x, y, z, g]` copy of `p` (its first
+/// near list). With `simd`, eight pairs at a time from an `[x, y, z, 0]` copy of `p` (its first
 /// `n` particles; every id must be below `n`); in parallel over fixed chunks of pairs when
 /// `parallel`, joined in order: the same list either way.
 #[allow(clippy::too_many_arguments)]
@@ -111,7 +94,7 @@ pub(crate) fn filter_pairs(
     pairs: &[(u32, u32)],
     p: [&[f32]; 3],
     n: usize,
-    reach: Reach<'_>,
+    reach: Reach,
     simd: bool,
     parallel: bool,
     s: &mut ScanScratch,
@@ -120,12 +103,14 @@ pub(crate) fn filter_pairs(
     out.clear();
     if simd {
         let n = n.min(p[0].len()).min(p[1].len()).min(p[2].len());
-        fill_xyz(p, n, reach, parallel, &mut s.xyz);
+        fill_xyz(p, n, parallel, &mut s.xyz);
     }
     let m = pairs.len().div_ceil(FILTER_CHUNK);
     if !parallel || m < 2 {
+        s.parts = 1;
         return filter_range(pairs, p, reach, simd, &s.xyz, out);
     }
+    s.parts = m;
     let xyz = &s.xyz[..];
     join_chunks(&mut s.chunks, m, out, |c, buf| {
         let part = &pairs[c * FILTER_CHUNK..((c + 1) * FILTER_CHUNK).min(pairs.len())];
@@ -135,39 +120,13 @@ pub(crate) fn filter_pairs(
 
 /// Appends to `out` the pairs of `pairs` within the radius (the work of [`filter_pairs`]):
 /// the difference `p_i - p_j` and its squared length computed as [`collect_range`] does.
-pub(crate) fn filter_range(
-    pairs: &[(u32, u32)],
-    p: [&[f32]; 3],
-    reach: Reach<'_>,
-    simd: bool,
-    xyz: &[[f32; 4]],
-    out: &mut Vec<(u32, u32)>,
-) {
-    // Without widening the radius is one vector for the whole scan (the per-lane radius
-    // slowed the scans of the fall by ~10%).
-    if reach.fast.is_empty() {
-        filter_range_with::<false>(pairs, p, reach, simd, xyz, out)
-    } else {
-        filter_range_with::<true>(pairs, p, reach, simd, xyz, out)
-    }
-}
-
-#[inline(always)]
-fn filter_range_with<const WIDE: bool>(
-    pairs: &[(u32, u32)],
-    p: [&[f32]; 3],
-    reach: Reach<'_>,
-    simd: bool,
-    xyz: &[[f32; 4]],
-    out: &mut Vec<(u32, u32)>,
-) {
+pub(crate) fn filter_range(pairs: &[(u32, u32)], p: [&[f32]; 3], reach: Reach, simd: bool, xyz: &[[f32; 4]], out: &mut Vec<(u32, u32)>) {
     let mut done = 0;
     let r2 = reach.r * reach.r;
     // Every index below the copy's length, checked once, so the gathers need no checks
     // (session 12, with the pair pass's: see `PairCtx::near_candidates`).
     let top = largest_id(pairs);
     if simd && (top as usize) < xyz.len() {
-        let rv = F32s::splat(reach.r);
         let r2v = F32s::splat(r2);
         for c in pairs.as_chunks::<LANES>().0 {
             // SAFETY (both gathers): every index of `pairs` is at most `top < xyz.len()`.
@@ -181,13 +140,7 @@ fn filter_range_with<const WIDE: bool>(
             let b = unsafe { gather_xyzw8_unchecked(xyz, &idx8(|l| c[l].1)) };
             let v = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
             let d2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
-            let r2 = if WIDE {
-                let rr = rv + a[3].max(b[3]);
-                rr * rr
-            } else {
-                r2v
-            };
-            let mut bits = (d2.simd_lt(r2) | d2.is_nan()).to_bitmask();
+            let mut bits = (d2.simd_lt(r2v) | d2.is_nan()).to_bitmask();
             while bits != 0 {
                 out.push(c[bits.trailing_zeros() as usize]);
                 bits &= bits - 1;
@@ -199,7 +152,7 @@ fn filter_range_with<const WIDE: bool>(
         let (i, j) = (i as usize, j as usize);
         let v = [p[0][i] - p[0][j], p[1][i] - p[1][j], p[2][i] - p[2][j]];
         let d2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
-        if d2 < if WIDE { reach.r2(i, j) } else { r2 } || d2.is_nan() {
+        if d2 < r2 || d2.is_nan() {
             out.push((i as u32, j as u32));
         }
     }
@@ -213,14 +166,14 @@ pub(crate) const NEAR_CHUNK: usize = 8192;
 /// Replaces `out` with the candidate pairs `(i, j)` of `cand` (first `n` lists) closer than their
 /// radius of `reach` at `p`, or with a NaN distance (the exact test rejects those later, as the fresh
 /// path does), in list order. With `simd`, eight candidates of one particle at a time: their
-/// positions come from `xyz`, a copy of `p` as `[x, y, z, g]` made here (one 16-byte load a
+/// positions come from `xyz`, a copy of `p` as `[x, y, z, 0]` made here (one 16-byte load a
 /// candidate instead of three scattered ones, transposed to `f32x8` in registers by
 /// [`gather_xyzw8`]); the same operations as the scalar twin, so the same list.
 pub(crate) fn collect_near(
     cand: &Neighbours,
     p: [&[f32]; 3],
     n: usize,
-    reach: Reach<'_>,
+    reach: Reach,
     simd: bool,
     xyz: &mut Vec<[f32; 4]>,
     out: &mut Vec<(u32, u32)>,
@@ -228,7 +181,7 @@ pub(crate) fn collect_near(
     out.clear();
     let n = near_len(cand, p, n);
     if simd {
-        fill_xyz(p, n, reach, false, xyz);
+        fill_xyz(p, n, false, xyz);
     }
     collect_range(cand, p, 0..n, reach, simd, xyz, out);
 }
@@ -238,10 +191,10 @@ fn near_len(cand: &Neighbours, p: [&[f32]; 3], n: usize) -> usize {
     n.min(cand.len()).min(p[0].len()).min(p[1].len()).min(p[2].len())
 }
 
-/// Replaces `xyz` with `[x, y, z, g]` of the first `n` particles of `p`, `g` the particle's
-/// widening in `reach` (element-wise, in parallel over fixed blocks when `parallel`: the same
+/// Replaces `xyz` with `[x, y, z, 0]` of the first `n` particles of `p` (element-wise, in
+/// parallel over fixed blocks when `parallel`: the same
 /// values either way).
-fn fill_xyz(p: [&[f32]; 3], n: usize, reach: Reach<'_>, parallel: bool, xyz: &mut Vec<[f32; 4]>) {
+fn fill_xyz(p: [&[f32]; 3], n: usize, parallel: bool, xyz: &mut Vec<[f32; 4]>) {
     const BLOCK: usize = 2048;
     // Every entry is overwritten below: zero only new entries (a rebuild used to clear and
     // zero all `n`, ~9% of the near updates' instructions in callgrind).
@@ -257,11 +210,6 @@ fn fill_xyz(p: [&[f32]; 3], n: usize, reach: Reach<'_>, parallel: bool, xyz: &mu
         xyz.par_chunks_mut(BLOCK).enumerate().for_each(|(b, d)| one(b, d));
     } else {
         xyz.chunks_mut(BLOCK).enumerate().for_each(|(b, d)| one(b, d));
-    }
-    for &i in reach.fast {
-        if let Some(d) = xyz.get_mut(i as usize) {
-            d[3] = reach.wide;
-        }
     }
 }
 
@@ -287,30 +235,13 @@ fn collect_range(
     cand: &Neighbours,
     p: [&[f32]; 3],
     range: std::ops::Range<usize>,
-    reach: Reach<'_>,
-    simd: bool,
-    xyz: &[[f32; 4]],
-    out: &mut Vec<(u32, u32)>,
-) {
-    if reach.fast.is_empty() {
-        collect_range_with::<false>(cand, p, range, reach, simd, xyz, out)
-    } else {
-        collect_range_with::<true>(cand, p, range, reach, simd, xyz, out)
-    }
-}
-
-#[inline(always)]
-fn collect_range_with<const WIDE: bool>(
-    cand: &Neighbours,
-    p: [&[f32]; 3],
-    range: std::ops::Range<usize>,
-    reach: Reach<'_>,
+    reach: Reach,
     simd: bool,
     xyz: &[[f32; 4]],
     out: &mut Vec<(u32, u32)>,
 ) {
     let r2 = reach.r * reach.r;
-    let (rv, r2v) = (F32s::splat(reach.r), F32s::splat(r2));
+    let r2v = F32s::splat(r2);
     for i in range {
         let list = cand.of(i);
         if list.is_empty() {
@@ -320,7 +251,6 @@ fn collect_range_with<const WIDE: bool>(
         let mut k = 0;
         if simd {
             let piv = [F32s::splat(pi[0]), F32s::splat(pi[1]), F32s::splat(pi[2])];
-            let gi = if WIDE { F32s::splat(reach.grow_of(i)) } else { F32s::splat(0.0) };
             for js in list.as_chunks::<LANES>().0 {
                 let idx = idx8(|l| js[l]);
                 // Checked here: a per-list check before the loop measured more instructions
@@ -328,13 +258,7 @@ fn collect_range_with<const WIDE: bool>(
                 let q = gather_xyzw8(xyz, &idx);
                 let v = [piv[0] - q[0], piv[1] - q[1], piv[2] - q[2]];
                 let d2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
-                let r2 = if WIDE {
-                    let rr = rv + gi.max(q[3]);
-                    rr * rr
-                } else {
-                    r2v
-                };
-                let mut bits = (d2.simd_lt(r2) | d2.is_nan()).to_bitmask();
+                let mut bits = (d2.simd_lt(r2v) | d2.is_nan()).to_bitmask();
                 while bits != 0 {
                     out.push((i as u32, js[bits.trailing_zeros() as usize]));
                     bits &= bits - 1;
@@ -346,7 +270,7 @@ fn collect_range_with<const WIDE: bool>(
             let ju = j as usize;
             let v = [pi[0] - p[0][ju], pi[1] - p[1][ju], pi[2] - p[2][ju]];
             let d2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
-            if d2 < if WIDE { reach.r2(i, ju) } else { r2 } || d2.is_nan() {
+            if d2 < r2 || d2.is_nan() {
                 out.push((i as u32, j));
             }
         }

@@ -18,49 +18,22 @@ fn simd_near_list_equals_scalar_and_brute_force() {
     let mut p = p;
     p[1][17] = f32::NAN;
     let pr = [&p[0][..], &p[1][..], &p[2][..]];
-    // One radius for all, then wider for the pairs with an end among a few fast particles
-    // (the near list's two skins).
-    for reach in [
-        Reach::plain(0.6),
-        Reach {
-            r: 0.6,
-            wide: 0.25,
-            fast: &[3, 17, 150, 299],
-        },
-    ] {
-        let (mut a, mut b) = (Vec::new(), Vec::new());
-        collect_near(&cand, pr, n, reach, false, &mut Vec::new(), &mut a);
-        collect_near(&cand, pr, n, reach, true, &mut Vec::new(), &mut b);
-        assert_eq!(a, b);
-        let want: Vec<(u32, u32)> = cand
-            .pairs()
-            .filter(|&(i, j)| {
-                let (i, j) = (i as usize, j as usize);
-                let d2: f32 = (0..3).map(|k| (p[k][i] - p[k][j]) * (p[k][i] - p[k][j])).sum();
-                let fast = [i, j].iter().any(|x| reach.fast.contains(&(*x as u32)));
-                let r = if fast { reach.r + reach.wide } else { reach.r };
-                d2 < r * r || d2.is_nan()
-            })
-            .collect();
-        assert_eq!(a, want);
-        assert!(a.len() > 100 && a.len() < cand.total(), "{} of {}", a.len(), cand.total());
-        assert!(a.iter().any(|&(i, j)| i == 17 || j == 17), "NaN pairs are kept");
-    }
-    let wide = |r| Reach {
-        r,
-        wide: 0.25,
-        fast: &[3, 150, 299],
-    };
-    let (mut plain, mut wider) = (Vec::new(), Vec::new());
-    collect_near(&cand, pr, n, Reach::plain(0.6), true, &mut Vec::new(), &mut plain);
-    collect_near(&cand, pr, n, wide(0.6), true, &mut Vec::new(), &mut wider);
-    let added: Vec<_> = wider.iter().filter(|q| !plain.contains(q)).collect();
-    assert!(
-        !added.is_empty()
-            && added
-                .iter()
-                .all(|&&(i, j)| [3, 150, 299].contains(&i) || [3, 150, 299].contains(&j))
-    );
+    let reach = Reach::plain(0.6);
+    let (mut a, mut b) = (Vec::new(), Vec::new());
+    collect_near(&cand, pr, n, reach, false, &mut Vec::new(), &mut a);
+    collect_near(&cand, pr, n, reach, true, &mut Vec::new(), &mut b);
+    assert_eq!(a, b);
+    let want: Vec<(u32, u32)> = cand
+        .pairs()
+        .filter(|&(i, j)| {
+            let (i, j) = (i as usize, j as usize);
+            let d2: f32 = (0..3).map(|k| (p[k][i] - p[k][j]) * (p[k][i] - p[k][j])).sum();
+            d2 < reach.r * reach.r || d2.is_nan()
+        })
+        .collect();
+    assert_eq!(a, want);
+    assert!(a.len() > 100 && a.len() < cand.total(), "{} of {}", a.len(), cand.total());
+    assert!(a.iter().any(|&(i, j)| i == 17 || j == 17), "NaN pairs are kept");
 }
 
 #[test]
@@ -82,24 +55,16 @@ fn parallel_rebuild_over_ranges_equals_the_serial_list_on_1_and_2_threads() {
     assert!(bounds.len() > 4, "{bounds:?}");
     assert!(bounds.windows(2).all(|w| w[0] < w[1]) && bounds[0] == 0 && bounds[bounds.len() - 1] == n);
     let pr = [&p[0][..], &p[1][..], &p[2][..]];
-    for reach in [
-        Reach::plain(0.7),
-        Reach {
-            r: 0.7,
-            wide: 0.2,
-            fast: &[50, 123, 200],
-        },
-    ] {
-        let mut want = Vec::new();
-        collect_near(&cand, pr, n, reach, false, &mut Vec::new(), &mut want);
-        assert!(want.len() > 1000 && want.iter().any(|&(i, _)| i == 123));
-        for threads in [1, 2] {
-            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-            for (simd, parallel) in [(true, true), (false, true), (true, false)] {
-                let (mut scratch, mut got) = (ScanScratch::default(), Vec::new());
-                pool.install(|| collect(&cand, pr, n, reach, simd, parallel, &mut scratch, &mut got));
-                assert_eq!(got, want, "{threads} threads, simd {simd}, parallel {parallel}");
-            }
+    let reach = Reach::plain(0.7);
+    let mut want = Vec::new();
+    collect_near(&cand, pr, n, reach, false, &mut Vec::new(), &mut want);
+    assert!(want.len() > 1000 && want.iter().any(|&(i, _)| i == 123));
+    for threads in [1, 2] {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        for (simd, parallel) in [(true, true), (false, true), (true, false)] {
+            let (mut scratch, mut got) = (ScanScratch::default(), Vec::new());
+            pool.install(|| collect(&cand, pr, n, reach, simd, parallel, &mut scratch, &mut got));
+            assert_eq!(got, want, "{threads} threads, simd {simd}, parallel {parallel}");
         }
     }
     chunk_bounds(&cand, 0, &mut bounds);
@@ -123,8 +88,8 @@ fn block_displacement_simd_equals_scalar_and_flags_nan() {
     }
     let pr = [&p[0][..], &p[1][..], &p[2][..]];
     let ar = [&at[0][..], &at[1][..], &at[2][..]];
-    let s = max_disp2_blocks(pr, ar, &blocks, None, false);
-    assert_eq!(s.to_bits(), max_disp2_blocks(pr, ar, &blocks, None, true).to_bits());
+    let s = max_disp2_blocks(pr, ar, &blocks, false);
+    assert_eq!(s.to_bits(), max_disp2_blocks(pr, ar, &blocks, true).to_bits());
     // The largest over the listed particles only (block 1 is left out and moved far).
     let mut want = 0.0f32;
     for (k, &b) in blocks.iter().enumerate() {
@@ -141,33 +106,14 @@ fn block_displacement_simd_equals_scalar_and_flags_nan() {
     q[0][8 + 1] = 50.0;
     let qr = [&q[0][..], &q[1][..], &q[2][..]];
     assert_eq!(
-        max_disp2_blocks(qr, ar, &blocks, None, true).to_bits(),
+        max_disp2_blocks(qr, ar, &blocks, true).to_bits(),
         s.to_bits(),
         "block 1 is not checked"
     );
     q[2][3 * 8 + 5] = f32::NAN;
     for simd in [false, true] {
         let qr = [&q[0][..], &q[1][..], &q[2][..]];
-        assert_eq!(max_disp2_blocks(qr, ar, &blocks, None, simd), f32::INFINITY);
-    }
-    // A mask leaves its zero slots out (the near list's fast particles), a NaN still counts.
-    let mut mask = vec![1.0f32; blocks.len() * LANES];
-    let mut q = p.clone();
-    q[0][3 * 8 + 2] += 7.0; // block 3, slot 2 * 8 + 2
-    mask[2 * LANES + 2] = 0.0;
-    for simd in [false, true] {
-        let qr = [&q[0][..], &q[1][..], &q[2][..]];
-        assert_eq!(
-            max_disp2_blocks(qr, ar, &blocks, Some(&mask), simd).to_bits(),
-            s.to_bits(),
-            "simd {simd}"
-        );
-        assert!(max_disp2_blocks(qr, ar, &blocks, None, simd) > 40.0);
-    }
-    q[1][3 * 8 + 2] = f32::NAN;
-    for simd in [false, true] {
-        let qr = [&q[0][..], &q[1][..], &q[2][..]];
-        assert_eq!(max_disp2_blocks(qr, ar, &blocks, Some(&mask), simd), f32::INFINITY);
+        assert_eq!(max_disp2_blocks(qr, ar, &blocks, simd), f32::INFINITY);
     }
 }
 
@@ -278,7 +224,7 @@ fn near_through_mid(hashed: bool, parallel: bool, reach: f32) {
         };
         near.update(source, pr, &blocks, n, d, true, parallel);
         if near.rebuilds > before {
-            let reach = near.fast.reach(d + near.skin);
+            let reach = Reach::plain(d + near.skin);
             collect(&cand, pr, n, reach, false, false, &mut scratch, &mut want);
             assert_eq!(near.pairs, want, "call {call}");
             checked += 1;
@@ -333,7 +279,7 @@ fn refreshed_mid(parallel: bool) {
     let blocks: Vec<u32> = (0..n.div_ceil(LANES) as u32).collect();
     let mut near = NearList::default();
     let (mut scratch, mut want) = (ScanScratch::default(), Vec::new());
-    let (mut checked, mut refreshed, mut queried, mut with_fast, mut rehashed) = (0, 0, 0, 0, 0);
+    let (mut checked, mut refreshed, mut queried, mut rehashed) = (0, 0, 0, 0);
     for call in 0..900 {
         // Six fast particles (0.15 d a call along a fixed direction each), a new six every
         // 25 calls; the others drift by up to 0.004 d a call.
@@ -370,15 +316,13 @@ fn refreshed_mid(parallel: bool) {
             rehashed += 1;
         }
         if near.rebuilds > before {
-            let reach = near.fast.reach(d + near.skin);
-            collect(&all, pr, n, reach, false, false, &mut scratch, &mut want);
+            collect(&all, pr, n, Reach::plain(d + near.skin), false, false, &mut scratch, &mut want);
             assert_eq!(near.pairs, want, "call {call}");
             checked += 1;
-            with_fast += usize::from(!near.fast.ids().is_empty());
         }
     }
     let msg = format!(
-        "{checked} near builds ({with_fast} with fast particles), {queried} mid queries, {refreshed} refreshes \
+        "{checked} near builds, {queried} mid queries, {refreshed} refreshes \
          ({rehashed} rehashes)"
     );
     assert!(checked > 100 && refreshed > 20 && queried >= 1 && rehashed >= 2, "{msg}");
@@ -389,13 +333,12 @@ fn refreshed_mid(parallel: bool) {
     );
 }
 
-/// A few particles that jump back and forth (0.2 d a call) among a slowly drifting crowd
-/// (the movement-speed fold, module `self_near_fast`): they get the wide skin, the crowd keeps
-/// a narrow one, the list built at each rebuild is the one of those radii from every pair,
-/// and every contact is in the list at every call. The narrow skin lists fewer pairs than the
-/// cap would and the crowd's rebuilds stay rare; once the jumpers stop, the set goes.
+/// A few particles that jump back and forth (0.2 d a call) among a slowly drifting crowd (the
+/// movement-speed fold's edge particles): on the mid path the skin stays at its floor `d / 8`,
+/// the jumpers force rebuilds, the list built at each rebuild is the one of that radius from
+/// every pair, and every contact is in the list at every call.
 #[test]
-fn jumping_particles_get_the_wide_skin_and_every_contact_stays_listed() {
+fn jumping_particles_keep_every_contact_listed() {
     let mut rng = signed(41);
     let (n, d) = (400usize, 0.1f32);
     let mut p: [Vec<f32>; 3] = std::array::from_fn(|_| (0..n).map(|_| 0.6 * rng()).collect());
@@ -411,8 +354,8 @@ fn jumping_particles_get_the_wide_skin_and_every_contact_stays_listed() {
     let blocks: Vec<u32> = (0..n.div_ceil(LANES) as u32).collect();
     let jumpers = [5u32, 77, 222, 391];
     let mut near = NearList::default();
-    let (mut scratch, mut want, mut capped) = (ScanScratch::default(), Vec::new(), Vec::new());
-    let (mut checked, mut with_fast, mut later) = (0, 0, Vec::new());
+    let (mut scratch, mut want) = (ScanScratch::default(), Vec::new());
+    let (mut jumping, mut after) = (0, 0);
     // The jumpers stop at call 300; the crowd drifts on.
     for call in 0..500 {
         let sign = if call % 2 == 0 { 1.0 } else { -1.0 };
@@ -429,47 +372,22 @@ fn jumping_particles_get_the_wide_skin_and_every_contact_stays_listed() {
         let before = near.rebuilds;
         near.update(MidSource::Hash(rule), pr, &blocks, n, d, true, false);
         if near.rebuilds > before {
-            collect(&all, pr, n, near.fast.reach(d + near.skin), false, false, &mut scratch, &mut want);
+            collect(&all, pr, n, Reach::plain(d + near.skin), false, false, &mut scratch, &mut want);
             assert_eq!(near.pairs, want, "call {call}");
-            if call < 300 {
-                checked += 1;
-                // The jumpers past the bound, or kept from the last build (they passed it
-                // since); now and then a drifting particle that passed it too.
-                with_fast += usize::from(jumpers.iter().all(|j| near.fast.ids().contains(j)));
-            } else {
-                later.push(near.fast.ids().len());
+            if call > 0 {
+                assert_eq!(near.skin, MID_NEAR_SKIN_MAX * d, "call {call}: the mid path's skin");
             }
-        }
-        if call == 299 {
-            let pr = [&p[0][..], &p[1][..], &p[2][..]];
-            collect(
-                &all,
-                pr,
-                n,
-                Reach::plain(d * (1.0 + MID_NEAR_SKIN_MAX)),
-                false,
-                false,
-                &mut scratch,
-                &mut capped,
-            );
-            let msg = format!(
-                "{checked} near builds, {with_fast} with the jumpers fast, skin {} d, {} near pairs against {} at the cap",
-                near.skin / d,
-                near.pairs.len(),
-                capped.len()
-            );
-            // Every build but the first has the jumpers fast.
-            assert!(with_fast + 1 == checked && checked >= 4, "{msg}");
-            assert!(checked < 30 && near.skin < 0.3 * d && near.pairs.len() < capped.len(), "{msg}");
+            if call < 300 {
+                jumping += 1;
+            } else {
+                after += 1;
+            }
         }
         assert_contacts_listed(&all, &p, d, &near.pairs, call);
     }
-    // Once the jumpers stopped, a build whose skin the slow crowd sets alike with or without
-    // the particles past the bound makes no fast set.
-    assert!(
-        later.len() >= 2 && later.last() == Some(&0),
-        "fast particles at the later builds: {later:?}"
-    );
+    // 0.2 d a call against a bound of 0.49 d / 8: a rebuild every call while they jump, few
+    // once only the crowd drifts (0.004 d a call).
+    assert!(jumping >= 290 && after < 60, "{jumping} rebuilds while jumping, {after} after");
 }
 
 #[test]
@@ -483,23 +401,14 @@ fn filter_pairs_simd_and_parallel_equal_the_scalar_filter() {
         .collect();
     assert!(pairs.len() > 3 * FILTER_CHUNK, "{} pairs", pairs.len());
     let pr = [&p[0][..], &p[1][..], &p[2][..]];
-    let reach = Reach {
-        r: 0.5,
-        wide: 0.1,
-        fast: &[2, 77, 400],
-    };
+    let reach = Reach::plain(0.5);
     let want: Vec<(u32, u32)> = pairs
         .iter()
         .copied()
         .filter(|&(i, j)| {
             let (i, j) = (i as usize, j as usize);
             let d2: f32 = (0..3).map(|k| (p[k][i] - p[k][j]) * (p[k][i] - p[k][j])).sum();
-            let r = if [i, j].iter().any(|&x| [2, 77, 400].contains(&x)) {
-                reach.r + reach.wide
-            } else {
-                reach.r
-            };
-            d2 < r * r || d2.is_nan()
+            d2 < reach.r * reach.r || d2.is_nan()
         })
         .collect();
     assert!(want.len() > 100 && want.len() < pairs.len() && want.iter().any(|&(i, j)| i == 77 || j == 77));
