@@ -301,8 +301,7 @@ impl NearList {
 
     /// Makes the list hold for the predicted positions `p`: kept if no particle of the active
     /// `blocks` (ascending; every candidate pair has both ends in them) moved more than
-    /// `0.49 s₂` since the build, else rebuilt with a new skin from the mid
-    /// list, itself
+    /// `0.49 s₂` since the build, else rebuilt with a new skin from the mid list, itself
     /// rebuilt from `source` first when one of those particles moved more than
     /// `0.49 MID_SKIN d` since its build. Only the active blocks are checked and copied:
     /// before the fold they are a few, and the particles outside them have no candidate. The
