@@ -83,6 +83,11 @@
 //! and 13 mid queries of ~1.35 ms each came). The tree keeps the wide lists (its query is the
 //! slow part either way).
 //!
+//! Session 13, `SLOW_FACTOR` 1.5, 2 and 4 (more of the fall without candidate lists; timeline,
+//! basic VcCPBD, one thread, two runs each): stage 82.0-83.2, 95.0-95.8 and 100.5 ms against
+//! 78.7-79.1; the query column fell (24.5 -> 11.2, 4.4, 1.3 ms) but the substeps' mid queries
+//! and refreshes of a fast cloth cost more (pairs 39.2 -> 57-58, 78-79, 87 ms). 1 stays.
+//!
 //! Tried in session 13 and not kept: going direct also on a fast step (up to 1.5 d a step)
 //! when the last build's candidates were dense (at least 2, 3 or 4 pairs a particle: the
 //! steps of the impact, whose queries keep 47 000-110 000 pairs). Timeline, basic VcCPBD, one
