@@ -46,6 +46,14 @@
 //! rounds). The basic rows are still the only ones below 50x (basic PBD at 49.3-50.7x in the
 //! faster round, VcCPBD 42.7-44.1x). Two threads, a good spell, `--repeat 3`: every run of
 //! every hash row at least 50.2x (basic VcCPBD 0.434-0.482 ms).
+//! Session 13 (linear hash rows, the member test in lanes, the falling near list from pairs,
+//! the mid path's near skin at `d / 8`, the correction's unchecked runs), `--repeat 3` on one
+//! thread, two runs alternating with the session's starting build: the 12 hash rows' sum
+//! 5.55 / 5.55 -> 4.88 / 5.12 ms, every hash row at least 51.8x (basic VcCPBD 0.537 / 0.541
+//! -> 0.467 / 0.468 ms, 44.8-45.1x -> 51.8x; basic PBD 60.2-60.8x, movement speed
+//! 53.7-54.5x), average collision 0.000%; two threads, one run: at least 57.1x. The margin on
+//! one thread is ~4%, less than the VM's spell-to-spell drift (up to ~12%), so a slow spell
+//! can still put the basic VcCPBD row below 50x.
 //!
 //! A second table splits the collision time by phase (hash build, query, the rest of the step
 //! start, substep pair passes, substep corrections, the speed clamp) and gives the number of
