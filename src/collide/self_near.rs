@@ -210,7 +210,7 @@
 use super::neighbours::Neighbours;
 use super::self_mid::{merge_unique, HashedMid, RestRule};
 use super::self_near_moves::{as_refs, copy_blocks, max_disp2_blocks};
-use super::self_near_scan::{collect, filter_pairs, filter_range, Reach, ScanScratch};
+use super::self_near_scan::{collect, filter_pairs, filter_range, ScanScratch};
 use super::self_verlet::SAFE;
 use crate::lanes::LANES;
 
@@ -344,7 +344,6 @@ impl NearList {
         self.skin = self.skin.min(cap);
         copy_blocks(p, blocks, &mut self.at);
         let r = d + self.skin;
-        let reach = Reach::plain(r);
         let mut mid = MidUpdate::Kept;
         match source {
             MidSource::Candidates { cand, .. } if !use_mid => {
@@ -356,17 +355,17 @@ impl NearList {
                         .extend((0..m).flat_map(|i| cand.of(i).iter().map(move |&j| (i as u32, j))));
                     self.cand_pairs_valid = true;
                 }
-                filter_pairs(&self.cand_pairs, p, n, reach, simd, parallel, &mut self.scratch, &mut self.pairs);
+                filter_pairs(&self.cand_pairs, p, n, r, simd, parallel, &mut self.scratch, &mut self.pairs);
             }
             source => {
                 mid = self.update_mid(source, p, blocks, n, d, simd, parallel);
-                filter_pairs(&self.mid, p, n, reach, simd, parallel, &mut self.scratch, &mut self.pairs);
+                filter_pairs(&self.mid, p, n, r, simd, parallel, &mut self.scratch, &mut self.pairs);
                 let extra = self.hashed.extra();
                 if !extra.is_empty() {
                     // The refreshes' pairs (module `self_mid`): filtered alike, then merged in
                     // order, a pair in both lists once.
                     self.extra_near.clear();
-                    filter_range(extra, p, reach, simd, &self.scratch.xyz, &mut self.extra_near);
+                    filter_range(extra, p, r, simd, &self.scratch.xyz, &mut self.extra_near);
                     merge_unique(&mut self.pairs, &self.extra_near, &mut self.merged);
                 }
             }
@@ -416,7 +415,7 @@ impl NearList {
         self.mid_rebuilds += 1;
         match source {
             MidSource::Candidates { cand, .. } => {
-                collect(cand, p, n, Reach::plain(r), simd, parallel, &mut self.scratch, &mut self.mid);
+                collect(cand, p, n, r, simd, parallel, &mut self.scratch, &mut self.mid);
                 self.hashed.forget();
                 self.mid_valid = true;
                 MidUpdate::Kept

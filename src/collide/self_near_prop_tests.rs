@@ -3,7 +3,7 @@
 //! candidate lists with and without a mid list.
 
 use super::*;
-use crate::collide::self_near_scan::{collect, Reach, ScanScratch};
+use crate::collide::self_near_scan::{collect, ScanScratch};
 use crate::test_rng::signed;
 use proptest::prelude::*;
 
@@ -49,7 +49,7 @@ proptest! {
             };
             near.update(src, pr, &blocks, n, d, true, false);
             if near.rebuilds > before {
-                collect(&all, pr, n, Reach::plain(d + near.skin), false, false, &mut scratch, &mut want);
+                collect(&all, pr, n, d + near.skin, false, false, &mut scratch, &mut want);
                 prop_assert_eq!(&near.pairs, &want, "call {}", call);
             }
             for (i, j) in all.pairs() {

@@ -20,19 +20,6 @@ pub(crate) struct ScanScratch {
     chunks: Vec<Vec<(u32, u32)>>,
 }
 
-/// The radius of a scan.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Reach {
-    pub(crate) r: f32,
-}
-
-impl Reach {
-    /// The radius `r` for every pair.
-    pub(crate) fn plain(r: f32) -> Self {
-        Reach { r }
-    }
-}
-
 /// [`collect_near`] into `out`; when `parallel`, over the ranges of [`chunk_bounds`], each
 /// into its own buffer, the buffers joined in range order: the same list as the serial walk
 /// whatever the number of threads.
@@ -41,7 +28,7 @@ pub(crate) fn collect(
     cand: &Neighbours,
     p: [&[f32]; 3],
     n: usize,
-    reach: Reach,
+    r: f32,
     simd: bool,
     parallel: bool,
     s: &mut ScanScratch,
@@ -52,7 +39,7 @@ pub(crate) fn collect(
     let m = s.bounds.len() - 1;
     if !parallel || m < 2 {
         s.parts = 1;
-        return collect_near(cand, p, n, reach, simd, &mut s.xyz, out);
+        return collect_near(cand, p, n, r, simd, &mut s.xyz, out);
     }
     s.parts = m;
     if simd {
@@ -60,7 +47,7 @@ pub(crate) fn collect(
     }
     let (bounds, xyz) = (&s.bounds, &s.xyz[..]);
     join_chunks(&mut s.chunks, m, out, |c, buf| {
-        collect_range(cand, p, bounds[c]..bounds[c + 1], reach, simd, xyz, buf)
+        collect_range(cand, p, bounds[c]..bounds[c + 1], r, simd, xyz, buf)
     });
 }
 
@@ -84,7 +71,7 @@ fn join_chunks(chunks: &mut Vec<Vec<(u32, u32)>>, m: usize, out: &mut Vec<(u32, 
 /// the number of threads; the list does not either).
 pub(crate) const FILTER_CHUNK: usize = 8192;
 
-/// Replaces `out` with the pairs of `pairs` within their radius of `reach` at `p`, or with a NaN
+/// Replaces `out` with the pairs of `pairs` within `r` of each other at `p`, or with a NaN
 /// distance, in their order (the test of [`collect_near`], pair by pair: the mid list to the
 /// near list). With `simd`, eight pairs at a time from an `[x, y, z, 0]` copy of `p` (its first
 /// `n` particles; every id must be below `n`); in parallel over fixed chunks of pairs when
@@ -94,7 +81,7 @@ pub(crate) fn filter_pairs(
     pairs: &[(u32, u32)],
     p: [&[f32]; 3],
     n: usize,
-    reach: Reach,
+    r: f32,
     simd: bool,
     parallel: bool,
     s: &mut ScanScratch,
@@ -108,21 +95,21 @@ pub(crate) fn filter_pairs(
     let m = pairs.len().div_ceil(FILTER_CHUNK);
     if !parallel || m < 2 {
         s.parts = 1;
-        return filter_range(pairs, p, reach, simd, &s.xyz, out);
+        return filter_range(pairs, p, r, simd, &s.xyz, out);
     }
     s.parts = m;
     let xyz = &s.xyz[..];
     join_chunks(&mut s.chunks, m, out, |c, buf| {
         let part = &pairs[c * FILTER_CHUNK..((c + 1) * FILTER_CHUNK).min(pairs.len())];
-        filter_range(part, p, reach, simd, xyz, buf)
+        filter_range(part, p, r, simd, xyz, buf)
     });
 }
 
 /// Appends to `out` the pairs of `pairs` within the radius (the work of [`filter_pairs`]):
 /// the difference `p_i - p_j` and its squared length computed as [`collect_range`] does.
-pub(crate) fn filter_range(pairs: &[(u32, u32)], p: [&[f32]; 3], reach: Reach, simd: bool, xyz: &[[f32; 4]], out: &mut Vec<(u32, u32)>) {
+pub(crate) fn filter_range(pairs: &[(u32, u32)], p: [&[f32]; 3], r: f32, simd: bool, xyz: &[[f32; 4]], out: &mut Vec<(u32, u32)>) {
     let mut done = 0;
-    let r2 = reach.r * reach.r;
+    let r2 = r * r;
     // Every index below the copy's length, checked once, so the gathers need no checks
     // (session 12, with the pair pass's: see `PairCtx::near_candidates`).
     let top = largest_id(pairs);
@@ -163,8 +150,8 @@ pub(crate) fn filter_range(pairs: &[(u32, u32)], p: [&[f32]; 3], reach: Reach, s
 /// how the candidates are spread over the particles).
 pub(crate) const NEAR_CHUNK: usize = 8192;
 
-/// Replaces `out` with the candidate pairs `(i, j)` of `cand` (first `n` lists) closer than their
-/// radius of `reach` at `p`, or with a NaN distance (the exact test rejects those later, as the fresh
+/// Replaces `out` with the candidate pairs `(i, j)` of `cand` (first `n` lists) closer than
+/// `r` at `p`, or with a NaN distance (the exact test rejects those later, as the fresh
 /// path does), in list order. With `simd`, eight candidates of one particle at a time: their
 /// positions come from `xyz`, a copy of `p` as `[x, y, z, 0]` made here (one 16-byte load a
 /// candidate instead of three scattered ones, transposed to `f32x8` in registers by
@@ -173,7 +160,7 @@ pub(crate) fn collect_near(
     cand: &Neighbours,
     p: [&[f32]; 3],
     n: usize,
-    reach: Reach,
+    r: f32,
     simd: bool,
     xyz: &mut Vec<[f32; 4]>,
     out: &mut Vec<(u32, u32)>,
@@ -183,7 +170,7 @@ pub(crate) fn collect_near(
     if simd {
         fill_xyz(p, n, false, xyz);
     }
-    collect_range(cand, p, 0..n, reach, simd, xyz, out);
+    collect_range(cand, p, 0..n, r, simd, xyz, out);
 }
 
 /// The particles [`collect_near`] walks: the first `n` with a list and a position.
@@ -235,12 +222,12 @@ fn collect_range(
     cand: &Neighbours,
     p: [&[f32]; 3],
     range: std::ops::Range<usize>,
-    reach: Reach,
+    r: f32,
     simd: bool,
     xyz: &[[f32; 4]],
     out: &mut Vec<(u32, u32)>,
 ) {
-    let r2 = reach.r * reach.r;
+    let r2 = r * r;
     let r2v = F32s::splat(r2);
     for i in range {
         let list = cand.of(i);

@@ -3,7 +3,7 @@
 
 use super::*;
 use crate::collide::neighbours::within;
-use crate::collide::self_near_scan::{chunk_bounds, collect, collect_near, filter_pairs, gather_xyzw8, Reach, ScanScratch, FILTER_CHUNK};
+use crate::collide::self_near_scan::{chunk_bounds, collect, collect_near, filter_pairs, gather_xyzw8, ScanScratch, FILTER_CHUNK};
 use crate::lanes::Idx8;
 use crate::test_rng::signed;
 
@@ -18,20 +18,12 @@ fn simd_near_list_equals_scalar_and_brute_force() {
     let mut p = p;
     p[1][17] = f32::NAN;
     let pr = [&p[0][..], &p[1][..], &p[2][..]];
-    let reach = Reach::plain(0.6);
+    let r = 0.6;
     let (mut a, mut b) = (Vec::new(), Vec::new());
-    collect_near(&cand, pr, n, reach, false, &mut Vec::new(), &mut a);
-    collect_near(&cand, pr, n, reach, true, &mut Vec::new(), &mut b);
+    collect_near(&cand, pr, n, r, false, &mut Vec::new(), &mut a);
+    collect_near(&cand, pr, n, r, true, &mut Vec::new(), &mut b);
     assert_eq!(a, b);
-    let want: Vec<(u32, u32)> = cand
-        .pairs()
-        .filter(|&(i, j)| {
-            let (i, j) = (i as usize, j as usize);
-            let d2: f32 = (0..3).map(|k| (p[k][i] - p[k][j]) * (p[k][i] - p[k][j])).sum();
-            d2 < reach.r * reach.r || d2.is_nan()
-        })
-        .collect();
-    assert_eq!(a, want);
+    assert_eq!(a, brute_near(cand.pairs(), &p, r));
     assert!(a.len() > 100 && a.len() < cand.total(), "{} of {}", a.len(), cand.total());
     assert!(a.iter().any(|&(i, j)| i == 17 || j == 17), "NaN pairs are kept");
 }
@@ -55,15 +47,15 @@ fn parallel_rebuild_over_ranges_equals_the_serial_list_on_1_and_2_threads() {
     assert!(bounds.len() > 4, "{bounds:?}");
     assert!(bounds.windows(2).all(|w| w[0] < w[1]) && bounds[0] == 0 && bounds[bounds.len() - 1] == n);
     let pr = [&p[0][..], &p[1][..], &p[2][..]];
-    let reach = Reach::plain(0.7);
+    let r = 0.7;
     let mut want = Vec::new();
-    collect_near(&cand, pr, n, reach, false, &mut Vec::new(), &mut want);
+    collect_near(&cand, pr, n, r, false, &mut Vec::new(), &mut want);
     assert!(want.len() > 1000 && want.iter().any(|&(i, _)| i == 123));
     for threads in [1, 2] {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         for (simd, parallel) in [(true, true), (false, true), (true, false)] {
             let (mut scratch, mut got) = (ScanScratch::default(), Vec::new());
-            pool.install(|| collect(&cand, pr, n, reach, simd, parallel, &mut scratch, &mut got));
+            pool.install(|| collect(&cand, pr, n, r, simd, parallel, &mut scratch, &mut got));
             assert_eq!(got, want, "{threads} threads, simd {simd}, parallel {parallel}");
         }
     }
@@ -224,8 +216,7 @@ fn near_through_mid(hashed: bool, parallel: bool, reach: f32) {
         };
         near.update(source, pr, &blocks, n, d, true, parallel);
         if near.rebuilds > before {
-            let reach = Reach::plain(d + near.skin);
-            collect(&cand, pr, n, reach, false, false, &mut scratch, &mut want);
+            collect(&cand, pr, n, d + near.skin, false, false, &mut scratch, &mut want);
             assert_eq!(near.pairs, want, "call {call}");
             checked += 1;
             kept += usize::from(near.mid_rebuilds == mid_before);
@@ -316,7 +307,7 @@ fn refreshed_mid(parallel: bool) {
             rehashed += 1;
         }
         if near.rebuilds > before {
-            collect(&all, pr, n, Reach::plain(d + near.skin), false, false, &mut scratch, &mut want);
+            collect(&all, pr, n, d + near.skin, false, false, &mut scratch, &mut want);
             assert_eq!(near.pairs, want, "call {call}");
             checked += 1;
         }
@@ -372,7 +363,7 @@ fn jumping_particles_keep_every_contact_listed() {
         let before = near.rebuilds;
         near.update(MidSource::Hash(rule), pr, &blocks, n, d, true, false);
         if near.rebuilds > before {
-            collect(&all, pr, n, Reach::plain(d + near.skin), false, false, &mut scratch, &mut want);
+            collect(&all, pr, n, d + near.skin, false, false, &mut scratch, &mut want);
             assert_eq!(near.pairs, want, "call {call}");
             if call > 0 {
                 assert_eq!(near.skin, MID_NEAR_SKIN_MAX * d, "call {call}: the mid path's skin");
@@ -401,25 +392,29 @@ fn filter_pairs_simd_and_parallel_equal_the_scalar_filter() {
         .collect();
     assert!(pairs.len() > 3 * FILTER_CHUNK, "{} pairs", pairs.len());
     let pr = [&p[0][..], &p[1][..], &p[2][..]];
-    let reach = Reach::plain(0.5);
-    let want: Vec<(u32, u32)> = pairs
-        .iter()
-        .copied()
-        .filter(|&(i, j)| {
-            let (i, j) = (i as usize, j as usize);
-            let d2: f32 = (0..3).map(|k| (p[k][i] - p[k][j]) * (p[k][i] - p[k][j])).sum();
-            d2 < reach.r * reach.r || d2.is_nan()
-        })
-        .collect();
+    let r = 0.5;
+    let want = brute_near(pairs.iter().copied(), &p, r);
     assert!(want.len() > 100 && want.len() < pairs.len() && want.iter().any(|&(i, j)| i == 77 || j == 77));
     for threads in [1, 2] {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         for (simd, parallel) in [(false, false), (true, false), (true, true), (false, true)] {
             let (mut s, mut got) = (ScanScratch::default(), vec![(9, 9)]);
-            pool.install(|| filter_pairs(&pairs, pr, n, reach, simd, parallel, &mut s, &mut got));
+            pool.install(|| filter_pairs(&pairs, pr, n, r, simd, parallel, &mut s, &mut got));
             assert_eq!(got, want, "{threads} threads, simd {simd}, parallel {parallel}");
         }
     }
+}
+
+/// The pairs of `pairs` closer than `r` at `p`, or at a NaN distance (the scans' rule), in
+/// their order: the reference the scans are held to.
+fn brute_near(pairs: impl Iterator<Item = (u32, u32)>, p: &[Vec<f32>; 3], r: f32) -> Vec<(u32, u32)> {
+    pairs
+        .filter(|&(i, j)| {
+            let (i, j) = (i as usize, j as usize);
+            let d2: f32 = (0..3).map(|k| (p[k][i] - p[k][j]) * (p[k][i] - p[k][j])).sum();
+            d2 < r * r || d2.is_nan()
+        })
+        .collect()
 }
 
 /// Every pair of `cand` closer than `d` at `p` is in the (ordered) near list.
