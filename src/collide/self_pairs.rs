@@ -41,8 +41,8 @@ impl PairCtx<'_> {
         let top = largest_id(pairs);
         if simd && (top as usize) < len {
             let limv = F32s::splat(lim);
-            for (g8, group) in pairs.as_chunks::<LANES>().0.iter().enumerate() {
-                let k = g8 * LANES;
+            let groups = pairs.as_chunks::<LANES>().0;
+            for group in groups {
                 let ii = idx8(|l| group[l].0);
                 let jj = idx8(|l| group[l].1);
                 // SAFETY: every index of `pairs` is at most `top < len` (checked above).
@@ -60,8 +60,8 @@ impl PairCtx<'_> {
                         out.push((i, j));
                     }
                 }
-                done = k + LANES;
             }
+            done = groups.len() * LANES;
         }
         for &(i, j) in &pairs[done..] {
             let (iu, ju) = (i as usize, j as usize);
