@@ -11,9 +11,9 @@
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use std::hint::black_box;
-use weft::collide::hash::SpatialHash;
-use weft::collide::neighbours::Neighbours;
-use weft::collide::particle_tree::{ParticleTree, TreeShape};
+use weft::self_collision::hash::SpatialHash;
+use weft::self_collision::neighbours::Neighbours;
+use weft::self_collision::tree::{ParticleTree, TreeShape};
 
 struct Cloth {
     x: Vec<f32>,

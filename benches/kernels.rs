@@ -11,8 +11,8 @@
 //! Run: `cargo bench --bench kernels` (add `-- --quick` for a shorter run).
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
-use weft::cloth::ClothDesc;
 use weft::integrate::{predict, update, PredictParams};
+use weft::model::cloth::ClothDesc;
 use weft::{Effects, Fabric, PinSpec, SolverParams, World};
 
 const SIZES: [usize; 4] = [1_000, 10_000, 100_000, 1_000_000];
@@ -56,7 +56,7 @@ fn integrate(c: &mut Criterion) {
             drag: None,
             force: None,
         };
-        let run = |p: &mut weft::particles::Particles, simd: bool, par: bool| {
+        let run = |p: &mut weft::data::particles::Particles, simd: bool, par: bool| {
             p.for_chunks(par, |c| predict(c, &params, simd));
             p.for_chunks(par, |c| update(c, 1.0 / 600.0, None, simd));
         };

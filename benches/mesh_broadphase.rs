@@ -7,13 +7,13 @@
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use std::hint::black_box;
-use weft::collide::bvh::Bvh;
-use weft::collide::dressform::{dress_form, PRESET_4800, PRESET_8350};
-use weft::collide::face_broadphase::FaceBroadphase;
-use weft::collide::face_hash::FaceHash;
-use weft::collide::grid::UniformGrid;
-use weft::collide::mesh::TriMesh;
-use weft::collide::mesh_batch::{contacts_par, contacts_serial, contacts_with_memory_serial, Soa3};
+use weft::obstacles::mesh::batch::{contacts_par, contacts_serial, contacts_with_memory_serial, Soa3};
+use weft::obstacles::mesh::broadphase::bvh::Bvh;
+use weft::obstacles::mesh::broadphase::grid::UniformGrid;
+use weft::obstacles::mesh::broadphase::hash::FaceHash;
+use weft::obstacles::mesh::broadphase::FaceBroadphase;
+use weft::obstacles::mesh::dressform::{dress_form, PRESET_4800, PRESET_8350};
+use weft::obstacles::mesh::TriMesh;
 
 const THICKNESS: f32 = 0.003;
 

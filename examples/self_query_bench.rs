@@ -9,9 +9,9 @@
 //! ```
 
 use std::time::Instant;
-use weft::collide::hash::SpatialHash;
-use weft::collide::neighbours::Neighbours;
-use weft::collide::self_config::{Response, SelfBroadphase, SelfCollision};
+use weft::self_collision::config::{Response, SelfBroadphase, SelfCollision};
+use weft::self_collision::hash::SpatialHash;
+use weft::self_collision::neighbours::Neighbours;
 use weft::{Fabric, SolverParams};
 
 fn main() -> weft::Result<()> {

@@ -2,10 +2,10 @@
 //! (`tests/fuzz_corpus.rs`), so CI runs the saved corpus through exactly what the fuzzers run.
 //! Each returns normally for every input; a panic is a bug.
 
-use crate::cloth::{ClothDesc, PinSpec};
-use crate::effects::{Effects, Wind};
-use crate::fabric::Fabric;
-use crate::params::{Backend, SolverParams};
+use crate::model::cloth::{ClothDesc, PinSpec};
+use crate::model::effects::{Effects, Wind};
+use crate::model::fabric::Fabric;
+use crate::model::params::{Backend, SolverParams};
 use crate::scene::Scene;
 use crate::world::World;
 
@@ -137,11 +137,11 @@ pub fn step_bytes(data: &[u8]) {
 /// Loads arbitrary bytes as an OBJ mesh; when it loads, builds all three broadphases and asks
 /// each for the contact of a few segments (they must agree, as the proptests demand).
 pub fn obj_bytes(data: &[u8]) {
-    use crate::collide::bvh::Bvh;
-    use crate::collide::face_hash::FaceHash;
-    use crate::collide::grid::UniformGrid;
-    use crate::collide::mesh::TriMesh;
-    use crate::collide::narrow::mesh_contact;
+    use crate::obstacles::mesh::broadphase::bvh::Bvh;
+    use crate::obstacles::mesh::broadphase::grid::UniformGrid;
+    use crate::obstacles::mesh::broadphase::hash::FaceHash;
+    use crate::obstacles::mesh::narrow::mesh_contact;
+    use crate::obstacles::mesh::TriMesh;
     let Ok((mesh, _report)) = TriMesh::from_obj_reader(&mut std::io::Cursor::new(data), "fuzz.obj") else {
         return;
     };

@@ -12,16 +12,16 @@
 
 use std::time::Instant;
 
-use crate::cloth::{ClothDesc, PinSpec};
-use crate::collide::self_config::SelfCollision;
 use crate::constraints::DistanceSet;
-use crate::effects::Effects;
+use crate::data::lanes::{load, Vec3x8, LANES};
+use crate::data::particles::{ParticleChunk, Particles};
 use crate::error::{Result, WeftError};
-use crate::fabric::Fabric;
 use crate::integrate::{predict, update, PredictParams};
-use crate::lanes::{load, Vec3x8, LANES};
-use crate::params::SolverParams;
-use crate::particles::{ParticleChunk, Particles};
+use crate::model::cloth::{ClothDesc, PinSpec};
+use crate::model::effects::Effects;
+use crate::model::fabric::Fabric;
+use crate::model::params::SolverParams;
+use crate::self_collision::config::SelfCollision;
 use crate::world::World;
 
 /// Median of `reps` timings of `f`, in seconds.
@@ -293,8 +293,8 @@ pub fn step_ms(world: &mut World, steps: usize) -> Result<f64> {
 /// (no shear, no tethers, no pins) lying just above a sphere it drapes over, 5 substeps and
 /// 1 iteration, on `threads` threads.
 pub fn sphere_drape_world(n: usize, threads: usize) -> Result<World> {
-    use crate::collide::obstacles::Obstacle;
-    use crate::collide::shapes::Shape;
+    use crate::model::shapes::Shape;
+    use crate::obstacles::Obstacle;
     let side = (n as f64).sqrt().round().max(2.0) as u32;
     let spacing = 2.0 / side as f32;
     let desc = ClothDesc {
@@ -325,7 +325,7 @@ pub fn sphere_drape_world(n: usize, threads: usize) -> Result<World> {
     Ok(w)
 }
 
-/// One stage's share of the real step ([`crate::stage_clock`]).
+/// One stage's share of the real step ([`crate::world::stage_clock`]).
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct StepStageFigure {
     /// Stage name (as the step's clock names it).
@@ -361,7 +361,7 @@ pub fn step_stage_times(world: &mut World, steps: usize) -> Result<Vec<StepStage
 /// One stage of the XPBD substep, timed on its own.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct StageFigure {
-    /// Stage name (as in the step's stage list, [`crate::step`]).
+    /// Stage name (as in the step's stage list, [`crate::world::step`]).
     pub stage: &'static str,
     /// Milliseconds per substep.
     pub ms: f64,

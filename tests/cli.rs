@@ -160,7 +160,7 @@ fn ctrl_c_leaves_a_checkpoint_and_a_valid_summary() {
     assert_eq!(status.code(), Some(130), "interrupted runs exit with 130");
     let s: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(s["interrupted"], true);
-    let c = weft::checkpoint::Checkpoint::load(&ck).unwrap();
+    let c = weft::world::checkpoint::Checkpoint::load(&ck).unwrap();
     assert_eq!(c.steps, s["steps"].as_u64().unwrap());
     assert!(c.steps > 0);
 }

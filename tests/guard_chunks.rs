@@ -5,8 +5,8 @@
 
 mod common;
 
-use weft::collide::obstacles::Obstacle;
-use weft::collide::shapes::Shape;
+use weft::model::shapes::Shape;
+use weft::obstacles::Obstacle;
 use weft::{ClothDesc, Effects, SolverParams, WeftError, World};
 
 /// A 100 x 100 cloth (10 000 particles: three chunks of 4096) over a sphere, after a few

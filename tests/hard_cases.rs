@@ -221,7 +221,7 @@ fn divergence_names_particle_and_stage_and_keeps_the_state() {
 
 #[test]
 fn self_colliding_particles_moving_1000_times_the_cell_size() {
-    use weft::collide::self_config::SelfCollision;
+    use weft::self_collision::config::SelfCollision;
     let desc = ClothDesc {
         rows: 12,
         cols: 12,
@@ -248,8 +248,8 @@ fn self_colliding_particles_moving_1000_times_the_cell_size() {
 
 #[test]
 fn zero_area_and_sliver_faces_in_a_mesh_obstacle() {
-    use weft::collide::mesh::TriMesh;
-    use weft::collide::obstacles::{BroadphaseKind, Obstacle};
+    use weft::obstacles::mesh::TriMesh;
+    use weft::obstacles::{BroadphaseKind, Obstacle};
     // A floor quad plus a zero-area face and a sliver: both skipped with a count, never NaN.
     let v = vec![
         [-1.0, 0.0, -1.0],

@@ -5,8 +5,8 @@
 mod common;
 
 use proptest::prelude::*;
-use weft::checkpoint::Checkpoint;
 use weft::scene::Scene;
+use weft::world::checkpoint::Checkpoint;
 use weft::{ClothDesc, Effects, Fabric, SolverParams};
 
 /// Energy may exceed its start by at most this fraction (f32 rounding of a dissipative method).

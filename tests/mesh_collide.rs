@@ -3,14 +3,14 @@
 //! and the parallel batch equals the serial one for any thread count.
 
 use proptest::prelude::*;
-use weft::collide::bvh::Bvh;
-use weft::collide::dressform::dress_form;
-use weft::collide::face_broadphase::{BruteForce, FaceBroadphase};
-use weft::collide::face_hash::{mean_face_size, FaceHash};
-use weft::collide::grid::UniformGrid;
-use weft::collide::mesh::TriMesh;
-use weft::collide::mesh_batch::{contacts_par, contacts_serial, contacts_with_memory_par, contacts_with_memory_serial, Soa3};
-use weft::collide::narrow::{mesh_contact_with, Contact, ContactKind};
+use weft::obstacles::mesh::batch::{contacts_par, contacts_serial, contacts_with_memory_par, contacts_with_memory_serial, Soa3};
+use weft::obstacles::mesh::broadphase::bvh::Bvh;
+use weft::obstacles::mesh::broadphase::grid::UniformGrid;
+use weft::obstacles::mesh::broadphase::hash::{mean_face_size, FaceHash};
+use weft::obstacles::mesh::broadphase::{BruteForce, FaceBroadphase};
+use weft::obstacles::mesh::dressform::dress_form;
+use weft::obstacles::mesh::narrow::{mesh_contact_with, Contact, ContactKind};
+use weft::obstacles::mesh::TriMesh;
 
 /// UV sphere of radius ~1 with radial bumps `amp * bumps[k]`, star-shaped about the origin.
 fn bumpy_sphere(seg: usize, rings: usize, amp: f32, bumps: &[f32]) -> TriMesh {
@@ -274,7 +274,7 @@ fn inside_mesh(m: &TriMesh, q: [f32; 3]) -> bool {
         .filter(|d| {
             let far = [q[0] + d[0], q[1] + d[1], q[2] + d[2]];
             let n = (0..m.face_count() as u32)
-                .filter_map(|f| weft::collide::narrow::face_contact(m, f, q, far, 0.0))
+                .filter_map(|f| weft::obstacles::mesh::narrow::face_contact(m, f, q, far, 0.0))
                 .filter(|c| c.kind == ContactKind::Crossing)
                 .count();
             n % 2 == 1
@@ -285,8 +285,8 @@ fn inside_mesh(m: &TriMesh, q: [f32; 3]) -> bool {
 
 #[test]
 fn falling_particles_never_penetrate_the_form() {
-    use weft::collide::face_memory::{project_if_remembered, Projection};
-    use weft::collide::mesh_response::{resolve_position, resolve_velocity};
+    use weft::obstacles::mesh::face_memory::{project_if_remembered, Projection};
+    use weft::obstacles::mesh::response::{resolve_position, resolve_velocity};
     let m = dress_form(1200).unwrap();
     let bp = UniformGrid::auto(&m).unwrap();
     let (th, band, h, mu) = (0.003f32, 0.006f32, 1.0f32 / 240.0, 0.3f32);

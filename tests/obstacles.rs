@@ -5,9 +5,9 @@
 mod common;
 
 use proptest::prelude::*;
-use weft::collide::dressform::dress_form;
-use weft::collide::obstacles::{BroadphaseKind, Obstacle};
-use weft::collide::shapes::Shape;
+use weft::model::shapes::Shape;
+use weft::obstacles::mesh::dressform::dress_form;
+use weft::obstacles::{BroadphaseKind, Obstacle};
 use weft::{Backend, ClothDesc, Effects, Fabric, SolverParams, World};
 
 /// Deepest accepted penetration at the end of a step, m (the stand-off is the 1 mm cotton

@@ -2,9 +2,9 @@
 //! the same neighbour lists, bit for bit, serial or parallel, on 1 or 2 threads.
 
 use proptest::prelude::*;
-use weft::collide::hash::SpatialHash;
-use weft::collide::neighbours::Neighbours;
-use weft::collide::particle_tree::{ParticleTree, TreeShape};
+use weft::self_collision::hash::SpatialHash;
+use weft::self_collision::neighbours::Neighbours;
+use weft::self_collision::tree::{ParticleTree, TreeShape};
 
 /// A point cloud as three arrays.
 #[derive(Debug, Clone)]

@@ -5,10 +5,10 @@
 mod common;
 
 use proptest::prelude::*;
-use weft::collide::neighbours::Neighbours;
-use weft::collide::self_collision::REST_SKIP_FACTOR;
-use weft::collide::self_config::{Response, SelfBroadphase, SelfCollision};
 use weft::scene::Scene;
+use weft::self_collision::config::{Response, SelfBroadphase, SelfCollision};
+use weft::self_collision::neighbours::Neighbours;
+use weft::self_collision::REST_SKIP_FACTOR;
 use weft::{Backend, ClothDesc, Effects, Fabric, SolverParams, World};
 
 /// Largest penetration the step may leave, as a fraction of the collision distance: a pair of

@@ -34,7 +34,7 @@
 use std::path::{Path, PathBuf};
 
 use crate::error::{Result, WeftError};
-use crate::params::{Method, SolverParams};
+use crate::model::params::{Method, SolverParams};
 use crate::reference::ReferenceWorld;
 use crate::world::World;
 
@@ -112,7 +112,7 @@ fn run(make: MakeWorld<'_>, substeps: u32, steps: usize, kind: ReferenceKind) ->
             ReferenceKind::F32World => F32_REFERENCE_ITERATIONS,
         },
         method: Method::Xpbd,
-        backend: crate::params::Backend::Simd,
+        backend: crate::model::params::Backend::Simd,
         guard: true,
         ..w.params().clone()
     };

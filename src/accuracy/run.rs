@@ -5,10 +5,10 @@ use std::time::Instant;
 use crate::accuracy::energy::{energy_budget, kinetic_energy, model_energy};
 use crate::accuracy::reference::{MakeWorld, Reference, ReferenceKind};
 use crate::accuracy::{pareto, BLOWUP_FACTOR, DIVERGED_RMS};
-use crate::collide::self_config::{Response, SelfBroadphase};
 use crate::error::{Result, WeftError};
-use crate::params::{Backend, Method, SolverParams};
+use crate::model::params::{Backend, Method, SolverParams};
 use crate::reference::ReferenceWorld;
+use crate::self_collision::config::{Response, SelfBroadphase};
 use crate::world::World;
 
 /// Arithmetic of a run.
@@ -136,8 +136,8 @@ pub fn grid_for(world: &World) -> Vec<Setting> {
 /// Deepest obstacle penetration of `w`'s particles (m, 0 when none) and how many sit deeper
 /// than [`PENETRATION_COUNT_DEPTH`].
 pub fn obstacle_penetration(w: &World) -> (f64, u64) {
-    use crate::collide::obstacles::Geometry;
-    use crate::collide::penetration::mesh_signed_distance;
+    use crate::obstacles::penetration::mesh_signed_distance;
+    use crate::obstacles::Geometry;
     let [x, y, z] = w.positions();
     let mut depth = vec![0.0f32; w.particle_count()];
     let mut scratch = Vec::new();

@@ -11,7 +11,7 @@
 //!   diagonals): six contiguous loads and six contiguous stores;
 //! - **window**: the sixteen indices `{a_l} ∪ {b_l}` are exactly `s, s+1, …, s+15` (horizontal
 //!   stretch `(i, i+1)` with `i = s, s+2, …`; horizontal bend `(i, i+2)` in pairs): two
-//!   contiguous loads per coordinate and a fixed permutation ([`pick16`](crate::lanes::pick16))
+//!   contiguous loads per coordinate and a fixed permutation ([`pick16`](crate::data::lanes::pick16))
 //!   to put each particle in its lane, and the inverse permutation on the way back. Since the
 //!   block owns all sixteen particles, writing the whole window back is safe under the
 //!   colouring guarantee (no particle in two constraints of a colour);
@@ -22,7 +22,7 @@
 
 use std::collections::HashMap;
 
-use crate::lanes::{Pos8, LANES};
+use crate::data::lanes::{Pos8, LANES};
 
 /// [`Block::kind`] of a block that gathers and scatters.
 pub const GATHER: u32 = 0;

@@ -6,8 +6,8 @@
 
 use rayon::prelude::*;
 
-use crate::cloth::Tether;
-use crate::lanes::{load, load_idx, round_up, F32s, SharedVec3, LANES};
+use crate::data::lanes::{load, load_idx, round_up, F32s, SharedVec3, LANES};
+use crate::model::cloth::Tether;
 
 /// Tethers in SoA, padded with dummies on the particle sink.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -95,7 +95,7 @@ fn block_simd(particle: &[u32], anchor: &[u32], max_len: &[f32], p: &SharedVec3)
         let over = len.simd_gt(l);
         let s = over.select(l / len, F32s::ONE);
         let moved = pa + d.scale(s);
-        let out = crate::lanes::Vec3x8::select(over, moved, pi);
+        let out = crate::data::lanes::Vec3x8::select(over, moved, pi);
         // SAFETY: as above.
         unsafe { p.scatter(&ii, out) };
     }

@@ -10,11 +10,11 @@
 //!
 //! A [`Snapshot`] is the evolving state (positions, velocities, inverse masses, time, steps,
 //! pending kinematic targets and the [`advance`](World::advance) accumulator), built on the
-//! checkpoint machinery ([`crate::checkpoint`]); restoring it onto a world of the same topology
+//! checkpoint machinery ([`crate::world::checkpoint`]); restoring it onto a world of the same topology
 //! continues bit for bit as if the steps since had never happened.
 
-use crate::checkpoint::Checkpoint;
 use crate::error::{non_negative, Result, WeftError};
+use crate::world::checkpoint::Checkpoint;
 use crate::world::World;
 
 /// A copy of a world's evolving state (see the module docs).
@@ -40,7 +40,7 @@ impl Snapshot {
 }
 
 /// Which kind of grid constraint joins local grid cells `a` and `b` of a `cols`-wide cloth:
-/// 0 stretch, 1 shear, 2 bend (see [`crate::cloth`] for the layout).
+/// 0 stretch, 1 shear, 2 bend (see [`crate::model::cloth`] for the layout).
 fn grid_kind(a: u32, b: u32, cols: u32) -> Option<usize> {
     let (ra, ca) = ((a / cols) as i64, (a % cols) as i64);
     let (rb, cb) = ((b / cols) as i64, (b % cols) as i64);

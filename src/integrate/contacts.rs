@@ -28,7 +28,7 @@
 //! kick, so the closing force is evaluated at the corrected positions. A world with neither
 //! obstacles nor self-collision takes none of this path and steps bit for bit as before.
 
-use crate::collide::self_collision::Active;
+use crate::self_collision::Active;
 use crate::world::World;
 
 /// What the force-based substeps of one step need for contacts.
@@ -161,8 +161,8 @@ impl World {
 
 #[cfg(test)]
 mod tests {
-    use crate::collide::obstacles::Obstacle;
-    use crate::collide::shapes::Shape;
+    use crate::model::shapes::Shape;
+    use crate::obstacles::Obstacle;
     use crate::{ClothDesc, Effects, Fabric, Method, SolverParams, World};
 
     /// Penetration allowed at the end of a step, m (the obstacle stages leave particles the
@@ -251,7 +251,7 @@ mod tests {
     /// velocity at 1/60 s). Counting the clamp twice gave `2 v_c - v`, about -8.8 m/s.
     #[test]
     fn the_speed_clamp_slows_a_fast_particle_instead_of_reflecting_it() {
-        use crate::collide::self_config::SelfCollision;
+        use crate::self_collision::config::SelfCollision;
         for method in [Method::SymplecticEuler, Method::Leapfrog, Method::ImplicitEuler] {
             let fabric = Fabric {
                 stretch_compliance: 1e3,

@@ -1,7 +1,7 @@
 //! SIMD predict/update kernels and their scalar twins.
 
-use crate::lanes::{load, store, F32s, Vec3x8, LANES};
-use crate::particles::ParticleChunk;
+use crate::data::lanes::{load, store, F32s, Vec3x8, LANES};
+use crate::data::particles::ParticleChunk;
 
 /// What the predict kernel adds to velocities.
 #[derive(Clone, Copy, Debug, Default)]
@@ -150,7 +150,7 @@ fn update_scalar(c: ParticleChunk<'_>, h: f32, damp: Option<&[f32]>) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::particles::Particles;
+    use crate::data::particles::Particles;
     use proptest::prelude::*;
 
     fn cloud(n: usize, seed: u64) -> Particles {

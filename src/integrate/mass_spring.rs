@@ -27,11 +27,11 @@
 //! `h` must stay below about `2 / ω`, `ω = 2 √(k/m)`. Past that the state grows without bound
 //! and the step's guard reports [`WeftError::Diverged`](crate::WeftError::Diverged).
 
-use crate::effects::Effects;
+use crate::data::lanes::{load, F32s, Vec3x8, LANES};
+use crate::data::particles::ParticleChunk;
 use crate::integrate::springs::{add_spring_forces_scalar, add_spring_forces_simd};
-use crate::lanes::{load, F32s, Vec3x8, LANES};
-use crate::params::{Backend, Method};
-use crate::particles::ParticleChunk;
+use crate::model::effects::Effects;
+use crate::model::params::{Backend, Method};
 use crate::world::World;
 
 /// Scratch of the force-based methods, kept by the world between steps.

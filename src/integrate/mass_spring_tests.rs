@@ -1,10 +1,10 @@
 //! Tests of the four integrators on the same model: order of convergence on a spring with an
 //! exact solution, stability, pinned particles, scalar twin and thread independence.
 
-use crate::cloth::{ClothDesc, PinSpec};
-use crate::effects::{Effects, Wind};
-use crate::fabric::Fabric;
-use crate::params::{Backend, Method, SolverParams};
+use crate::model::cloth::{ClothDesc, PinSpec};
+use crate::model::effects::{Effects, Wind};
+use crate::model::fabric::Fabric;
+use crate::model::params::{Backend, Method, SolverParams};
 use crate::world::World;
 use crate::WeftError;
 

@@ -17,7 +17,7 @@
 use rayon::prelude::*;
 
 use crate::constraints::distance::{DistanceSet, CHUNK, MIN_LENGTH};
-use crate::lanes::{load, load_idx, F32s, SharedVec3, LANES};
+use crate::data::lanes::{load, load_idx, F32s, SharedVec3, LANES};
 
 /// Stiffness of one spring: `1/α`, or `stiffness` when `α = 0`.
 #[inline(always)]
@@ -73,8 +73,8 @@ unsafe fn springs_block_simd(a: &[u32], b: &[u32], rest: &[f32], comp: &[f32], x
     for i in (0..a.len()).step_by(LANES) {
         let ia = load_idx(a, i);
         let ib = load_idx(b, i);
-        let g = |s: &[f32], idx: &[u32; LANES]| crate::lanes::gather1(s, idx);
-        let d = crate::lanes::Vec3x8 {
+        let g = |s: &[f32], idx: &[u32; LANES]| crate::data::lanes::gather1(s, idx);
+        let d = crate::data::lanes::Vec3x8 {
             x: g(x[0], &ib) - g(x[0], &ia),
             y: g(x[1], &ib) - g(x[1], &ia),
             z: g(x[2], &ib) - g(x[2], &ia),
@@ -139,7 +139,7 @@ pub fn spring_energy(set: &DistanceSet, x: [&[f32]; 3], stiffness: f32) -> f64 {
 mod tests {
     use super::*;
     use crate::constraints::distance::DistanceInput;
-    use crate::lanes::round_up;
+    use crate::data::lanes::round_up;
     use proptest::prelude::*;
 
     fn setup(n: usize, m: usize, seed: u64) -> (DistanceSet, [Vec<f32>; 3]) {

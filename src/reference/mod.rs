@@ -29,7 +29,7 @@ mod self_collision;
 #[cfg(test)]
 mod tests;
 
-use crate::effects::Effects;
+use crate::model::effects::Effects;
 use crate::world::World;
 use obstacles::{Contact, Obstacle64};
 use self_collision::SelfCollision64;

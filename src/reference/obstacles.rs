@@ -31,8 +31,8 @@
 //! shape between two samples (a step longer than 1/16 of the shape's size) is missed; with the
 //! reference's small substeps even a crossing needs a step longer than 3 mm.
 
-use crate::collide::obstacles::{Geometry, Obstacle, MIN_MARGIN};
-use crate::collide::shapes::Shape;
+use crate::model::shapes::Shape;
+use crate::obstacles::{Geometry, Obstacle, MIN_MARGIN};
 
 /// A particle this far beyond the thickness still counts as touching (the world's value).
 const TOUCH_SLACK: f64 = 1e-4;

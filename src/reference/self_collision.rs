@@ -29,8 +29,8 @@
 //!   `p = q`, else with `β = min(b h, 1)` (`b` the particle's damping rate) and `n̂ = n/|n|`,
 //!   `p = t - (β (t - x).n̂ + β² g/(4k)) n̂`; PBD and movement speed: `p = t`.
 
-use crate::collide::self_collision::{BOX_RADIUS, QUERY_FACTOR, REST_SKIP_FACTOR, TRAVEL_FACTOR};
-use crate::collide::self_config::Response;
+use crate::self_collision::config::Response;
+use crate::self_collision::{BOX_RADIUS, QUERY_FACTOR, REST_SKIP_FACTOR, TRAVEL_FACTOR};
 use crate::world::World;
 use std::collections::HashMap;
 

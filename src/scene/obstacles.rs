@@ -25,11 +25,11 @@
 use serde::{Deserialize, Serialize};
 
 use super::checked::{Count, NonNegative, Positive, Vec3};
-use crate::collide::dressform::dress_form;
-use crate::collide::mesh::TriMesh;
-use crate::collide::obstacles::{BroadphaseKind, Obstacle};
-use crate::collide::shapes::Shape;
 use crate::error::{Result, WeftError};
+use crate::model::shapes::Shape;
+use crate::obstacles::mesh::dressform::dress_form;
+use crate::obstacles::mesh::TriMesh;
+use crate::obstacles::{BroadphaseKind, Obstacle};
 
 /// Obstacle kinds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize)]

@@ -3,12 +3,12 @@
 use serde::{Deserialize, Serialize};
 
 use super::checked::{Count, Fraction, NonNegative, Positive, Vec3};
-use crate::cloth::{ClothDesc, PinSpec};
-use crate::collide::self_config::{Response, SelfBroadphase, SelfCollision};
-use crate::effects::{Effects, Wind};
 use crate::error::Result;
-use crate::fabric::Fabric;
-use crate::params::{Backend, Method, SolverParams};
+use crate::model::cloth::{ClothDesc, PinSpec};
+use crate::model::effects::{Effects, Wind};
+use crate::model::fabric::Fabric;
+use crate::model::params::{Backend, Method, SolverParams};
+use crate::self_collision::config::{Response, SelfBroadphase, SelfCollision};
 
 /// `[solver]`.
 #[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
@@ -30,7 +30,7 @@ pub struct SolverSection {
     #[serde(default)]
     pub method: Method,
     /// Spring stiffness, N/m, of zero-compliance constraints in the force-based methods
-    /// (default [`DEFAULT_STIFFNESS`](crate::params::DEFAULT_STIFFNESS)).
+    /// (default [`DEFAULT_STIFFNESS`](crate::model::params::DEFAULT_STIFFNESS)).
     pub stiffness: Option<Positive>,
     /// `"simd"` (default) or `"scalar"`.
     #[serde(default)]
@@ -71,7 +71,7 @@ impl SolverSection {
             threads: self.threads as usize,
             backend: self.backend,
             method: self.method,
-            stiffness: self.stiffness.map_or(crate::params::DEFAULT_STIFFNESS, |s| s.0),
+            stiffness: self.stiffness.map_or(crate::model::params::DEFAULT_STIFFNESS, |s| s.0),
             ..SolverParams::default()
         }
     }

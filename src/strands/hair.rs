@@ -11,7 +11,7 @@
 //!   softened by their own compliance;
 //! - the root `T_1` is pinned (`w = 0`, kinematic: it moves only if the caller moves it);
 //! - gravity acts on every free point through the predict stage, and wind as a drag on each
-//!   point (see [`crate::effects`], strand drag `F = ½ ρ C_d (d · leng) |v_rel| v_rel`);
+//!   point (see [`crate::model::effects`], strand drag `F = ½ ρ C_d (d · leng) |v_rel| v_rel`);
 //! - the scalp stage keeps every free point outside the scalp plus half the strand thickness
 //!   (see [`super::scalp`]).
 //!
@@ -21,8 +21,8 @@
 //! [`NurbsCurve::strand`]: super::nurbs::NurbsCurve::strand
 
 use super::scalp::Scalp;
-use crate::cloth::{ConstraintKind, Edge, MAX_PARTICLES};
 use crate::error::{non_negative, positive, Result, WeftError};
+use crate::model::cloth::{ConstraintKind, Edge, MAX_PARTICLES};
 
 /// A group of strands grown on one scalp.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]

@@ -7,7 +7,6 @@
 //! - [`nurbs`]: NURBS curves and surfaces with global and local evaluation, used to draw strands
 //!   and cloth smoothly; [`nurbs_timing`] measures global against local evaluation.
 
-pub mod attach;
 pub mod hair;
 pub mod nurbs;
 pub mod nurbs_timing;
@@ -17,6 +16,6 @@ mod tests;
 #[cfg(test)]
 mod tests_paths;
 
-pub use attach::StrandInfo;
+pub use crate::model::layout::StrandInfo;
 pub use hair::{StrandsBuild, StrandsDesc};
 pub use scalp::Scalp;

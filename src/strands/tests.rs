@@ -3,7 +3,7 @@
 
 use super::scalp::ScalpSet;
 use super::*;
-use crate::params::Backend;
+use crate::model::params::Backend;
 use crate::{Effects, SolverParams, Wind, World};
 
 fn dist(a: [f32; 3], b: [f32; 3]) -> f32 {

@@ -109,7 +109,7 @@ fn strand_scene_resumes_bitwise_from_a_checkpoint() {
     for _ in 0..12 {
         b.step(1.0 / 60.0).unwrap();
     }
-    let c = crate::checkpoint::Checkpoint::from_bytes(&b.checkpoint(&text).to_bytes()).unwrap();
+    let c = crate::world::checkpoint::Checkpoint::from_bytes(&b.checkpoint(&text).to_bytes()).unwrap();
     let mut r = Scene::parse(&c.scene, "s").unwrap().world().unwrap();
     r.restore(&c).unwrap();
     for _ in 12..30 {

@@ -5,8 +5,8 @@
 //! drawn as smooth NURBS curves through their simulated points (root and tip exact, the rest
 //! smoothed; SEEDS.md B), and each scalp as a shaded ellipsoid mesh.
 
-use weft::collide::obstacles::Geometry;
-use weft::collide::shapes::Shape;
+use weft::model::shapes::Shape;
+use weft::obstacles::Geometry;
 use weft::render::{self, shapes, Camera, Image, LineItem, MeshItem, RenderOptions, RenderScene};
 use weft::strands::nurbs::{NurbsCurve, NurbsSurface};
 

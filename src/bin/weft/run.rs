@@ -9,8 +9,8 @@ use std::time::Instant;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
-use weft::checkpoint::{write_atomic, Checkpoint};
 use weft::scene::{ClothSurface, Scene};
+use weft::world::checkpoint::{write_atomic, Checkpoint};
 use weft::{WeftError, World};
 
 use crate::pictures::{self, Frame};
@@ -92,7 +92,7 @@ struct SelfCollisionSummary {
     max_collision_pct: Option<f64>,
     final_collision_pct: f64,
     collision_ms_per_step: f64,
-    stats: weft::collide::self_config::SelfCollisionStats,
+    stats: weft::self_collision::config::SelfCollisionStats,
 }
 
 fn percentile(sorted: &[f64], q: f64) -> f64 {

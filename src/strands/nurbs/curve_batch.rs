@@ -10,7 +10,7 @@
 
 use super::basis::MAX_ORDER;
 use super::curve::NurbsCurve;
-use crate::lanes::{F32s, LANES};
+use crate::data::lanes::{F32s, LANES};
 use crate::{Result, WeftError};
 
 impl NurbsCurve {
@@ -40,9 +40,9 @@ impl NurbsCurve {
         for c in (0..full).step_by(LANES) {
             let u: [f32; LANES] = us[c..c + LANES].try_into().expect("lane chunk");
             let [x, y, z] = self.eval_lanes(u);
-            crate::lanes::store(out_x, c, x);
-            crate::lanes::store(out_y, c, y);
-            crate::lanes::store(out_z, c, z);
+            crate::data::lanes::store(out_x, c, x);
+            crate::data::lanes::store(out_y, c, y);
+            crate::data::lanes::store(out_z, c, z);
         }
         for i in full..us.len() {
             let s = self.knots().span_unchecked(us[i]);

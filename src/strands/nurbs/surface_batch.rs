@@ -25,7 +25,7 @@
 
 use super::basis::{basis_in_span, MAX_ORDER};
 use super::surface::NurbsSurface;
-use crate::lanes::{load, store, F32s, LANES};
+use crate::data::lanes::{load, store, F32s, LANES};
 use crate::{Result, WeftError};
 
 /// Spans and local basis values for a list of parameters along one direction.

@@ -19,7 +19,7 @@
 //! drapes over the form: without the warm-up the 150 iterations of the 8352-face row ended
 //! before the sheet reached the shoulders (about 1% of the particles in contact), so the row
 //! timed mostly free fall. The `contact` column is the mean share of particles holding an
-//! obstacle contact over the timed iterations. The forms are our procedural ones (`weft::collide::dressform`:
+//! obstacle contact over the timed iterations. The forms are our procedural ones (`weft::obstacles::mesh::dressform`:
 //! exactly 4800, and 8352 faces).
 //!
 //! Each row times the whole step (cloth constraints included) on all cores: `seconds` is wall
@@ -40,8 +40,8 @@
 use std::process::ExitCode;
 use std::time::Instant;
 
-use weft::collide::dressform::dress_form;
-use weft::collide::obstacles::{BroadphaseKind, Obstacle};
+use weft::obstacles::mesh::dressform::dress_form;
+use weft::obstacles::{BroadphaseKind, Obstacle};
 use weft::{ClothDesc, Effects, Fabric, SolverParams, World};
 
 /// Options of `weft reproduce landovsky`.
@@ -152,7 +152,7 @@ fn world(s: &Spec) -> weft::Result<World> {
         rows: s.rows,
         cols: s.cols,
         spacing: s.spacing,
-        origin: [-wx / 2.0, weft::collide::dressform::HEIGHT + DROP, -wz / 2.0],
+        origin: [-wx / 2.0, weft::obstacles::mesh::dressform::HEIGHT + DROP, -wz / 2.0],
         u: [1.0, 0.0, 0.0],
         v: [0.0, 0.0, 1.0],
         fabric: Fabric::preset("cotton")?,
@@ -220,8 +220,8 @@ fn measure(s: &Spec) -> weft::Result<Measured> {
 
 /// The row's broadphase label, the mesh's face count and the grid's cells.
 fn label(w: &World, face_memory: bool) -> (String, usize, Option<[usize; 3]>) {
-    use weft::collide::face_broadphase::FaceBroadphase;
-    use weft::collide::obstacles::{Geometry, MeshBroadphase};
+    use weft::obstacles::mesh::broadphase::FaceBroadphase;
+    use weft::obstacles::{Geometry, MeshBroadphase};
     match w.obstacles().first().map(|o| o.geometry()) {
         Some(Geometry::Mesh(m)) => {
             let cells = match m.broadphase() {

@@ -88,7 +88,7 @@ use std::time::Instant;
 
 use clap::Args;
 use serde::Serialize;
-use weft::collide::self_config::{Response, SelfBroadphase, SelfCollision};
+use weft::self_collision::config::{Response, SelfBroadphase, SelfCollision};
 use weft::{Fabric, SolverParams, WeftError, World};
 
 /// Options of `weft reproduce vccpbd`.

@@ -1,0 +1,335 @@
+//! Particle storage in structure-of-arrays form.
+//!
+//! Every attribute is its own `Vec<f32>`: positions `x, y, z`, predicted positions
+//! `px, py, pz`, velocities `vx, vy, vz` and inverse masses `w` (0 = pinned or kinematic).
+//! The length is padded to a multiple of [`LANES`](crate::data::lanes::LANES) with inert particles
+//! (`w = 0`, at the origin, at rest), and there is always at least one such padding slot: the
+//! last one, [`Particles::sink`], is where padded (dummy) constraints point so that SIMD loops
+//! never need a tail.
+//!
+//! Element-wise kernels run over [`CHUNK`]-particle chunks ([`Particles::for_chunks`]). The
+//! step's divergence guard rides on two such passes instead of passes of its own
+//! ([`Particles::for_chunks_saving`] copies the state at the start of the step chunk by chunk
+//! inside the first predict, [`chunk_finite_simd`] checks the end state chunk by chunk inside
+//! the last update, while the chunk is still in cache).
+
+use crate::data::lanes::round_up;
+
+/// Particle arrays (SoA), padded to the lane width.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Particles {
+    count: usize,
+    /// Positions.
+    pub x: Vec<f32>,
+    /// Positions.
+    pub y: Vec<f32>,
+    /// Positions.
+    pub z: Vec<f32>,
+    /// Predicted positions (scratch of the solver; equal to `x` between steps).
+    pub px: Vec<f32>,
+    /// Predicted positions.
+    pub py: Vec<f32>,
+    /// Predicted positions.
+    pub pz: Vec<f32>,
+    /// Velocities.
+    pub vx: Vec<f32>,
+    /// Velocities.
+    pub vy: Vec<f32>,
+    /// Velocities.
+    pub vz: Vec<f32>,
+    /// Inverse masses (1/kg); 0 means the particle is pinned (infinite mass).
+    pub w: Vec<f32>,
+}
+
+impl Particles {
+    /// An empty set with the single padding block.
+    pub fn new() -> Self {
+        let mut p = Self::default();
+        p.repad();
+        p
+    }
+
+    /// Number of real (non-padding) particles.
+    pub fn count(&self) -> usize {
+        self.count
+    }
+
+    /// Padded length of every array (a multiple of the lane width, > `count`).
+    pub fn padded_len(&self) -> usize {
+        self.x.len()
+    }
+
+    /// Index of the inert padding particle that dummy constraints point at.
+    pub fn sink(&self) -> u32 {
+        (self.padded_len() - 1) as u32
+    }
+
+    /// Appends a particle and returns its index.
+    pub fn push(&mut self, pos: [f32; 3], vel: [f32; 3], inv_mass: f32) -> u32 {
+        self.truncate_padding();
+        let i = self.count;
+        self.x.push(pos[0]);
+        self.y.push(pos[1]);
+        self.z.push(pos[2]);
+        self.vx.push(vel[0]);
+        self.vy.push(vel[1]);
+        self.vz.push(vel[2]);
+        self.w.push(inv_mass);
+        self.count += 1;
+        self.repad();
+        i as u32
+    }
+
+    /// Appends many particles at once (faster than repeated [`push`](Self::push)).
+    pub fn extend(&mut self, pos: &[[f32; 3]], inv_mass: &[f32]) -> u32 {
+        debug_assert_eq!(pos.len(), inv_mass.len());
+        self.truncate_padding();
+        let first = self.count;
+        for (p, &w) in pos.iter().zip(inv_mass) {
+            self.x.push(p[0]);
+            self.y.push(p[1]);
+            self.z.push(p[2]);
+            self.vx.push(0.0);
+            self.vy.push(0.0);
+            self.vz.push(0.0);
+            self.w.push(w);
+        }
+        self.count += pos.len();
+        self.repad();
+        first as u32
+    }
+
+    /// The arrays that hold state between steps (the predictions are derived from `x`).
+    fn stored_arrays(&mut self) -> [&mut Vec<f32>; 7] {
+        [
+            &mut self.x,
+            &mut self.y,
+            &mut self.z,
+            &mut self.vx,
+            &mut self.vy,
+            &mut self.vz,
+            &mut self.w,
+        ]
+    }
+
+    fn truncate_padding(&mut self) {
+        let n = self.count;
+        for v in self.stored_arrays() {
+            v.truncate(n);
+        }
+    }
+
+    fn repad(&mut self) {
+        let len = round_up(self.count + 1);
+        for v in self.stored_arrays() {
+            v.resize(len, 0.0);
+        }
+        self.px = self.x.clone();
+        self.py = self.y.clone();
+        self.pz = self.z.clone();
+    }
+
+    /// Position of particle `i`.
+    pub fn position(&self, i: usize) -> [f32; 3] {
+        [self.x[i], self.y[i], self.z[i]]
+    }
+
+    /// Velocity of particle `i`.
+    pub fn velocity(&self, i: usize) -> [f32; 3] {
+        [self.vx[i], self.vy[i], self.vz[i]]
+    }
+
+    /// Index of the first real particle whose position or velocity is not finite.
+    pub fn first_non_finite(&self) -> Option<usize> {
+        (0..self.count).find(|&i| {
+            !(self.x[i].is_finite()
+                && self.y[i].is_finite()
+                && self.z[i].is_finite()
+                && self.vx[i].is_finite()
+                && self.vy[i].is_finite()
+                && self.vz[i].is_finite())
+        })
+    }
+}
+
+/// Particles per parallel task in element-wise kernels (a multiple of the lane width).
+pub const CHUNK: usize = 4096;
+
+/// A contiguous range of particles handed to an element-wise kernel.
+#[derive(Debug)]
+pub struct ParticleChunk<'a> {
+    /// Index of the first particle of the chunk.
+    pub start: usize,
+    /// Positions.
+    pub x: &'a mut [f32],
+    /// Positions.
+    pub y: &'a mut [f32],
+    /// Positions.
+    pub z: &'a mut [f32],
+    /// Predicted positions.
+    pub px: &'a mut [f32],
+    /// Predicted positions.
+    pub py: &'a mut [f32],
+    /// Predicted positions.
+    pub pz: &'a mut [f32],
+    /// Velocities.
+    pub vx: &'a mut [f32],
+    /// Velocities.
+    pub vy: &'a mut [f32],
+    /// Velocities.
+    pub vz: &'a mut [f32],
+    /// Inverse masses.
+    pub w: &'a [f32],
+}
+
+impl Particles {
+    /// Runs `f` over chunks of [`CHUNK`] particles, in parallel on the current rayon pool when
+    /// `parallel`, else as one chunk on this thread. Element-wise kernels give the same bits
+    /// either way.
+    pub fn for_chunks<F>(&mut self, parallel: bool, f: F)
+    where
+        F: Fn(ParticleChunk<'_>) + Sync + Send,
+    {
+        use rayon::prelude::*;
+        if parallel && self.padded_len() > CHUNK {
+            self.par_chunks().for_each(f);
+        } else {
+            f(self.whole());
+        }
+    }
+
+    /// The particles in chunks of [`CHUNK`], as a parallel iterator.
+    fn par_chunks(&mut self) -> impl rayon::iter::IndexedParallelIterator<Item = ParticleChunk<'_>> {
+        use rayon::prelude::*;
+        (
+            self.x.par_chunks_mut(CHUNK),
+            self.y.par_chunks_mut(CHUNK),
+            self.z.par_chunks_mut(CHUNK),
+            self.px.par_chunks_mut(CHUNK),
+            self.py.par_chunks_mut(CHUNK),
+            self.pz.par_chunks_mut(CHUNK),
+            self.vx.par_chunks_mut(CHUNK),
+            self.vy.par_chunks_mut(CHUNK),
+            self.vz.par_chunks_mut(CHUNK),
+            self.w.par_chunks(CHUNK),
+        )
+            .into_par_iter()
+            .enumerate()
+            .map(|(k, (x, y, z, px, py, pz, vx, vy, vz, w))| ParticleChunk {
+                start: k * CHUNK,
+                x,
+                y,
+                z,
+                px,
+                py,
+                pz,
+                vx,
+                vy,
+                vz,
+                w,
+            })
+    }
+
+    /// All particles as one chunk.
+    fn whole(&mut self) -> ParticleChunk<'_> {
+        ParticleChunk {
+            start: 0,
+            x: &mut self.x,
+            y: &mut self.y,
+            z: &mut self.z,
+            px: &mut self.px,
+            py: &mut self.py,
+            pz: &mut self.pz,
+            vx: &mut self.vx,
+            vy: &mut self.vy,
+            vz: &mut self.vz,
+            w: &self.w,
+        }
+    }
+}
+
+impl ParticleChunk<'_> {
+    /// The same chunk, borrowed again (to hand it to one kernel and keep it for the next).
+    pub fn reborrow(&mut self) -> ParticleChunk<'_> {
+        ParticleChunk {
+            start: self.start,
+            x: self.x,
+            y: self.y,
+            z: self.z,
+            px: self.px,
+            py: self.py,
+            pz: self.pz,
+            vx: self.vx,
+            vy: self.vy,
+            vz: self.vz,
+            w: self.w,
+        }
+    }
+
+    /// The chunk's positions and velocities, `x, y, z, vx, vy, vz`.
+    pub fn state(&self) -> [&[f32]; 6] {
+        [&*self.x, &*self.y, &*self.z, &*self.vx, &*self.vy, &*self.vz]
+    }
+}
+
+impl Particles {
+    /// [`for_chunks`](Self::for_chunks), also handing each chunk its part of `saved` (six
+    /// arrays, resized to the padded length): for a kernel that keeps a copy of the chunk's
+    /// state (`x, y, z, vx, vy, vz`) before it changes it. Allocates only when `saved` is not
+    /// yet sized.
+    pub fn for_chunks_saving<F>(&mut self, parallel: bool, saved: &mut [Vec<f32>; 6], f: F)
+    where
+        F: Fn(ParticleChunk<'_>, [&mut [f32]; 6]) + Sync + Send,
+    {
+        use rayon::prelude::*;
+        let len = self.padded_len();
+        for s in saved.iter_mut() {
+            s.resize(len, 0.0);
+        }
+        let [s0, s1, s2, s3, s4, s5] = saved;
+        if parallel && len > CHUNK {
+            let parts = (
+                s0.par_chunks_mut(CHUNK),
+                s1.par_chunks_mut(CHUNK),
+                s2.par_chunks_mut(CHUNK),
+                s3.par_chunks_mut(CHUNK),
+                s4.par_chunks_mut(CHUNK),
+                s5.par_chunks_mut(CHUNK),
+            )
+                .into_par_iter();
+            self.par_chunks()
+                .zip(parts)
+                .for_each(|(chunk, (a, b, c, d, e, g))| f(chunk, [a, b, c, d, e, g]));
+        } else {
+            f(self.whole(), [s0, s1, s2, s3, s4, s5]);
+        }
+    }
+}
+
+/// Are the first `n` values of every array in `arrays` finite? Eight lanes at once: the sum
+/// of `v - v` over the values stays `0` while every value is finite and turns NaN at the first
+/// infinity or NaN (`inf - inf` and `NaN - NaN` are NaN), so the loop has no branch.
+/// A tail of fewer than eight values is checked one by one.
+#[allow(clippy::eq_op)] // `v - v` is the test: 0 for a finite value, NaN otherwise
+pub fn chunk_finite_simd(arrays: &[&[f32]], n: usize) -> bool {
+    use crate::data::lanes::{load, F32s, LANES};
+    let whole = n - n % LANES;
+    let mut acc = F32s::splat(0.0);
+    for a in arrays {
+        for i in (0..whole).step_by(LANES) {
+            let v = load(a, i);
+            acc += v - v;
+        }
+    }
+    let tail_finite = arrays.iter().all(|a| a[whole..n].iter().all(|v| v.is_finite()));
+    acc.to_array().iter().all(|&s| s == 0.0) && tail_finite
+}
+
+/// Scalar twin of [`chunk_finite_simd`].
+pub fn chunk_finite_scalar(arrays: &[&[f32]], n: usize) -> bool {
+    arrays.iter().all(|a| a[..n].iter().all(|v| v.is_finite()))
+}
+
+#[cfg(test)]
+#[path = "particles_tests.rs"]
+mod tests;

@@ -1,0 +1,9 @@
+//! Plain descriptions shared by the world, the scene files and the f64 reference: solver
+//! parameters, fabrics, cloth grids, effects, analytic shapes. No kernels, no thread pools:
+//! a reader of these types needs nothing but `data/` and the error type.
+pub mod cloth;
+pub mod effects;
+pub mod fabric;
+pub mod layout;
+pub mod params;
+pub mod shapes;

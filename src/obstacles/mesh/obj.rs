@@ -1,0 +1,76 @@
+//! Loading mesh obstacles from Wavefront OBJ files through the `tobj` crate.
+//!
+//! Every model in the file is merged into one [`TriMesh`]; polygons are triangulated by
+//! `tobj` (fan triangulation); normals, texture coordinates and materials are ignored (face
+//! normals come from the winding). The merged mesh goes through [`TriMesh::new`]'s checks, and
+//! errors name the file.
+
+use crate::obstacles::mesh::{MeshReport, TriMesh};
+use crate::{Result, WeftError};
+use std::path::Path;
+
+impl TriMesh {
+    /// Loads every model of an OBJ file (polygons triangulated by `tobj`) into one mesh.
+    pub fn from_obj(path: impl AsRef<Path>) -> Result<(TriMesh, MeshReport)> {
+        let path = path.as_ref();
+        let file = std::fs::File::open(path).map_err(|e| WeftError::io(path, e))?;
+        TriMesh::from_obj_reader(&mut std::io::BufReader::new(file), &path.display().to_string())
+    }
+
+    /// Loads OBJ text from any reader; `name` labels errors. Material libraries are ignored.
+    pub fn from_obj_reader(reader: &mut impl std::io::BufRead, name: &str) -> Result<(TriMesh, MeshReport)> {
+        let opts = tobj::LoadOptions {
+            triangulate: true,
+            single_index: false,
+            ..Default::default()
+        };
+        let named = |reason: String| WeftError::InvalidMesh {
+            source_name: Some(name.to_string()),
+            reason,
+        };
+        let (models, _materials) = tobj::load_obj_buf(reader, &opts, |_| Err(tobj::LoadError::OpenFileFailed)).map_err(|e| match e {
+            tobj::LoadError::ReadError => WeftError::Io {
+                path: name.to_string(),
+                message: e.to_string(),
+            },
+            other => named(other.to_string()),
+        })?;
+        let mut vertices = Vec::new();
+        let mut faces = Vec::new();
+        for m in &models {
+            let base = vertices.len() as u32;
+            vertices.extend(m.mesh.positions.chunks_exact(3).map(|c| [c[0], c[1], c[2]]));
+            faces.extend(
+                m.mesh
+                    .indices
+                    .chunks_exact(3)
+                    .map(|c| [c[0], c[1], c[2]].map(|i| base.saturating_add(i))),
+            );
+        }
+        TriMesh::new(vertices, faces).map_err(|e| match e {
+            WeftError::InvalidMesh { reason, .. } => named(reason),
+            other => other,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn obj_loads_and_triangulates() {
+        let dir = std::env::temp_dir().join(format!("weft_mesh_obj_{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join("quad.obj");
+        std::fs::write(&p, "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n").unwrap();
+        let (m, r) = TriMesh::from_obj(&p).unwrap();
+        assert_eq!(m.face_count(), 2);
+        assert_eq!(r.boundary_edges, 4);
+        let e = TriMesh::from_obj(dir.join("missing.obj")).unwrap_err();
+        assert!(matches!(e, WeftError::Io { .. }), "{e}");
+        std::fs::write(&p, "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 7\n").unwrap();
+        assert!(TriMesh::from_obj(&p).is_err());
+        std::fs::remove_dir_all(&dir).ok();
+    }
+}

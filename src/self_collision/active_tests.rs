@@ -1,0 +1,429 @@
+//! The compact step (lists built once, rest neighbours dropped, substeps on the active blocks)
+//! against a recomputation from scratch: the pair sums of a brute force over all pairs with the
+//! same rules, and the correction kernel run on every particle. Bit for bit, for the three
+//! responses, SIMD and scalar, serial and parallel on one and two threads.
+
+use super::*;
+use crate::data::lanes::LANES;
+use crate::self_collision::response::{apply, ApplyInput, ApplyMode, ContactSums};
+use crate::test_rng::signed;
+
+/// A `rows x cols` cloth of spacing `s` folded in half across a row (second layer `gap` above),
+/// each coordinate jittered by up to `jitter`.
+fn folded(rows: usize, cols: usize, s: f32, gap: f32, jitter: f32, rng: &mut impl FnMut() -> f32) -> (SelfCollisionData, [Vec<f32>; 3]) {
+    let mut data = SelfCollisionData::default();
+    let rest: Vec<[f32; 3]> = (0..rows * cols)
+        .map(|i| [(i % cols) as f32 * s, 0.0, (i / cols) as f32 * s])
+        .collect();
+    data.add_cloth(&rest, 0, s, s);
+    let mut x = [vec![0.0f32; rows * cols], vec![0.0; rows * cols], vec![0.0; rows * cols]];
+    for r in 0..rows {
+        for c in 0..cols {
+            let i = r * cols + c;
+            let (y, z) = if r < rows / 2 {
+                (0.0, r as f32 * s)
+            } else {
+                (gap, (rows - 1 - r) as f32 * s)
+            };
+            let p = [c as f32 * s, y, z];
+            for a in 0..3 {
+                x[a][i] = p[a] + jitter * rng();
+            }
+        }
+    }
+    (data, x)
+}
+
+fn padded(v: &[f32]) -> Vec<f32> {
+    let mut p = v.to_vec();
+    p.resize(crate::data::lanes::round_up(v.len() + 1), 0.0);
+    p
+}
+
+/// Runs one pair pass and one correction on the compact set; returns `(p after, sums by particle)`.
+#[allow(clippy::type_complexity)]
+fn compact(
+    data: &mut SelfCollisionData,
+    x: &[Vec<f32>; 3],
+    p: &[Vec<f32>; 3],
+    w: &[f32],
+    n: usize,
+    parallel: bool,
+    simd: bool,
+) -> ([Vec<f32>; 3], Vec<[f32; 11]>) {
+    let damping = vec![0.8f32; n];
+    let xs = [&x[0][..], &x[1][..], &x[2][..]];
+    assert!(data.begin_step(xs, n, &damping).unwrap());
+    let mut out = p.clone();
+    data.keep_predictions([&out[0][..], &out[1][..], &out[2][..]]);
+    data.pair_pass(xs, [&p[0][..], &p[1][..], &p[2][..]], w, n, parallel, simd);
+    let a = data.active().unwrap();
+    let ap = a.apply_params(0.005);
+    let [o0, o1, o2] = &mut out;
+    data.apply(xs, w, None, [o0, o1, o2], ap, parallel, simd);
+    let st = data.state.as_ref().unwrap();
+    let s = &st.active.sums;
+    let mut by_particle = vec![[0.0f32; 11]; n];
+    for (k, &b) in st.active.blocks.iter().enumerate() {
+        for l in 0..LANES {
+            let (i, g) = (b as usize * LANES + l, k * LANES + l);
+            if i < n {
+                let v = [
+                    s.c[0][g], s.c[1][g], s.c[2][g], s.f[0][g], s.f[1][g], s.f[2][g], s.n[0][g], s.n[1][g], s.n[2][g], s.gap[g], s.count[g],
+                ];
+                by_particle[i] = v;
+            }
+        }
+    }
+    (out, by_particle)
+}
+
+/// The reference: every pair tested (no broadphase, rest rule applied), the kernel run on all
+/// particles.
+#[allow(clippy::type_complexity)]
+fn reference(data: &SelfCollisionData, x: &[Vec<f32>; 3], p: &[Vec<f32>; 3], w: &[f32], n: usize) -> ([Vec<f32>; 3], Vec<[f32; 11]>) {
+    let a = data.active().unwrap();
+    let mut all = Neighbours::new();
+    all.fill_serial(n, |i, buf| {
+        buf.extend((0..n).filter(|&j| j != i && !data.rest_skipped(i, j, a.d)).map(|j| j as u32))
+    })
+    .unwrap();
+    let ctx = PairCtx {
+        x: [&x[0], &x[1], &x[2]],
+        p: [&p[0], &p[1], &p[2]],
+        w,
+        rest: [&data.rest[0], &data.rest[1], &data.rest[2]],
+        cloth_of: &data.cloth_of,
+        start: [&x[0], &x[1], &x[2]],
+        q2: f32::INFINITY,
+        d: a.d,
+        movement: a.response == Response::MovementSpeed,
+    };
+    let sums: Vec<[f32; 11]> = (0..n).map(|i| ctx.sums(&all, i)).collect();
+    let len = p[0].len();
+    let mut full = ContactSums::new(len);
+    for (i, v) in sums.iter().enumerate() {
+        full.set(i, v);
+    }
+    let damping = padded(&vec![0.8f32; n]);
+    let mut out = p.clone();
+    let inp = ApplyInput {
+        start: 0,
+        x: [&x[0], &x[1], &x[2]],
+        w,
+        q: [&p[0], &p[1], &p[2]],
+        v: None,
+        b: &damping,
+        sums: &full,
+        friction: a.friction,
+        h: 0.005,
+        r: BOX_RADIUS * a.d,
+    };
+    let mode = if a.response == Response::Vccpbd {
+        ApplyMode::Vccpbd
+    } else {
+        ApplyMode::Plain
+    };
+    let [o0, o1, o2] = &mut out;
+    apply(&inp, [o0, o1, o2], mode, false);
+    (out, sums)
+}
+
+#[test]
+fn compact_step_equals_recomputation_from_scratch() {
+    let mut rng = signed(7);
+    let (rows, cols, s) = (14, 11, 0.02f32);
+    for case in 0..6 {
+        let response = [Response::Pbd, Response::MovementSpeed, Response::Vccpbd][case % 3];
+        let (mut data, x0) = folded(rows, cols, s, 1.05 * s, 0.3 * s, &mut rng);
+        data.config = Some(SelfCollision {
+            response,
+            ..SelfCollision::default()
+        });
+        let n = rows * cols;
+        let x = [padded(&x0[0]), padded(&x0[1]), padded(&x0[2])];
+        // Predicted positions within one travel `T = d` of the start (what the clamp allows).
+        let mut p = x.clone();
+        for c in &mut p {
+            for v in &mut c[..n] {
+                *v += 0.55 * s * rng();
+            }
+        }
+        let mut w = padded(&vec![1.0f32; n]);
+        w[case] = 0.0;
+        let (want_p, want_sums) = reference(&data, &x, &p, &w, n);
+        assert!(want_sums.iter().any(|v| v[10] > 0.0), "case {case}: no contact to compare");
+        for (parallel, simd) in [(false, false), (false, true), (true, true), (true, false)] {
+            for threads in [1, 2] {
+                let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+                let (got_p, got_sums) = pool.install(|| compact(&mut data, &x, &p, &w, n, parallel, simd));
+                for i in 0..n {
+                    assert_eq!(
+                        got_sums[i].map(f32::to_bits),
+                        want_sums[i].map(f32::to_bits),
+                        "case {case} particle {i} ({parallel}, {simd}, {threads})"
+                    );
+                    for a in 0..3 {
+                        assert_eq!(got_p[a][i].to_bits(), want_p[a][i].to_bits(), "case {case} p of {i}");
+                    }
+                }
+            }
+        }
+        assert!(data.active_blocks() > 0);
+    }
+}
+
+#[test]
+fn rest_neighbours_are_never_listed() {
+    let mut rng = signed(3);
+    let (rows, cols, s) = (12, 9, 0.02f32);
+    let (mut data, x0) = folded(rows, cols, s, 1.1 * s, 0.0, &mut rng);
+    data.config = Some(SelfCollision::default());
+    let n = rows * cols;
+    let x = [&x0[0][..], &x0[1][..], &x0[2][..]];
+    assert!(data.begin_step(x, n, &vec![0.0; n]).unwrap());
+    let lists = data.lists().unwrap();
+    let d = data.distance();
+    // Fold rows r and rows - 1 - r lie `gap` apart; only rows 3 or more apart at rest are kept.
+    assert!(lists.total() > 0);
+    assert!(
+        (0..n).all(|i| lists.of(i).iter().all(|&j| j as usize > i)),
+        "each pair once, under its smaller id"
+    );
+    for (i, j) in lists.pairs() {
+        let (ri, rj) = (i as usize / cols, j as usize / cols);
+        assert!(ri.abs_diff(rj) >= 3, "{i} {j}");
+        assert!(!data.rest_skipped(i as usize, j as usize, d));
+    }
+    // A flat cloth: the step has nothing to do.
+    let flat: Vec<f32> = (0..n).map(|i| (i / cols) as f32 * s).collect();
+    let zero = vec![0.0; n];
+    let xs: Vec<f32> = (0..n).map(|i| (i % cols) as f32 * s).collect();
+    assert!(data.begin_step([&xs, &zero, &flat], n, &zero).unwrap());
+    assert_eq!(data.lists().unwrap().total(), 0);
+    assert_eq!(data.active_blocks(), 0);
+}
+
+/// The cloth of `weft reproduce vccpbd` at `size x size`: hung over its middle row, both
+/// halves fall and fold face to face.
+fn hung(size: u32, response: Response, broadphase: SelfBroadphase, threads: usize, fresh: bool) -> (crate::World, f32) {
+    let params = crate::SolverParams {
+        substeps: 10,
+        iterations: 1,
+        threads,
+        ..Default::default()
+    };
+    let sc = SelfCollision {
+        response,
+        broadphase,
+        measure: true,
+        ..SelfCollision::default()
+    };
+    let (mut w, dt) = crate::perf::fold_world(size, crate::Fabric::preset("wool").unwrap(), params, sc).unwrap();
+    w.selfcol.fresh_every_step = fresh;
+    (w, dt)
+}
+
+#[test]
+fn reused_candidate_lists_give_the_fresh_lists_and_the_same_bits() {
+    for (response, broadphase) in [
+        (Response::Vccpbd, SelfBroadphase::Hash),
+        (Response::MovementSpeed, SelfBroadphase::Hash),
+        (Response::Pbd, SelfBroadphase::AabbTree),
+    ] {
+        let steps = 100;
+        let (mut fresh, dt) = hung(24, response, broadphase, 1, true);
+        let mut reuse: Vec<_> = [1, 2].map(|t| hung(24, response, broadphase, t, false).0).into();
+        let mut contacts = 0;
+        for step in 0..steps {
+            fresh.step(dt).unwrap();
+            let want = fresh.self_collision_pairs().unwrap().clone();
+            contacts += fresh.selfcol.touched_blocks();
+            for w in &mut reuse {
+                w.step(dt).unwrap();
+                assert_eq!(w.self_collision_pairs().unwrap(), &want, "{response:?} {broadphase:?} step {step}");
+                for (a, b) in w.positions().iter().zip(fresh.positions()) {
+                    assert!(a.iter().zip(b).all(|(u, v)| u.to_bits() == v.to_bits()), "{response:?} step {step}");
+                }
+            }
+        }
+        let ph = &reuse[0].self_collision_stats().phases;
+        assert_eq!(fresh.self_collision_stats().phases.rebuilds, steps);
+        assert!(
+            ph.rebuilds < steps * 2 / 3,
+            "{response:?}: the lists were rebuilt {} times in {steps} steps",
+            ph.rebuilds
+        );
+        let near = &reuse[0].selfcol.state.as_ref().unwrap().near;
+        assert!(near.rebuilds < steps * 5, "near list rebuilt {} times", near.rebuilds);
+        eprintln!(
+            "{response:?} {broadphase:?}: {} list builds, {} near builds, {contacts} touched blocks",
+            ph.rebuilds, near.rebuilds
+        );
+        assert!(contacts > 0, "{response:?}: no contact in the run");
+        // The hash runs the slow steps without candidate lists (mid lists from the hash,
+        // queried and refreshed for the particles that moved).
+        assert_eq!(
+            (ph.mid_queries > 0, ph.mid_refreshes > 0),
+            (broadphase == SelfBroadphase::Hash, broadphase == SelfBroadphase::Hash),
+            "{} mid queries, {} refreshes",
+            ph.mid_queries,
+            ph.mid_refreshes
+        );
+        assert_eq!(
+            reuse[0].self_collision_stats().average_pct,
+            fresh.self_collision_stats().average_pct
+        );
+    }
+}
+
+/// VcCPBD's box centres derived from the velocities (`x + h v`, no obstacles) give the bits
+/// of the copy the clamp keeps, on 1 and 2 threads, through the fall and the fold.
+#[test]
+fn derived_box_centres_equal_the_kept_copy() {
+    for threads in [1, 2] {
+        let (mut copy, dt) = hung(24, Response::Vccpbd, SelfBroadphase::Hash, threads, false);
+        copy.selfcol.copy_centres = true;
+        let (mut derive, _) = hung(24, Response::Vccpbd, SelfBroadphase::Hash, threads, false);
+        let mut touched = 0;
+        for step in 0..100 {
+            copy.step(dt).unwrap();
+            derive.step(dt).unwrap();
+            touched += derive.selfcol.touched_blocks();
+            for (a, b) in derive.positions().iter().zip(copy.positions()) {
+                assert!(
+                    a.iter().zip(b).all(|(u, v)| u.to_bits() == v.to_bits()),
+                    "{threads} threads, step {step}"
+                );
+            }
+        }
+        assert!(touched > 0, "no contact corrected");
+    }
+}
+
+/// Consecutive pair passes over different predictions (as the substeps run them): after each
+/// pass the sums are those of a recomputation for its own predictions, so a particle whose
+/// contacts ended has zero sums again, and one still in contact its new sums.
+#[test]
+fn consecutive_pair_passes_leave_no_stale_sums() {
+    let mut rng = signed(13);
+    let (rows, cols, s) = (14, 11, 0.02f32);
+    let (mut data, x0) = folded(rows, cols, s, 1.05 * s, 0.3 * s, &mut rng);
+    data.config = Some(SelfCollision {
+        response: Response::Vccpbd,
+        ..SelfCollision::default()
+    });
+    let n = rows * cols;
+    let x = [padded(&x0[0]), padded(&x0[1]), padded(&x0[2])];
+    let w = padded(&vec![1.0f32; n]);
+    let (mut ended, mut kept) = (0, 0);
+    let mut last: Option<Vec<[f32; 11]>> = None;
+    for pass in 0..6 {
+        // Predictions spread less and less: the contact set changes from pass to pass.
+        let spread = [0.55, 0.1, 0.4, 0.0, 0.3, 0.05][pass] * s;
+        let mut p = x.clone();
+        for c in &mut p {
+            for v in &mut c[..n] {
+                *v += spread * rng();
+            }
+        }
+        let (_, want) = reference(&data, &x, &p, &w, n);
+        // Serial and parallel passes alternating (the parallel search fills its chunks'
+        // buffers; each pass zeroes the sums the other left).
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+        for (parallel, simd) in [(false, false), (true, true), (false, true), (true, false)] {
+            let (_, got) = pool.install(|| compact(&mut data, &x, &p, &w, n, parallel, simd));
+            for i in 0..n {
+                assert_eq!(
+                    got[i].map(f32::to_bits),
+                    want[i].map(f32::to_bits),
+                    "pass {pass} particle {i} ({parallel}, {simd})"
+                );
+            }
+        }
+        if let Some(prev) = &last {
+            ended += (0..n).filter(|&i| prev[i][10] > 0.0 && want[i][10] == 0.0).count();
+            kept += (0..n).filter(|&i| prev[i][10] > 0.0 && want[i][10] > 0.0).count();
+        }
+        last = Some(want);
+    }
+    assert!(ended > 0 && kept > 0, "{ended} ended, {kept} kept contacts");
+}
+
+/// The correction pass over the touched blocks in parallel (1 and 2 threads, several groups
+/// of blocks) gives the bits of the serial runs (the step asks for it only from
+/// `APPLY_PARALLEL_BLOCKS` touched blocks).
+#[test]
+fn parallel_correction_equals_serial() {
+    let mut rng = signed(21);
+    let (rows, cols, s) = (70, 17, 0.02f32);
+    let (mut data, x0) = folded(rows, cols, s, 1.02 * s, 0.3 * s, &mut rng);
+    data.config = Some(SelfCollision::default());
+    let n = rows * cols;
+    let x = [padded(&x0[0]), padded(&x0[1]), padded(&x0[2])];
+    let mut p = x.clone();
+    for c in &mut p {
+        for v in &mut c[..n] {
+            *v += 0.5 * s * rng();
+        }
+    }
+    let w = padded(&vec![1.0f32; n]);
+    let (want, _) = compact(&mut data, &x, &p, &w, n, false, true);
+    assert!(
+        data.touched_blocks() > 2 * crate::self_collision::active::APPLY_BLOCKS,
+        "{} touched blocks",
+        data.touched_blocks()
+    );
+    let st = data.state.as_ref().unwrap();
+    let ap = data.active().unwrap().apply_params(0.005);
+    let xs = [&x[0][..], &x[1][..], &x[2][..]];
+    for threads in [1, 2] {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        let mut got = p.clone();
+        let [g0, g1, g2] = &mut got;
+        pool.install(|| st.active.apply(xs, &w, None, [g0, g1, g2], ap, true, true));
+        for a in 0..3 {
+            assert!(
+                got[a].iter().zip(&want[a]).all(|(u, v)| u.to_bits() == v.to_bits()),
+                "{threads} threads"
+            );
+        }
+        assert_ne!(got, p, "the correction moved particles");
+    }
+}
+
+/// The fold at 48 x 48 (its candidate pairs and mid lists span several chunks, so the near
+/// list is rebuilt in parallel): 1 and 2 threads and the scalar backend (serial) give the
+/// same bits every step.
+#[test]
+fn fold_with_parallel_near_ranges_is_bitwise_on_any_thread_count() {
+    let make = |threads: usize, backend: crate::Backend| {
+        let params = crate::SolverParams {
+            substeps: 10,
+            iterations: 1,
+            threads,
+            backend,
+            ..Default::default()
+        };
+        let sc = SelfCollision {
+            response: Response::Vccpbd,
+            ..SelfCollision::default()
+        };
+        crate::perf::fold_world(48, crate::Fabric::preset("basic").unwrap(), params, sc).unwrap()
+    };
+    let (mut one, dt) = make(1, crate::Backend::Simd);
+    let mut others = [make(2, crate::Backend::Simd).0, make(1, crate::Backend::Scalar).0];
+    let mut ranged = 0;
+    for step in 0..80 {
+        one.step(dt).unwrap();
+        let near = &one.selfcol.state.as_ref().unwrap().near;
+        ranged += usize::from(near.ranges() > 1);
+        for w in &mut others {
+            w.step(dt).unwrap();
+            for (a, b) in w.positions().iter().zip(one.positions()) {
+                assert!(a.iter().zip(b).all(|(u, v)| u.to_bits() == v.to_bits()), "step {step}");
+            }
+        }
+    }
+    assert!(ranged > 4, "the near list spanned several parts in {ranged} steps");
+}

@@ -1,0 +1,207 @@
+//! Self-collision settings, statistics and the world's API for them (the method is in
+//! [`crate::self_collision`]).
+
+use crate::error::Result;
+use crate::world::World;
+
+/// Relative tolerance of the penetration metric: a pair counts as penetrating when closer than
+/// `(1 - PENETRATION_TOLERANCE) d`.
+pub const PENETRATION_TOLERANCE: f32 = 0.1;
+
+/// Collision response (SEEDS.md section A compares the three).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Response {
+    /// Position projection of the collision constraints (Algorithm 1, Müller et al. 2006).
+    Pbd,
+    /// Velocity-based: zero the approaching normal velocity and move along the result.
+    MovementSpeed,
+    /// VcCPBD (Algorithm 2): projection, then the box test and damped-oscillator velocity
+    /// correction.
+    #[default]
+    Vccpbd,
+}
+
+impl Response {
+    /// The scene spelling: `pbd`, `movement-speed`, `vccpbd`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Response::Pbd => "pbd",
+            Response::MovementSpeed => "movement-speed",
+            Response::Vccpbd => "vccpbd",
+        }
+    }
+}
+
+/// Self-collision broadphase; both give the same pairs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum SelfBroadphase {
+    /// Spatial hash rebuilt each step (section C).
+    #[default]
+    Hash,
+    /// AABB tree built once, refitted each step (section A).
+    AabbTree,
+}
+
+impl SelfBroadphase {
+    /// The scene spelling: `hash`, `aabb-tree`.
+    pub fn name(self) -> &'static str {
+        match self {
+            SelfBroadphase::Hash => "hash",
+            SelfBroadphase::AabbTree => "aabb-tree",
+        }
+    }
+}
+
+/// Self-collision settings (scene table `[effects.self_collision]`).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SelfCollision {
+    /// Collision distance, m; `None` = the smallest `min(thickness, spacing)` of the cloths.
+    pub distance: Option<f32>,
+    /// Friction `μ` in `[0, 1]`: displacements pulled toward the pair average (section C).
+    pub friction: f32,
+    /// The response.
+    pub response: Response,
+    /// The broadphase.
+    pub broadphase: SelfBroadphase,
+    /// Measure the paper's "average collision" after every step (the percentage of particles
+    /// in penetration, [`SelfCollisionStats`]). Off by default: the measure has its own
+    /// broadphase query, about a quarter of a step of the 100x100 fold on one thread (0.5-0.6
+    /// of 1.75-2.4 ms); `World::measure_self_collision` measures the current state on demand
+    /// either way.
+    #[serde(default)]
+    pub measure: bool,
+}
+
+impl Default for SelfCollision {
+    fn default() -> Self {
+        SelfCollision {
+            distance: None,
+            friction: 0.3,
+            response: Response::default(),
+            broadphase: SelfBroadphase::default(),
+            measure: false,
+        }
+    }
+}
+
+/// The paper's "average collision" and the time self-collision took.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct SelfCollisionStats {
+    /// States measured (one after each step but the last, plus on-demand measures).
+    pub measured: u64,
+    /// Mean percentage of particles in penetration over the measured states.
+    pub average_pct: f64,
+    /// Largest percentage seen.
+    pub max_pct: f64,
+    /// Percentage in the last measured state.
+    pub last_pct: f64,
+    /// Wall time spent in self-collision stages (broadphase, clamp, pairs, correction), s.
+    /// The clamp's mean velocity, summed inside the predict pass when there are no
+    /// obstacles, counts here too: its chunks' times summed, shared by the threads.
+    pub time_s: f64,
+    /// Steps that ran self-collision.
+    pub steps: u64,
+    /// Where the time went.
+    pub phases: SelfCollisionPhases,
+    #[serde(skip)]
+    sum_pct: f64,
+}
+
+/// The self-collision time split by phase, s (summed over the steps; the speed clamp is the
+/// rest of [`SelfCollisionStats::time_s`]).
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct SelfCollisionPhases {
+    /// Hash build or tree refit (steps that rebuild the candidate lists).
+    pub build_s: f64,
+    /// Broadphase query for the candidate lists.
+    pub query_s: f64,
+    /// The rest of the step start: the reuse check, the start positions, the active blocks.
+    pub lists_s: f64,
+    /// Step starts in all (`build_s + query_s + lists_s` plus the copy of the start positions).
+    pub step_start_s: f64,
+    /// Pair passes of the substeps (near list and contact sums).
+    pub pairs_s: f64,
+    /// Velocity corrections of the substeps.
+    pub correction_s: f64,
+    /// Steps that rebuilt the candidate lists (ran the broadphase).
+    pub rebuilds: u64,
+    /// Mid lists queried from the hash of the predicted positions in the substeps of slow
+    /// steps, which run without candidate lists (their time is in `pairs_s`).
+    pub mid_queries: u64,
+    /// Mid lists refreshed for the few particles that moved past their bound instead of
+    /// queried afresh (their time is in `pairs_s`).
+    pub mid_refreshes: u64,
+}
+
+impl SelfCollisionStats {
+    pub(crate) fn record(&mut self, pct: f64) {
+        self.measured += 1;
+        self.sum_pct += pct;
+        self.average_pct = self.sum_pct / self.measured as f64;
+        self.max_pct = self.max_pct.max(pct);
+        self.last_pct = pct;
+    }
+
+    /// Mean self-collision time per step, ms.
+    pub fn ms_per_step(&self) -> f64 {
+        if self.steps == 0 {
+            0.0
+        } else {
+            self.time_s * 1e3 / self.steps as f64
+        }
+    }
+}
+
+impl World {
+    /// Turns self-collision on (`Some`) or off (`None`). Off costs nothing in the step.
+    pub fn set_self_collision(&mut self, config: Option<SelfCollision>) -> Result<()> {
+        if let Some(c) = &config {
+            crate::self_collision::validate(c)?;
+        }
+        self.selfcol.config = config;
+        Ok(())
+    }
+
+    /// The self-collision settings, if on.
+    pub fn self_collision(&self) -> Option<&SelfCollision> {
+        self.selfcol.config.as_ref()
+    }
+
+    /// The collision distance in use (configured or `min(thickness, spacing)`), m.
+    pub fn self_collision_distance(&self) -> f32 {
+        self.selfcol.distance()
+    }
+
+    /// The pair lists of the last step: pairs within `3 d` at the step's start, the cloths'
+    /// rest neighbours left out, each pair once in the list of its smaller id (see
+    /// [`crate::self_collision`]), if self-collision has run.
+    pub fn self_collision_pairs(&self) -> Option<&crate::self_collision::neighbours::Neighbours> {
+        self.selfcol.lists()
+    }
+
+    /// Groups of eight consecutive particles the substeps of the last step worked on (those
+    /// holding a particle with a partner in the pair lists).
+    pub fn self_collision_active_blocks(&self) -> usize {
+        self.selfcol.active_blocks()
+    }
+
+    /// Average-collision statistics and self-collision time so far.
+    pub fn self_collision_stats(&self) -> &SelfCollisionStats {
+        &self.selfcol.stats
+    }
+
+    /// Measures the current state's penetration percentage and records it in the statistics
+    /// (once per step count; the step measures the state it starts from, so calling this after
+    /// the last step completes the average). Returns the percentage; 0 when off.
+    pub fn measure_self_collision(&mut self) -> Result<f64> {
+        let n = self.particles.count();
+        let steps = self.steps;
+        let p = &self.particles;
+        let x = [&p.x[..], &p.y[..], &p.z[..]];
+        let parallel = self.params.backend == crate::model::params::Backend::Simd;
+        self.selfcol.measure(x, n, steps, parallel)
+    }
+}

@@ -1,0 +1,131 @@
+//! The paper's "average collision" metric of self-collision (the definition is in
+//! [`super`]): the share of particles with a non-neighbour closer than
+//! `(1 - PENETRATION_TOLERANCE) d`, measured outside the timed stage.
+//!
+//! After every step only when the settings ask for it ([`crate::self_collision::SelfCollision::measure`],
+//! session 8): on the 100x100 fold it was a quarter of the step on one thread, 2.33-2.44 ms a
+//! step with it against 1.75-1.83 without (`weft reproduce vccpbd --size 100`, mean over the
+//! hash rows, two alternate runs). Tried and not kept: a hash of its own with cells of the
+//! probe radius instead of the step's (3-6 d cells, ~800 candidates a particle once
+//! folded): the step got slower, 1.56-1.61 -> 1.69-1.72 ms (two threads, three alternate
+//! runs; the many small cells cost more look-ups than the candidates they save).
+
+use rayon::prelude::*;
+
+use crate::error::Result;
+use crate::self_collision::neighbours::{within, Neighbours};
+use crate::self_collision::{
+    build_hash, dist2, SelfBroadphase, SelfCollisionData, SpatialHash, PENETRATION_TOLERANCE, QUERY_FACTOR, REST_SKIP_FACTOR,
+};
+
+impl SelfCollisionData {
+    /// Measures the penetration of the state the lists were just built from (once per step
+    /// count `steps`, skipping the initial state) when the settings ask for it
+    /// ([`crate::self_collision::SelfCollision::measure`]). Kept out of the timed collision stage.
+    pub(crate) fn record_start_state(&mut self, x: [&[f32]; 3], n: usize, steps: u64, parallel: bool) {
+        let on = self.config.as_ref().is_some_and(|c| c.measure);
+        if on && steps > 0 && self.last_measured != Some(steps) {
+            let pct = self.penetration_pct(x, n, parallel);
+            self.stats.record(pct);
+            self.last_measured = Some(steps);
+        }
+    }
+
+    /// Measures (and records, once per step count) the penetration of the state `x`.
+    pub(crate) fn measure(&mut self, x: [&[f32]; 3], n: usize, steps: u64, parallel: bool) -> Result<f64> {
+        if self.last_measured == Some(steps) {
+            return Ok(self.stats.last_pct);
+        }
+        if !self.build_lists(x, n)? {
+            return Ok(0.0);
+        }
+        let pct = self.penetration_pct(x, n, parallel);
+        self.stats.record(pct);
+        self.last_measured = Some(steps);
+        Ok(pct)
+    }
+
+    /// Fills the metric lists (non-neighbours within the penetration limit) from the
+    /// broadphase of the same positions `x` (built here if the step reused its candidates).
+    fn probe_lists(&mut self, x: [&[f32]; 3], n: usize) -> Result<()> {
+        let d = self.distance();
+        let lim = d * (1.0 - PENETRATION_TOLERANCE);
+        let far2 = (1.5 * d) * (1.5 * d);
+        let Some(mut st) = self.state.take() else { return Ok(()) };
+        let broadphase = self.config.as_ref().map(|c| c.broadphase).unwrap_or_default();
+        let built = if st.structure_fresh {
+            Ok(())
+        } else {
+            self.build_structure(&mut st, x, n, QUERY_FACTOR * d, broadphase)
+        };
+        let keep = |i: usize, j: u32| self.cloth_of[i] != self.cloth_of[j as usize] || dist2(&self.rest, i, j as usize) > far2;
+        let r = built.and_then(|_| match &st.tree {
+            Some(t) if broadphase == SelfBroadphase::AabbTree => {
+                t.query_all(x[0], x[1], x[2], n, lim, &mut st.probe).map(|_| st.probe.retain(keep))
+            }
+            _ => st.hash.query_filtered(x[0], x[1], x[2], n, lim, &keep, &mut st.probe),
+        });
+        self.state = Some(st);
+        r
+    }
+
+    /// Percentage of particles in penetration in the state the lists were built from.
+    fn penetration_pct(&mut self, x: [&[f32]; 3], n: usize, parallel: bool) -> f64 {
+        if self.probe_lists(x, n).is_err() {
+            return 0.0;
+        }
+        let Some(st) = self.state.as_ref().filter(|s| s.ready) else {
+            return 0.0;
+        };
+        let d = self.distance();
+        let lim = d * (1.0 - PENETRATION_TOLERANCE);
+        let hit = |i: usize| -> bool { st.probe.of(i).iter().any(|&j| dist2(&x, i, j as usize) < lim * lim) };
+        let count = if parallel {
+            (0..n).into_par_iter().filter(|&i| hit(i)).count()
+        } else {
+            (0..n).filter(|&i| hit(i)).count()
+        };
+        if n == 0 {
+            0.0
+        } else {
+            100.0 * count as f64 / n as f64
+        }
+    }
+
+    /// The pair lists of the current step (empty before the first step with self-collision):
+    /// the candidate lists filtered with `|x_i - x_j| <= q` at the step's start, computed on
+    /// the first call of the step.
+    pub fn lists(&self) -> Option<&Neighbours> {
+        let st = self.state.as_ref().filter(|s| s.ready)?;
+        let q = QUERY_FACTOR * self.distance();
+        Some(st.lists.get_or_init(|| {
+            let (c, s) = (&st.verlet.cand, &st.start);
+            let mut out = Neighbours::new();
+            if st.verlet.is_direct() {
+                // No candidate lists this step: the query a fresh step start would run (on
+                // finite positions it cannot fail; on a failure the lists stay empty).
+                let n = s[0].len();
+                let mut hash = SpatialHash::new(n);
+                let skip = REST_SKIP_FACTOR * self.distance();
+                let _ = build_hash(&mut hash, [&s[0], &s[1], &s[2]], n, q, self.rest(), &self.cloth_of, true)
+                    .and_then(|_| hash.query_upper_unskipped_cells(q, skip, &mut out));
+                return out;
+            }
+            // Cannot fail: the candidates already fit in `u32` offsets.
+            let _ = out.fill_serial(c.len(), |i, buf| {
+                buf.extend(c.of(i).iter().filter(|&&j| {
+                    within(
+                        s[0][i],
+                        s[1][i],
+                        s[2][i],
+                        s[0][j as usize],
+                        s[1][j as usize],
+                        s[2][j as usize],
+                        q * q,
+                    )
+                }))
+            });
+            out
+        }))
+    }
+}

@@ -1,0 +1,394 @@
+//! Neighbour lists of a particle set in compressed-sparse-row (CSR) form.
+//!
+//! The self-collision broadphase ([`crate::self_collision::hash`], [`crate::self_collision::tree`]) answers one
+//! question for every particle `i`: which particles `j != i` lie within `max_dist`? The answer
+//! is stored the way SEEDS section C stores it (`firstAdjId` / `adjIds`): the neighbours of `i`
+//! are `ids[first[i] .. first[i + 1]]`.
+//!
+//! # The neighbour predicate
+//! Every broadphase in weft, and the brute-force reference [`Neighbours::fill_brute_force`],
+//! uses one predicate, evaluated in `f32` in this exact order:
+//!
+//! ```text
+//! dx = x[j] - x[i];  dy = y[j] - y[i];  dz = z[j] - z[i]
+//! j is a neighbour of i  <=>  j != i  and  (dx*dx + dy*dy) + dz*dz <= max_dist * max_dist
+//! ```
+//!
+//! Swapping `i` and `j` only negates `dx, dy, dz`, so the relation is symmetric bit for bit.
+//! A particle with a non-finite coordinate (NaN or ±Inf) fails the predicate with everyone, so
+//! it has no neighbours and is nobody's neighbour. Coincident particles (`dist2 == 0`) are
+//! neighbours: the response must handle them, not the broadphase skip them.
+//!
+//! # Canonical form
+//! Each list is sorted ascending and holds no duplicates, so the CSR arrays are a function of
+//! the positions alone: the hash, the tree, the brute force, serial or parallel, on any number
+//! of threads, all produce the same bits.
+//!
+//! Buffers are kept between calls: once the lists have reached their working size, refilling
+//! them allocates nothing.
+
+use crate::data::lanes::{F32s, Vec3x8, LANES};
+use crate::{Result, WeftError};
+use rayon::prelude::*;
+
+/// Particles handled by one parallel task when filling lists. Fixed, so the work split does not
+/// depend on the thread count (the result would not either: lists are canonical).
+pub(crate) const CHUNK: usize = 256;
+
+/// Neighbour lists in CSR form: the neighbours of particle `i` are
+/// `ids[first[i] as usize .. first[i + 1] as usize]`, sorted ascending.
+#[derive(Debug, Clone)]
+pub struct Neighbours {
+    /// Offsets into `ids`, length `n + 1`, `first[0] == 0`, non-decreasing.
+    pub first: Vec<u32>,
+    /// Neighbour ids of particle 0, then of particle 1, and so on.
+    pub ids: Vec<u32>,
+    /// Per-chunk output buffers of the parallel fill, kept to avoid allocation.
+    scratch: Vec<Vec<u32>>,
+    /// Pair assembly (`neighbours_pairs`): list starts by partner, then smaller ids by partner.
+    by_j: Vec<u32>,
+    order: Vec<u32>,
+}
+
+impl Default for Neighbours {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl PartialEq for Neighbours {
+    /// Two sets of lists are equal when their CSR arrays are (scratch space is ignored).
+    fn eq(&self, other: &Self) -> bool {
+        self.first == other.first && self.ids == other.ids
+    }
+}
+
+impl Eq for Neighbours {}
+
+impl Neighbours {
+    /// Empty lists for zero particles.
+    pub fn new() -> Self {
+        Self {
+            first: vec![0],
+            ids: Vec::new(),
+            scratch: Vec::new(),
+            by_j: Vec::new(),
+            order: Vec::new(),
+        }
+    }
+
+    /// Number of particles the lists are for.
+    pub fn len(&self) -> usize {
+        self.first.len().saturating_sub(1)
+    }
+
+    /// Whether the lists are for zero particles.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Total number of entries over all lists (each unordered pair counts twice).
+    pub fn total(&self) -> usize {
+        self.ids.len()
+    }
+
+    /// The neighbours of particle `i`, ascending.
+    ///
+    /// # Panics
+    /// If `i >= self.len()`, like slice indexing. Use [`Neighbours::get`] to check instead.
+    pub fn of(&self, i: usize) -> &[u32] {
+        &self.ids[self.first[i] as usize..self.first[i + 1] as usize]
+    }
+
+    /// The neighbours of particle `i`, or `None` if `i` is out of range.
+    pub fn get(&self, i: usize) -> Option<&[u32]> {
+        if i < self.len() {
+            Some(self.of(i))
+        } else {
+            None
+        }
+    }
+
+    /// Every unordered neighbour pair once, as `(i, j)` with `i < j`, ordered by `i` then `j`.
+    pub fn pairs(&self) -> impl Iterator<Item = (u32, u32)> + '_ {
+        (0..self.len()).flat_map(move |i| {
+            let list = self.of(i);
+            // The list is sorted: skip the part with j <= i.
+            let from = list.partition_point(|&j| (j as usize) <= i);
+            list[from..].iter().map(move |&j| (i as u32, j))
+        })
+    }
+
+    /// Removes every entry `j` of list `i` without `keep(i, j)` (serial, in place, order kept).
+    pub fn retain(&mut self, keep: impl Fn(usize, u32) -> bool) {
+        let mut w = 0usize;
+        let mut start = 0usize;
+        for i in 0..self.len() {
+            let end = self.first[i + 1] as usize;
+            for r in start..end {
+                let j = self.ids[r];
+                if keep(i, j) {
+                    self.ids[w] = j;
+                    w += 1;
+                }
+            }
+            start = end;
+            self.first[i + 1] = w as u32;
+        }
+        self.ids.truncate(w);
+    }
+
+    /// Empties the lists (zero particles) and keeps every buffer's capacity.
+    pub fn clear(&mut self) {
+        self.first.clear();
+        self.first.push(0);
+        self.ids.clear();
+    }
+
+    /// Fills the lists by testing every pair: O(n²), serial. The reference the broadphases are
+    /// tested against, and the right choice for a few dozen particles.
+    pub fn fill_brute_force(&mut self, x: &[f32], y: &[f32], z: &[f32], n: usize, max_dist: f32) -> Result<()> {
+        check_positions(x, y, z, n)?;
+        let md2 = check_max_dist(max_dist)?;
+        self.fill_serial(n, |i, buf| {
+            let (xi, yi, zi) = (x[i], y[i], z[i]);
+            for j in 0..n {
+                if j != i && within(xi, yi, zi, x[j], y[j], z[j], md2) {
+                    buf.push(j as u32);
+                }
+            }
+        })
+    }
+
+    /// Fills the lists in parallel: `f(i, buf)` appends the neighbours of `i` to `buf`, sorted
+    /// and without duplicates. Particles are split into fixed chunks of [`CHUNK`]; each chunk
+    /// appends to its own kept buffer, then the buffers are copied into `ids` in parallel.
+    pub(crate) fn fill_parallel<F>(&mut self, n: usize, f: F) -> Result<()>
+    where
+        F: Fn(usize, &mut Vec<u32>) + Sync,
+    {
+        let chunks = n.div_ceil(CHUNK);
+        if self.scratch.len() < chunks {
+            self.scratch.resize_with(chunks, Vec::new);
+        }
+        self.first.clear();
+        self.first.resize(n + 1, 0);
+        self.first[1..]
+            .par_chunks_mut(CHUNK)
+            .zip(self.scratch[..chunks].par_iter_mut())
+            .enumerate()
+            .for_each(|(c, (counts, buf))| {
+                buf.clear();
+                for (k, count) in counts.iter_mut().enumerate() {
+                    let before = buf.len();
+                    f(c * CHUNK + k, buf);
+                    *count = (buf.len() - before) as u32;
+                }
+            });
+        let total = match prefix_sum(&mut self.first) {
+            Ok(t) => t,
+            Err(e) => {
+                self.clear();
+                return Err(e);
+            }
+        };
+        self.ids.clear();
+        self.ids.resize(total, 0);
+        copy_buffers(&self.scratch[..chunks], &mut self.ids);
+        Ok(())
+    }
+
+    /// Serial twin of [`Neighbours::fill_parallel`]: one loop, appending straight into `ids`.
+    pub(crate) fn fill_serial<F>(&mut self, n: usize, mut f: F) -> Result<()>
+    where
+        F: FnMut(usize, &mut Vec<u32>),
+    {
+        self.clear();
+        for i in 0..n {
+            f(i, &mut self.ids);
+            if self.ids.len() > u32::MAX as usize {
+                self.clear();
+                return Err(too_many());
+            }
+            self.first.push(self.ids.len() as u32);
+        }
+        Ok(())
+    }
+}
+
+/// Turns per-particle counts in `first[1..]` into offsets; returns the total.
+fn prefix_sum(first: &mut [u32]) -> Result<usize> {
+    let mut acc: u64 = 0;
+    for v in first.iter_mut().skip(1) {
+        acc += u64::from(*v);
+        if acc > u64::from(u32::MAX) {
+            return Err(too_many());
+        }
+        *v = acc as u32;
+    }
+    Ok(acc as usize)
+}
+
+fn too_many() -> WeftError {
+    WeftError::param(
+        "max_dist",
+        "too large",
+        "more than 2^32 - 1 neighbour entries in total; use a smaller max_dist",
+    )
+}
+
+/// Copies the chunk buffers one after another into `dst` (whose length is their total),
+/// splitting the work in halves with `rayon::join` (no allocation).
+fn copy_buffers(bufs: &[Vec<u32>], dst: &mut [u32]) {
+    if bufs.len() <= 4 {
+        let mut at = 0;
+        for b in bufs {
+            dst[at..at + b.len()].copy_from_slice(b);
+            at += b.len();
+        }
+        return;
+    }
+    let mid = bufs.len() / 2;
+    let left: usize = bufs[..mid].iter().map(Vec::len).sum();
+    let (dl, dr) = dst.split_at_mut(left);
+    rayon::join(|| copy_buffers(&bufs[..mid], dl), || copy_buffers(&bufs[mid..], dr));
+}
+
+/// Removes from `buf[start..]` the entries without `keep(j)`, keeping the others in order.
+#[inline]
+pub(crate) fn retain_tail(buf: &mut Vec<u32>, start: usize, keep: impl Fn(u32) -> bool) {
+    let mut w = start;
+    for r in start..buf.len() {
+        let j = buf[r];
+        if keep(j) {
+            buf[w] = j;
+            w += 1;
+        }
+    }
+    buf.truncate(w);
+}
+
+/// Sorts `buf[start..]` and removes repeated ids from it.
+#[inline]
+pub(crate) fn sort_dedup_tail(buf: &mut Vec<u32>, start: usize) {
+    let tail = &mut buf[start..];
+    if tail.len() < 2 {
+        return;
+    }
+    tail.sort_unstable();
+    let mut w = 1;
+    for r in 1..tail.len() {
+        if tail[r] != tail[w - 1] {
+            tail[w] = tail[r];
+            w += 1;
+        }
+    }
+    buf.truncate(start + w);
+}
+
+/// Candidate particles stored contiguously: ids with their positions at the same index. The
+/// position arrays extend at least [`LANES`] entries past any scanned range (NaN padding), so a
+/// lane load never leaves them.
+pub(crate) struct Candidates<'a> {
+    pub ids: &'a [u32],
+    pub x: &'a [f32],
+    pub y: &'a [f32],
+    pub z: &'a [f32],
+    /// Keep only ids above the skipped one (each pair once, in the list of its smaller id).
+    pub above: bool,
+}
+
+impl Candidates<'_> {
+    /// Whether id `j` may be listed for particle `skip`.
+    #[inline(always)]
+    fn keeps(&self, j: u32, skip: u32) -> bool {
+        if self.above {
+            j > skip
+        } else {
+            j != skip
+        }
+    }
+
+    /// Appends to `buf` each `ids[k]`, `k` in `range`, other than `skip` (above it with
+    /// [`Candidates::above`]), whose position passes
+    /// the predicate against `p`. With `SIMD` eight candidates are tested per lane load, the
+    /// predicate computed operation for operation like [`within`] (no FMA), so both paths pick
+    /// the same ids; without it, the plain scalar loop (the twin).
+    #[inline(always)]
+    pub fn scan<const SIMD: bool>(&self, range: std::ops::Range<usize>, skip: u32, p: [f32; 3], md2: f32, buf: &mut Vec<u32>) {
+        let (s, e) = (range.start, range.end);
+        if !SIMD {
+            for k in s..e {
+                let j = self.ids[k];
+                if self.keeps(j, skip) && within(p[0], p[1], p[2], self.x[k], self.y[k], self.z[k], md2) {
+                    buf.push(j);
+                }
+            }
+            return;
+        }
+        let (pv, m2) = (Vec3x8::splat(p), F32s::splat(md2));
+        let mut k = s;
+        while k < e {
+            let d = Vec3x8::load(self.x, self.y, self.z, k) - pv;
+            let d2 = d.x * d.x + d.y * d.y + d.z * d.z;
+            let mut bits = d2.simd_le(m2).to_bitmask();
+            if e - k < LANES {
+                bits &= (1u32 << (e - k)) - 1;
+            }
+            while bits != 0 {
+                let j = self.ids[k + bits.trailing_zeros() as usize];
+                bits &= bits - 1;
+                if self.keeps(j, skip) {
+                    buf.push(j);
+                }
+            }
+            k += LANES;
+        }
+    }
+}
+
+/// The neighbour predicate (see the module docs), shared by every broadphase.
+#[inline(always)]
+pub(crate) fn within(xi: f32, yi: f32, zi: f32, xj: f32, yj: f32, zj: f32, md2: f32) -> bool {
+    let dx = xj - xi;
+    let dy = yj - yi;
+    let dz = zj - zi;
+    dx * dx + dy * dy + dz * dz <= md2
+}
+
+/// Half-width of the box a broadphase must search around a particle so that it finds every
+/// `j` that passes [`within`] despite rounding: if the `f32` test passes, the exact distance
+/// along each axis is at most `max(max_dist * (1 + 2^-22), 1.1e-19)` (the second term covers
+/// squares that underflow). The returned value exceeds both bounds.
+#[inline]
+pub(crate) fn search_radius(max_dist: f32) -> f32 {
+    max_dist * (1.0 + 1.0 / 1_048_576.0) + 2e-19
+}
+
+/// Validates `max_dist` (finite, not negative) and returns `max_dist²`.
+pub(crate) fn check_max_dist(max_dist: f32) -> Result<f32> {
+    crate::error::non_negative("max_dist", max_dist)?;
+    Ok(max_dist * max_dist)
+}
+
+/// Checks that the position arrays hold at least `n` particles and that ids fit in `u32`.
+pub(crate) fn check_positions(x: &[f32], y: &[f32], z: &[f32], n: usize) -> Result<()> {
+    if n >= u32::MAX as usize {
+        return Err(WeftError::param("n", n, "must be below 2^32 - 1 (ids are u32)"));
+    }
+    for (name, a) in [("x", x), ("y", y), ("z", z)] {
+        if a.len() < n {
+            return Err(WeftError::BufferLength {
+                name,
+                got: a.len(),
+                expected: n,
+            });
+        }
+    }
+    Ok(())
+}
+
+mod pairs;
+
+#[cfg(test)]
+mod tests;

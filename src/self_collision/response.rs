@@ -1,0 +1,626 @@
+//! Self-collision kernels over the particle arrays: the speed clamp and the velocity-correction
+//! pass (SEEDS.md sections A and C), each SIMD (`f32x8`) with a scalar twin that the tests hold
+//! to it bit for bit (same operations in the same order, no FMA).
+//!
+//! # Speed clamp (section C)
+//! After predict, a free particle's velocity relative to the mean velocity `m` of the free
+//! particles is limited so that it moves at most `limit` relative to the cloth in one substep:
+//!
+//! ```text
+//! u = v - m;   if |u| h > limit:  v = m + u limit / (|u| h);   p = x + h v
+//! ```
+//!
+//! The mean is summed in fixed chunks ([`MeanParts`]); when the step has no obstacles (which
+//! change velocities between predict and the clamp), its predict pass (or the update pass
+//! that runs the next predict) adds each chunk's sums while the chunk is in cache, and the
+//! clamp only reads them: one pass over the particles and one parallel region fewer a
+//! substep, the same bits (`step::fusion_tests`). Measured on the 100x100 fold
+//! (`examples/self_collision_timeline.rs`, 150 steps, 1 thread): callgrind over the substeps
+//! 6 399 to 6 197 million instructions; the timeline's clamp column 0.106 / 0.172 / 0.116 ms a
+//! step before against 0.066 / 0.049 / 0.063 after (binaries run alternately, load ~6 on two
+//! cores).
+//!
+//! # Velocity correction (section A, Algorithm 2; section C friction)
+//! The pair pass ([`crate::self_collision`]) leaves, per particle `i`, the sums over its
+//! contacts of: the position correction `c`, the partners' displacements `f = Σ (p_j - x_j)`,
+//! the unit contact normals `n` (pointing away from the partners), the signed gaps `g`
+//! (`dist - min_dist`, negative in contact) and the contact count `k`. This kernel applies them
+//! to a free particle with `k > 0` (Jacobi, averaged over the contacts):
+//!
+//! ```text
+//! t = p + c / k + μ (f / k - (p - x)) / 2          projection + friction (all responses)
+//! VcCPBD only, with q the predicted position (after the clamp), r the box radius (the
+//! collision distance d), n̂ = n / |n|, e = g / k:
+//!   if |t - q| >= r:  p = q                          back to the centre of the particle's box
+//!   else:             β = min(b h, 1)
+//!                     p = t - (β (t - x)·n̂ + β² e / 4) n̂
+//! ```
+//!
+//! Our reading of the paper's box: the particle's bounding box of radius `r` centred on where
+//! inertia alone takes it this substep, `c = (max + min) / 2 = q`; `s = |t - q|` is how far
+//! the solver moved it. With no obstacles nothing changes the predictions or the velocities
+//! between predict and the speed clamp, so `q = x + h v` exactly (both compute it so) and the
+//! kernel derives it ([`ApplyInput::v`]) instead of reading a copy the clamp made of every
+//! active particle each substep (session 9: with every block active on a slow step that copy
+//! was ~1% of the 100x100 fold's run; one thread, basic VcCPBD 0.603 -> 0.593 ms a step). A particle pushed out of its box is put back to the centre (a guard
+//! against the overshooting corrections of tangled layers); inside it, the velocity is
+//! corrected. The VcCPBD line is the paper's velocity correction `v <- (p - δd) + a dt`, `x <- p` written
+//! on positions (the update stage then sets `v = (p - x) / h`): the damped oscillator
+//! `δd = m x'' + k x + b x'` per unit mass along the contact normal, with `b` the fabric's
+//! damping rate (the paper's damping column), `k/m = b²/4` (critical damping, the paper gives
+//! no stiffness), `x'` the normal velocity `(t - x)·n̂ / h` and `x` the mean gap `e`; the
+//! `m x'' = a` term is the external acceleration of the next substep, which predict adds, so it
+//! is not added twice here. `β = min(b h, 1)` keeps the correction from overshooting.
+
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use rayon::prelude::*;
+
+use crate::data::lanes::{load, load_unchecked, store, store_unchecked, F32s, Vec3x8, LANES};
+
+/// Which correction [`apply`] makes (see the module docs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ApplyMode {
+    /// Projection (PBD or movement-speed corrections) plus friction.
+    Plain,
+    /// Projection plus friction plus the VcCPBD box test and oscillator.
+    Vccpbd,
+}
+
+/// Per-particle contact sums from the pair pass, padded to the lane width.
+#[derive(Clone, Debug, Default)]
+pub struct ContactSums {
+    /// Position corrections, summed.
+    pub c: [Vec<f32>; 3],
+    /// Partners' displacements this substep, summed.
+    pub f: [Vec<f32>; 3],
+    /// Unit contact normals, summed.
+    pub n: [Vec<f32>; 3],
+    /// Signed gaps `dist - min_dist`, summed.
+    pub gap: Vec<f32>,
+    /// Number of contacts.
+    pub count: Vec<f32>,
+}
+
+/// The arrays of a [`ContactSums`] in the order of its eleven-value layout, all `len` long
+/// ([`ContactSums::rows`]).
+pub(crate) struct SumRows<'a> {
+    len: usize,
+    a: [&'a mut [f32]; 11],
+}
+
+impl SumRows<'_> {
+    /// [`ContactSums::set`]; an index past the arrays is ignored.
+    #[inline]
+    pub(crate) fn set(&mut self, k: usize, v: &[f32; 11]) {
+        if k < self.len {
+            for (a, &x) in self.a.iter_mut().zip(v) {
+                a[k] = x;
+            }
+        }
+    }
+}
+
+impl ContactSums {
+    /// Sums for `len` particles (a multiple of the lane width), all zero.
+    pub fn new(len: usize) -> Self {
+        let z = || vec![0.0; len];
+        ContactSums {
+            c: [z(), z(), z()],
+            f: [z(), z(), z()],
+            n: [z(), z(), z()],
+            gap: z(),
+            count: z(),
+        }
+    }
+
+    /// The eleven arrays cut to their common length, for many stores ([`SumRows::set`]):
+    /// one bounds check a store instead of one an array (session 11: the pair pass's stores,
+    /// ~600 000 a run of the 100x100 fold, cost ~70 instructions each through
+    /// [`ContactSums::set`]).
+    pub(crate) fn rows(&mut self) -> SumRows<'_> {
+        let len = self
+            .c
+            .iter()
+            .chain(&self.f)
+            .chain(&self.n)
+            .chain([&self.gap, &self.count])
+            .map(Vec::len)
+            .min()
+            .unwrap_or(0);
+        let [c0, c1, c2] = &mut self.c;
+        let [f0, f1, f2] = &mut self.f;
+        let [n0, n1, n2] = &mut self.n;
+        SumRows {
+            len,
+            a: [c0, c1, c2, f0, f1, f2, n0, n1, n2, &mut self.gap, &mut self.count].map(|v| &mut v[..len]),
+        }
+    }
+
+    /// Stores particle `k`'s sums from one array laid out `c (3), f (3), n (3), gap, count`.
+    #[inline]
+    pub fn set(&mut self, k: usize, v: &[f32; 11]) {
+        for a in 0..3 {
+            self.c[a][k] = v[a];
+            self.f[a][k] = v[3 + a];
+            self.n[a][k] = v[6 + a];
+        }
+        self.gap[k] = v[9];
+        self.count[k] = v[10];
+    }
+
+    /// Number of entries.
+    pub fn len(&self) -> usize {
+        self.count.len()
+    }
+
+    /// Whether there are no entries.
+    pub fn is_empty(&self) -> bool {
+        self.count.is_empty()
+    }
+}
+
+/// Inputs of [`apply`] for one chunk of particles starting at global index `start`.
+pub struct ApplyInput<'a> {
+    /// Global index of the chunk's first particle.
+    pub start: usize,
+    /// Positions at the start of the substep.
+    pub x: [&'a [f32]; 3],
+    /// Inverse masses.
+    pub w: &'a [f32],
+    /// Predicted positions (box centres), global indexing.
+    pub q: [&'a [f32]; 3],
+    /// Velocities of the substep, indexed like `x`: when given, the box centres are
+    /// `x + h v` (the predictions as predict and the speed clamp compute them) and `q` is
+    /// not read.
+    pub v: Option<[&'a [f32]; 3]>,
+    /// Damping rates `b`, 1/s, global indexing.
+    pub b: &'a [f32],
+    /// Contact sums, global indexing.
+    pub sums: &'a ContactSums,
+    /// Friction `μ` in `[0, 1]`.
+    pub friction: f32,
+    /// Substep length, s.
+    pub h: f32,
+    /// Box radius `r`, m.
+    pub r: f32,
+}
+
+/// Applies the contact sums to the predicted positions `p` of one chunk (lengths a multiple of
+/// [`LANES`]): SIMD when `simd`, else the scalar twin. Same bits either way.
+pub fn apply(inp: &ApplyInput<'_>, p: [&mut [f32]; 3], mode: ApplyMode, simd: bool) {
+    match (mode, simd) {
+        (ApplyMode::Plain, true) => apply_simd::<false>(inp, p),
+        (ApplyMode::Vccpbd, true) => apply_simd::<true>(inp, p),
+        (m, false) => apply_scalar(inp, p, m == ApplyMode::Vccpbd),
+    }
+}
+
+/// Runs of blocks of [`apply_runs`]: `(k, b, len)` = compact block `k` (the sums' index over
+/// [`LANES`]) holds particle block `b`, for `len` consecutive blocks of both.
+pub(crate) type Run = (usize, usize, usize);
+
+/// The kernel on runs of blocks, `x`, `w` and `p` the whole particle arrays (`inp.start`
+/// unused): per lane the operations of [`apply`] (the same bits), with the constants set up
+/// once for all runs instead of once a call. The scalar backend calls the scalar twin on
+/// each run.
+pub(crate) fn apply_runs(inp: &ApplyInput<'_>, p: [&mut [f32]; 3], runs: impl Iterator<Item = Run>, mode: ApplyMode, simd: bool) {
+    let [px, py, pz] = p;
+    match (mode, simd) {
+        (ApplyMode::Plain, true) => runs_simd::<false>(inp, [px, py, pz], runs),
+        (ApplyMode::Vccpbd, true) => runs_simd::<true>(inp, [px, py, pz], runs),
+        (m, false) => {
+            for (k, b, len) in runs {
+                let g = b * LANES..(b + len) * LANES;
+                let one = ApplyInput {
+                    start: k * LANES,
+                    x: [&inp.x[0][g.clone()], &inp.x[1][g.clone()], &inp.x[2][g.clone()]],
+                    w: &inp.w[g.clone()],
+                    v: inp.v.map(|v| [&v[0][g.clone()], &v[1][g.clone()], &v[2][g.clone()]]),
+                    ..*inp
+                };
+                apply_scalar(&one, [&mut px[g.clone()], &mut py[g.clone()], &mut pz[g]], m == ApplyMode::Vccpbd);
+            }
+        }
+    }
+}
+
+/// The eight-lane kernel over runs of blocks (see [`apply_runs`]), its constants set up once.
+/// The arrays' lengths are taken once: a run inside all of them is computed without
+/// per-load bounds checks (session 13), any other with them. Callgrind over the basic fold's
+/// timeline (one thread): 76.1 -> 52.7 million instructions; five alternate runs in a noisy
+/// spell, correction column 4.19-4.66 -> 3.32-4.20 ms.
+fn runs_simd<const VC: bool>(inp: &ApplyInput<'_>, p: [&mut [f32]; 3], runs: impl Iterator<Item = Run>) {
+    let [px, py, pz] = p;
+    let c = Consts::new(inp);
+    let (len_i, len_g) = (particle_len(inp, [&*px, &*py, &*pz]), sums_len(inp, VC));
+    for (k, b, len) in runs {
+        let inside = (b + len) * LANES <= len_i && (k + len) * LANES <= len_g;
+        for l in 0..len {
+            let (i, g) = ((b + l) * LANES, (k + l) * LANES);
+            if inside {
+                // SAFETY: `i + LANES <= (b + len) LANES <= len_i`, the shortest array indexed
+                // by particle, and `g + LANES <= len_g`, the shortest indexed by sum.
+                unsafe { lanes::<VC, false>(&c, inp, [&mut *px, &mut *py, &mut *pz], i, g) }
+            } else {
+                // SAFETY: the checked form reads and writes through bounds-checked loads.
+                unsafe { lanes::<VC, true>(&c, inp, [&mut *px, &mut *py, &mut *pz], i, g) }
+            }
+        }
+    }
+}
+
+/// The shortest of the arrays the kernel indexes by particle.
+fn particle_len(inp: &ApplyInput<'_>, p: [&[f32]; 3]) -> usize {
+    let v = inp.v.map_or(usize::MAX, shortest);
+    shortest(inp.x).min(shortest(p)).min(inp.w.len()).min(v)
+}
+
+/// The shortest of the arrays the kernel indexes by sum (`vc`: the VcCPBD kernel's too).
+fn sums_len(inp: &ApplyInput<'_>, vc: bool) -> usize {
+    let s = inp.sums;
+    let plain = shortest(s.c.each_ref().map(|a| &a[..]))
+        .min(shortest(s.f.each_ref().map(|a| &a[..])))
+        .min(s.count.len());
+    if !vc {
+        return plain;
+    }
+    let q = if inp.v.is_some() { usize::MAX } else { shortest(inp.q) };
+    let n = shortest(s.n.each_ref().map(|a| &a[..]));
+    plain.min(n).min(s.gap.len()).min(inp.b.len()).min(q)
+}
+
+/// The length of the shortest of three arrays.
+fn shortest(a: [&[f32]; 3]) -> usize {
+    a[0].len().min(a[1].len()).min(a[2].len())
+}
+
+/// The kernel's constants in lanes.
+struct Consts {
+    mu: F32s,
+    h: F32s,
+    r2: F32s,
+}
+
+impl Consts {
+    #[inline(always)]
+    fn new(inp: &ApplyInput<'_>) -> Self {
+        Consts {
+            mu: F32s::splat(inp.friction),
+            h: F32s::splat(inp.h),
+            r2: F32s::splat(inp.r * inp.r),
+        }
+    }
+}
+
+fn apply_simd<const VC: bool>(inp: &ApplyInput<'_>, p: [&mut [f32]; 3]) {
+    let [px, py, pz] = p;
+    let c = Consts::new(inp);
+    for i in (0..px.len()).step_by(LANES) {
+        // SAFETY: the checked form reads and writes through bounds-checked loads.
+        unsafe { lanes::<VC, true>(&c, inp, [&mut *px, &mut *py, &mut *pz], i, inp.start + i) };
+    }
+}
+
+/// One block of the kernel: particles `i..i + 8` of `x`, `w`, `p`; sums, box centres and
+/// damping rates at `g..g + 8`; with bounds-checked loads and stores when `CHECKED`.
+///
+/// # Safety
+/// Without `CHECKED`, `i + LANES` is at most the length of every array indexed by particle
+/// (`x`, `w`, `p`, `v`) and `g + LANES` of every one indexed by sum (the sums, `q`, `b`).
+#[inline(always)]
+unsafe fn lanes<const VC: bool, const CHECKED: bool>(c: &Consts, inp: &ApplyInput<'_>, p: [&mut [f32]; 3], i: usize, g: usize) {
+    let [px, py, pz] = p;
+    let s = inp.sums;
+    // SAFETY (all unchecked loads and stores): the caller's guarantee above.
+    let ld = |a: &[f32], at: usize| if CHECKED { load(a, at) } else { unsafe { load_unchecked(a, at) } };
+    let ld3 = |a: [&[f32]; 3], at: usize| Vec3x8 {
+        x: ld(a[0], at),
+        y: ld(a[1], at),
+        z: ld(a[2], at),
+    };
+    let st = |a: &mut [f32], v: F32s| {
+        if CHECKED {
+            store(a, i, v)
+        } else {
+            unsafe { store_unchecked(a, i, v) }
+        }
+    };
+    let (zero, one) = (F32s::ZERO, F32s::ONE);
+    let k = ld(&s.count, g);
+    let active = k.simd_gt(zero) & ld(inp.w, i).simd_gt(zero);
+    let inv = one / k.max(one);
+    let x = ld3(inp.x, i);
+    let p0 = ld3([&*px, &*py, &*pz], i);
+    let cs = ld3([&s.c[0], &s.c[1], &s.c[2]], g);
+    let f = ld3([&s.f[0], &s.f[1], &s.f[2]], g);
+    let disp = p0 - x;
+    let mut t = p0 + cs.scale(inv) + (f.scale(inv) - disp).scale(F32s::splat(0.5)).scale(c.mu);
+    if VC {
+        let n = ld3([&s.n[0], &s.n[1], &s.n[2]], g);
+        let nl = n.length_sq().sqrt();
+        let nh = n.scale(one / nl.max(F32s::splat(f32::MIN_POSITIVE)));
+        let e = ld(&s.gap, g) * inv;
+        let q = match inp.v {
+            Some(v) => x + ld3(v, i).scale(c.h),
+            None => ld3(inp.q, g),
+        };
+        let back = (t - q).length_sq().simd_ge(c.r2);
+        let beta = (ld(inp.b, g) * c.h).min(one);
+        let amt = beta * (t - x).dot(nh) + beta * beta * e * F32s::splat(0.25);
+        let osc = t - nh.scale(amt);
+        t = Vec3x8::select(back, q, osc);
+    }
+    let out = Vec3x8::select(active, t, p0);
+    st(px, out.x);
+    st(py, out.y);
+    st(pz, out.z);
+}
+
+/// Scalar twin of the velocity-correction kernel.
+fn apply_scalar(inp: &ApplyInput<'_>, p: [&mut [f32]; 3], vc: bool) {
+    let [px, py, pz] = p;
+    let s = inp.sums;
+    let (mu, h, r2) = (inp.friction, inp.h, inp.r * inp.r);
+    let dot = |a: [f32; 3], b: [f32; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    for i in 0..px.len() {
+        let g = inp.start + i;
+        let k = s.count[g];
+        if !(k > 0.0 && inp.w[i] > 0.0) {
+            continue;
+        }
+        let inv = 1.0 / k.max(1.0);
+        let x = [inp.x[0][i], inp.x[1][i], inp.x[2][i]];
+        let p0 = [px[i], py[i], pz[i]];
+        let mut t = [0.0f32; 3];
+        for a in 0..3 {
+            let disp = p0[a] - x[a];
+            t[a] = p0[a] + s.c[a][g] * inv + (s.f[a][g] * inv - disp) * 0.5 * mu;
+        }
+        if vc {
+            let n = [s.n[0][g], s.n[1][g], s.n[2][g]];
+            let nl = dot(n, n).sqrt();
+            let il = 1.0 / nl.max(f32::MIN_POSITIVE);
+            let nh = n.map(|c| c * il);
+            let e = s.gap[g] * inv;
+            let q = match inp.v {
+                Some(v) => [x[0] + v[0][i] * h, x[1] + v[1][i] * h, x[2] + v[2][i] * h],
+                None => [inp.q[0][g], inp.q[1][g], inp.q[2][g]],
+            };
+            let tq = [t[0] - q[0], t[1] - q[1], t[2] - q[2]];
+            if dot(tq, tq) >= r2 {
+                t = q;
+            } else {
+                let beta = (inp.b[g] * h).min(1.0);
+                let tx = [t[0] - x[0], t[1] - x[1], t[2] - x[2]];
+                let amt = beta * dot(tx, nh) + beta * beta * e * 0.25;
+                t = [t[0] - nh[0] * amt, t[1] - nh[1] * amt, t[2] - nh[2] * amt];
+            }
+        }
+        px[i] = t[0];
+        py[i] = t[1];
+        pz[i] = t[2];
+    }
+}
+
+/// Inputs of [`clamp_speed`].
+#[derive(Clone, Copy, Debug)]
+pub struct ClampParams {
+    /// Mean velocity of the free particles, m/s.
+    pub mean: [f32; 3],
+    /// Largest move relative to the mean in one substep, m.
+    pub limit: f32,
+    /// Substep length, s.
+    pub h: f32,
+}
+
+/// The speed clamp on one chunk (`x`, `v`, `p`, `w` chunk-local, lengths a multiple of
+/// [`LANES`]): SIMD when `simd`, else the scalar twin.
+pub fn clamp_speed(c: crate::data::particles::ParticleChunk<'_>, cp: &ClampParams, simd: bool) {
+    if simd {
+        clamp_simd(c, cp)
+    } else {
+        clamp_scalar(c, cp)
+    }
+}
+
+/// The clamp's lanes. Session 12: the group test with unchecked loads (the length checked
+/// once) cut the clamp's instructions over the basic fold's timeline from 65.4 to 47.7
+/// million but not its time (clamp column 5.55-5.69 against 5.58-6.06 ms, three alternate
+/// runs: the pass waits on memory), so the checked loads stay.
+fn clamp_simd(c: crate::data::particles::ParticleChunk<'_>, cp: &ClampParams) {
+    let m = Vec3x8::splat(cp.mean);
+    let h = F32s::splat(cp.h);
+    let lim = F32s::splat(cp.limit / cp.h);
+    let lim2 = lim * lim;
+    for i in (0..c.x.len()).step_by(LANES) {
+        let v = Vec3x8::load(c.vx, c.vy, c.vz, i);
+        let u = v - m;
+        let u2 = u.length_sq();
+        let fast = u2.simd_gt(lim2) & load(c.w, i).simd_gt(F32s::ZERO);
+        if !fast.any() {
+            // Nothing to clamp: the pass only reads (the stores below would write the same bits).
+            continue;
+        }
+        let scaled = m + u.scale(lim / u2.sqrt());
+        let v = Vec3x8::select(fast, scaled, v);
+        let x = Vec3x8::load(c.x, c.y, c.z, i);
+        let p = x + v.scale(h);
+        let p = Vec3x8::select(fast, p, Vec3x8::load(c.px, c.py, c.pz, i));
+        v.store(c.vx, c.vy, c.vz, i);
+        p.store(c.px, c.py, c.pz, i);
+    }
+}
+
+/// Scalar twin of the speed clamp.
+fn clamp_scalar(c: crate::data::particles::ParticleChunk<'_>, cp: &ClampParams) {
+    let h = cp.h;
+    let lim = cp.limit / cp.h;
+    let lim2 = lim * lim;
+    for i in 0..c.x.len() {
+        let u = [c.vx[i] - cp.mean[0], c.vy[i] - cp.mean[1], c.vz[i] - cp.mean[2]];
+        let u2 = u[0] * u[0] + u[1] * u[1] + u[2] * u[2];
+        if !(u2 > lim2 && c.w[i] > 0.0) {
+            continue;
+        }
+        let s = lim / u2.sqrt();
+        let v = [cp.mean[0] + u[0] * s, cp.mean[1] + u[1] * s, cp.mean[2] + u[2] * s];
+        c.vx[i] = v[0];
+        c.vy[i] = v[1];
+        c.vz[i] = v[2];
+        c.px[i] = c.x[i] + v[0] * h;
+        c.py[i] = c.y[i] + v[1] * h;
+        c.pz[i] = c.z[i] + v[2] * h;
+    }
+}
+
+#[cfg(test)]
+#[path = "response_tests.rs"]
+mod tests;
+
+/// Particles a partial sum of the mean velocity covers (the sums are added in this order).
+pub(crate) const MEAN_CHUNK: usize = 4096;
+
+/// Mean velocity of the free particles (`w > 0`) among the first `n`: f64 sums over fixed
+/// chunks of [`MEAN_CHUNK`] particles, added in chunk order, so parallel and serial give the
+/// same bits ([`MeanParts`]; the step also fills them inside its predict pass).
+///
+/// Within a chunk the particles are summed in eight lanes, `f32` over blocks of 64 particles
+/// and `f64` across blocks ([`chunk_sums`]; session 12, four `f64` lanes before: the mean may
+/// differ in its last bits from earlier versions); every path uses this one summation.
+pub(crate) fn mean_velocity(v: [&[f32]; 3], w: &[f32], n: usize, parallel: bool, simd: bool) -> [f32; 3] {
+    let parts = MeanParts::new(n);
+    let chunks = n.div_ceil(MEAN_CHUNK);
+    let one = |k: usize| {
+        let (lo, hi) = (k * MEAN_CHUNK, ((k + 1) * MEAN_CHUNK).min(n));
+        parts.add(lo, [&v[0][lo..hi], &v[1][lo..hi], &v[2][lo..hi]], &w[lo..hi], n, simd);
+    };
+    if parallel && chunks > 1 {
+        (0..chunks).into_par_iter().for_each(one);
+    } else {
+        (0..chunks).for_each(one);
+    }
+    parts.mean()
+}
+
+/// The per-chunk partial sums of [`mean_velocity`] (`Σ vx, Σ vy, Σ vz, count` of the free
+/// particles of each [`MEAN_CHUNK`]-particle chunk, as f64 bits), filled by the chunks of a
+/// pass in any order and on any thread, then added in chunk order by [`MeanParts::mean`].
+#[derive(Debug, Default)]
+pub(crate) struct MeanParts(Vec<[AtomicU64; 4]>);
+
+impl MeanParts {
+    /// Zero sums for `n` particles.
+    pub(crate) fn new(n: usize) -> Self {
+        MeanParts((0..n.div_ceil(MEAN_CHUNK)).map(|_| Default::default()).collect())
+    }
+
+    /// Adds the particles of a range starting at particle `start` (a multiple of
+    /// [`MEAN_CHUNK`]; `v`, `w` the range's slices), those below `n` only. Every chunk must be
+    /// added by exactly one call. Eight particles at a time when `simd` (the same bits).
+    pub(crate) fn add(&self, start: usize, v: [&[f32]; 3], w: &[f32], n: usize, simd: bool) {
+        let len = w.len().min(n.saturating_sub(start));
+        for lo in (0..len).step_by(MEAN_CHUNK) {
+            let hi = (lo + MEAN_CHUNK).min(len);
+            let sums = chunk_sums([&v[0][lo..hi], &v[1][lo..hi], &v[2][lo..hi]], &w[lo..hi], simd);
+            if let Some(slot) = self.0.get((start + lo) / MEAN_CHUNK) {
+                for (a, s) in slot.iter().zip(sums) {
+                    a.store(s.to_bits(), Ordering::Relaxed);
+                }
+            }
+        }
+    }
+
+    /// The mean: the chunks' sums added in chunk order, then divided by the count (zero when
+    /// no particle is free).
+    pub(crate) fn mean(&self) -> [f32; 3] {
+        let mut t = [0.0f64; 4];
+        for slot in &self.0 {
+            for (t, a) in t.iter_mut().zip(slot) {
+                *t += f64::from_bits(a.load(Ordering::Relaxed));
+            }
+        }
+        if t[3] > 0.0 {
+            [(t[0] / t[3]) as f32, (t[1] / t[3]) as f32, (t[2] / t[3]) as f32]
+        } else {
+            [0.0; 3]
+        }
+    }
+}
+
+/// Lane-width groups a lane sums in `f32` before the sums are added to the `f64` ones
+/// ([`chunk_sums`]: a block of `F32_RUN LANES` particles).
+const F32_RUN: usize = 8;
+
+/// `Σ vx, Σ vy, Σ vz, count` over the free particles of one chunk (see [`mean_velocity`]):
+/// eight particles at a time when `simd`, else one by one (the twin; the same bits).
+///
+/// Particle `i` of the chunk goes to lane `i mod LANES`. The lanes add in `f32` over a block
+/// of `F32_RUN` groups, then each lane's block sum is added to the lane's `f64` sum; the
+/// lanes are combined at the end as a pairwise tree. A pinned particle adds `+0` (its bits
+/// masked, no branch). Each `f32` block sum has at most `F32_RUN` terms a lane, so the mean
+/// is within a few `f32` ulps of the velocities' magnitude of the exact mean: the order of
+/// the rounding of the clamp's own `v - mean`.
+fn chunk_sums(v: [&[f32]; 3], w: &[f32], simd: bool) -> [f64; 4] {
+    let mut s = [[0.0f64; LANES]; 3];
+    let mut count = 0u32;
+    let full = w.len() / LANES * LANES;
+    let mut acc = [[0.0f32; LANES]; 3];
+    let keep = |free: bool, v: f32| f32::from_bits(v.to_bits() & u32::from(free).wrapping_neg());
+    let flush = |acc: &mut [[f32; LANES]; 3], s: &mut [[f64; LANES]; 3]| {
+        for (sc, ac) in s.iter_mut().zip(acc.iter_mut()) {
+            for (a, b) in sc.iter_mut().zip(ac.iter_mut()) {
+                *a += f64::from(*b);
+                *b = 0.0;
+            }
+        }
+    };
+    let mut i = 0;
+    while i < full {
+        let end = (i + F32_RUN * LANES).min(full);
+        if simd {
+            let mut a = acc.map(F32s::from);
+            while i < end {
+                let free = load(w, i).simd_gt(F32s::ZERO);
+                count += free.to_bitmask().count_ones();
+                for (a, c) in a.iter_mut().zip(v) {
+                    *a += free & load(c, i);
+                }
+                i += LANES;
+            }
+            acc = a.map(|a| a.to_array());
+        } else {
+            while i < end {
+                for l in 0..LANES {
+                    let free = w[i + l] > 0.0;
+                    count += u32::from(free);
+                    for (a, c) in acc.iter_mut().zip(v) {
+                        a[l] += keep(free, c[i + l]);
+                    }
+                }
+                i += LANES;
+            }
+        }
+        flush(&mut acc, &mut s);
+    }
+    for (l, i) in (full..w.len()).enumerate() {
+        let free = w[i] > 0.0;
+        count += u32::from(free);
+        for (a, c) in acc.iter_mut().zip(v) {
+            a[l] += keep(free, c[i]);
+        }
+    }
+    flush(&mut acc, &mut s);
+    let sum = |a: &[f64; LANES]| {
+        let mut a = *a;
+        let mut k = LANES;
+        while k > 1 {
+            k /= 2;
+            for j in 0..k {
+                a[j] = a[2 * j] + a[2 * j + 1];
+            }
+        }
+        a[0]
+    };
+    [sum(&s[0]), sum(&s[1]), sum(&s[2]), f64::from(count)]
+}

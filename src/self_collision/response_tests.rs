@@ -1,0 +1,348 @@
+use super::*;
+use crate::data::particles::Particles;
+use proptest::prelude::*;
+
+/// xorshift in [-1, 1).
+fn rng(seed: u64) -> impl FnMut() -> f32 {
+    crate::test_rng::signed(seed | 1)
+}
+
+fn cloud(n: usize, seed: u64) -> Particles {
+    let mut p = Particles::new();
+    let mut r = rng(seed);
+    for i in 0..n {
+        let w = if i % 7 == 0 { 0.0 } else { 1.0 + r().abs() * 10.0 };
+        p.push([r(), r(), r()], [r() * 5.0, r() * 5.0, r() * 5.0], w);
+    }
+    for i in 0..p.padded_len() {
+        p.px[i] = p.x[i] + 0.01 * r();
+        p.py[i] = p.y[i] + 0.01 * r();
+        p.pz[i] = p.z[i] + 0.01 * r();
+    }
+    p
+}
+
+fn sums(len: usize, seed: u64) -> ContactSums {
+    let mut r = rng(seed ^ 0x9e37);
+    let mut s = ContactSums::new(len);
+    for i in 0..len {
+        let k = ((r() + 1.0) * 2.0) as u32; // 0..=3 contacts, some zero
+        if k == 0 {
+            continue;
+        }
+        s.count[i] = k as f32;
+        for a in 0..3 {
+            s.c[a][i] = 0.005 * r();
+            s.f[a][i] = 0.01 * r();
+            s.n[a][i] = if i % 11 == 0 { 0.0 } else { r() };
+        }
+        s.gap[i] = -0.004 * (r() + 1.0);
+    }
+    s
+}
+
+fn bits(p: &Particles) -> Vec<u32> {
+    [&p.x, &p.y, &p.z, &p.px, &p.py, &p.pz, &p.vx, &p.vy, &p.vz]
+        .iter()
+        .flat_map(|a| a.iter().map(|f| f.to_bits()))
+        .collect()
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(48))]
+    /// The velocity-correction kernel: SIMD (serial and parallel chunks) == scalar twin,
+    /// bitwise, in both modes, for lengths around the lane width and the chunk size.
+    #[test]
+    fn apply_simd_matches_scalar(n in prop_oneof![0usize..40, 4090usize..4110], seed in any::<u64>(),
+            h_milli in 1u32..60, friction_pct in 0u32..=100, r_milli in 1u32..20, vc in any::<bool>()) {
+        let base = cloud(n, seed);
+        let len = base.padded_len();
+        let s = sums(len, seed);
+        let mut rb = rng(seed ^ 77);
+        let b: Vec<f32> = (0..len).map(|_| (rb() + 1.0) * 20.0).collect();
+        let q: Vec<Vec<f32>> = [&base.px, &base.py, &base.pz].iter().map(|a| a.iter().map(|v| v + 0.003 * rb()).collect()).collect();
+        let mode = if vc { ApplyMode::Vccpbd } else { ApplyMode::Plain };
+        let h = h_milli as f32 * 1e-3;
+        let run = |simd: bool, par: bool| {
+            let mut p = base.clone();
+            p.for_chunks(par, |c| {
+                let inp = ApplyInput { start: c.start, x: [&*c.x, &*c.y, &*c.z], w: c.w, q: [&q[0], &q[1], &q[2]], v: None, b: &b, sums: &s,
+                    friction: friction_pct as f32 / 100.0, h, r: r_milli as f32 * 1e-3 };
+                apply(&inp, [c.px, c.py, c.pz], mode, simd);
+            });
+            bits(&p)
+        };
+        let reference = run(false, false);
+        prop_assert_eq!(&reference, &run(true, false));
+        prop_assert_eq!(&reference, &run(true, true));
+        prop_assert_eq!(&reference, &run(false, true));
+    }
+
+    /// The speed clamp: SIMD == scalar twin bitwise; afterwards no free particle moves more
+    /// than the limit (plus rounding) relative to the mean in a substep.
+    #[test]
+    fn clamp_simd_matches_scalar(n in prop_oneof![0usize..40, 4090usize..4110], seed in any::<u64>(), limit_milli in 1u32..50, h_milli in 1u32..60) {
+        let base = cloud(n, seed);
+        let cp = ClampParams { mean: [0.5, -1.0, 0.25], limit: limit_milli as f32 * 1e-3, h: h_milli as f32 * 1e-3 };
+        let run = |simd: bool, par: bool| {
+            let mut p = base.clone();
+            p.for_chunks(par, |c| clamp_speed(c, &cp, simd));
+            p
+        };
+        let reference = run(false, false);
+        prop_assert_eq!(bits(&reference), bits(&run(true, false)));
+        prop_assert_eq!(bits(&reference), bits(&run(true, true)));
+        for i in 0..n {
+            if reference.w[i] > 0.0 {
+                let u = [reference.vx[i] - cp.mean[0], reference.vy[i] - cp.mean[1], reference.vz[i] - cp.mean[2]];
+                let m = (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]).sqrt() * cp.h;
+                prop_assert!(m <= cp.limit * 1.0001, "particle {} moves {} > {}", i, m, cp.limit);
+            }
+        }
+    }
+}
+
+/// Box centres derived from the velocities (`x + h v`, as predict and the clamp compute the
+/// predictions) give the bits of the centres read from a copy, SIMD and scalar, in chunks
+/// and in runs; the box test sends some particles back to their centre.
+#[test]
+fn derived_box_centres_equal_the_copied_ones() {
+    let h = 0.01f32;
+    let mut base = cloud(300, 9);
+    for i in 0..base.padded_len() {
+        base.px[i] = base.x[i] + base.vx[i] * h;
+        base.py[i] = base.y[i] + base.vy[i] * h;
+        base.pz[i] = base.z[i] + base.vz[i] * h;
+    }
+    let len = base.padded_len();
+    let s = sums(len, 9);
+    let b = vec![30.0; len];
+    let q = [base.px.clone(), base.py.clone(), base.pz.clone()];
+    let run = |derive: bool, simd: bool, runs: bool| {
+        let mut p = base.clone();
+        let v = [base.vx.clone(), base.vy.clone(), base.vz.clone()];
+        let inp = |x, w, v, start| centres_input(x, w, derive.then_some(v), &q, &b, &s, start, h);
+        if runs {
+            let xs = [&base.x[..], &base.y[..], &base.z[..]];
+            let blocks = len / crate::data::lanes::LANES;
+            let runs = [(0, 0, 3), (3, 3, blocks - 3)].into_iter();
+            let i = inp(xs, &base.w[..], [&v[0][..], &v[1][..], &v[2][..]], 0);
+            super::apply_runs(&i, [&mut p.px[..], &mut p.py[..], &mut p.pz[..]], runs, ApplyMode::Vccpbd, simd);
+        } else {
+            p.for_chunks(false, |c| {
+                let g = c.start..c.start + c.x.len();
+                let vs = [&v[0][g.clone()], &v[1][g.clone()], &v[2][g]];
+                let i = centres_input([&*c.x, &*c.y, &*c.z], c.w, derive.then_some(vs), &q, &b, &s, c.start, h);
+                apply(&i, [c.px, c.py, c.pz], ApplyMode::Vccpbd, simd);
+            });
+        }
+        p
+    };
+    let want = run(false, false, false);
+    let back = (0..300)
+        .filter(|&i| base.w[i] > 0.0 && s.count[i] > 0.0 && want.px[i].to_bits() == q[0][i].to_bits())
+        .count();
+    assert!(back > 10, "{back} particles sent back to their box centre");
+    for (derive, simd, runs) in [
+        (true, false, false),
+        (true, true, false),
+        (true, false, true),
+        (true, true, true),
+        (false, true, true),
+    ] {
+        assert_eq!(
+            bits(&run(derive, simd, runs)),
+            bits(&want),
+            "derive {derive}, simd {simd}, runs {runs}"
+        );
+    }
+}
+
+/// The kernel's input of [`derived_box_centres_equal_the_copied_ones`].
+#[allow(clippy::too_many_arguments)]
+fn centres_input<'a>(
+    x: [&'a [f32]; 3],
+    w: &'a [f32],
+    v: Option<[&'a [f32]; 3]>,
+    q: &'a [Vec<f32>; 3],
+    b: &'a [f32],
+    sums: &'a ContactSums,
+    start: usize,
+    h: f32,
+) -> ApplyInput<'a> {
+    ApplyInput {
+        start,
+        x,
+        w,
+        q: [&q[0], &q[1], &q[2]],
+        v,
+        b,
+        sums,
+        friction: 0.3,
+        h,
+        r: 0.002,
+    }
+}
+
+#[test]
+fn apply_leaves_pinned_and_contactless_particles_alone() {
+    let base = cloud(20, 5);
+    let len = base.padded_len();
+    let mut s = sums(len, 5);
+    s.count[3] = 0.0;
+    let b = vec![0.8; len];
+    let mut p = base.clone();
+    p.for_chunks(false, |c| {
+        let inp = ApplyInput {
+            start: c.start,
+            x: [&*c.x, &*c.y, &*c.z],
+            w: c.w,
+            q: [&base.px, &base.py, &base.pz],
+            v: None,
+            b: &b,
+            sums: &s,
+            friction: 0.3,
+            h: 0.01,
+            r: 0.01,
+        };
+        apply(&inp, [c.px, c.py, c.pz], ApplyMode::Vccpbd, true);
+    });
+    for i in [0, 3, 7, 14] {
+        assert_eq!(p.px[i].to_bits(), base.px[i].to_bits(), "particle {i}");
+    }
+}
+
+#[test]
+fn vccpbd_puts_a_far_moved_particle_back_to_its_box_centre() {
+    let mut p = Particles::new();
+    p.push([0.0; 3], [0.0; 3], 1.0);
+    p.px[0] = 0.0;
+    let len = p.padded_len();
+    let mut s = ContactSums::new(len);
+    s.count[0] = 1.0;
+    s.c[0][0] = 0.5; // a correction far larger than the box radius
+    s.n[0][0] = 1.0;
+    s.gap[0] = -0.001;
+    let q = [vec![0.25; len], vec![0.0; len], vec![0.0; len]];
+    let b = vec![0.8; len];
+    p.for_chunks(false, |c| {
+        let inp = ApplyInput {
+            start: c.start,
+            x: [&*c.x, &*c.y, &*c.z],
+            w: c.w,
+            q: [&q[0], &q[1], &q[2]],
+            v: None,
+            b: &b,
+            sums: &s,
+            friction: 0.0,
+            h: 0.01,
+            r: 0.01,
+        };
+        apply(&inp, [c.px, c.py, c.pz], ApplyMode::Vccpbd, false);
+    });
+    assert_eq!(p.px[0], 0.25);
+}
+
+/// The mean velocity: the same bits serial, parallel on one and two threads, SIMD and scalar,
+/// and within the bound of its `f32` block sums of an `f64` running sum over the free
+/// particles (pinned ones left out), for sizes around the lane width, the `f32` block and the
+/// chunk size. The bound: each `f32` block sum of a lane (at most `F32_RUN` terms) is within
+/// `F32_RUN` ulps of the sum of its terms' magnitudes, so the mean is within
+/// `F32_RUN ε Σ|v| / count`, plus the `f32` rounding of the result.
+#[test]
+fn mean_velocity_is_deterministic_and_averages_the_free_particles() {
+    for n in [0usize, 1, 3, 5, 9, 63, 64, 65, 520, 4095, 4097, 9001] {
+        let p = cloud(n, n as u64 + 3);
+        let v = [&p.vx[..], &p.vy[..], &p.vz[..]];
+        let serial = mean_velocity(v, &p.w, n, false, true);
+        for threads in [1, 2] {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            for simd in [false, true] {
+                let par = pool.install(|| mean_velocity(v, &p.w, n, true, simd));
+                assert_eq!(
+                    serial.map(f32::to_bits),
+                    par.map(f32::to_bits),
+                    "n {n}, {threads} threads, simd {simd}"
+                );
+            }
+        }
+        let free: Vec<usize> = (0..n).filter(|&i| p.w[i] > 0.0).collect();
+        for (a, got) in serial.iter().enumerate() {
+            let (want, bound) = if free.is_empty() {
+                (0.0, 0.0)
+            } else {
+                let k = free.len() as f64;
+                let abs = free.iter().map(|&i| (v[a][i] as f64).abs()).sum::<f64>();
+                let want = free.iter().map(|&i| v[a][i] as f64).sum::<f64>() / k;
+                (
+                    want,
+                    F32_RUN as f64 * f32::EPSILON as f64 * abs / k + f32::EPSILON as f64 * want.abs(),
+                )
+            };
+            assert!((*got as f64 - want).abs() <= bound, "n {n}: {got} vs {want} (bound {bound})");
+        }
+    }
+}
+
+/// The eight-lane sums of a chunk and their scalar twin give the same bits, with pinned
+/// particles, non-finite velocities and every tail length.
+#[test]
+fn chunk_sums_simd_equals_scalar() {
+    for n in [0usize, 1, 7, 8, 9, 63, 64, 65, 71, 130, 4096] {
+        let mut p = cloud(n.max(1), n as u64 + 29);
+        if n > 40 {
+            p.vx[40] = f32::INFINITY;
+            p.vy[33] = f32::NAN;
+            p.w[33] = 0.0;
+        }
+        let v = [&p.vx[..n], &p.vy[..n], &p.vz[..n]];
+        let (a, b) = (chunk_sums(v, &p.w[..n], true), chunk_sums(v, &p.w[..n], false));
+        assert_eq!(a.map(f64::to_bits), b.map(f64::to_bits), "n {n}");
+        if n > 40 {
+            assert!(a[0].is_infinite() && a[1].is_finite(), "n {n}: {a:?}");
+        }
+    }
+}
+
+/// The mean-velocity sums filled as the step's predict pass fills them (ranges of whole
+/// chunks, in any order, the arrays padded past `n`) give the bits of `mean_velocity`; a
+/// changed velocity in one chunk changes the result (the sums are overwritten, not kept).
+#[test]
+fn mean_parts_filled_by_chunk_ranges_equal_mean_velocity() {
+    for n in [1usize, 4096, 4097, 9001, 12_289] {
+        let mut p = cloud(n, n as u64 + 11);
+        let len = p.vx.len();
+        let want = mean_velocity([&p.vx[..], &p.vy[..], &p.vz[..]], &p.w, n, false, true);
+        // One range for everything (the serial pass) and single chunks in reverse order.
+        let whole = MeanParts::new(n);
+        whole.add(0, [&p.vx[..], &p.vy[..], &p.vz[..]], &p.w, n, true);
+        assert_eq!(whole.mean().map(f32::to_bits), want.map(f32::to_bits), "n {n}");
+        let parts = MeanParts::new(n);
+        for lo in (0..len).step_by(MEAN_CHUNK).rev() {
+            let hi = (lo + MEAN_CHUNK).min(len);
+            parts.add(
+                lo,
+                [&p.vx[lo..hi], &p.vy[lo..hi], &p.vz[lo..hi]],
+                &p.w[lo..hi],
+                n,
+                (lo / MEAN_CHUNK).is_multiple_of(2),
+            );
+        }
+        assert_eq!(parts.mean().map(f32::to_bits), want.map(f32::to_bits), "n {n}");
+        let i = n - 1;
+        p.vx[i] += 1000.0;
+        p.w[i] = 1.0;
+        let lo = i / MEAN_CHUNK * MEAN_CHUNK;
+        let hi = (lo + MEAN_CHUNK).min(len);
+        parts.add(
+            lo,
+            [&p.vx[lo..hi], &p.vy[lo..hi], &p.vz[lo..hi]],
+            &p.w[lo..hi],
+            n,
+            (lo / MEAN_CHUNK).is_multiple_of(2),
+        );
+        let moved = mean_velocity([&p.vx[..], &p.vy[..], &p.vz[..]], &p.w, n, false, true);
+        assert_eq!(parts.mean().map(f32::to_bits), moved.map(f32::to_bits), "n {n}");
+        assert_ne!(moved[0], want[0], "n {n}");
+    }
+}

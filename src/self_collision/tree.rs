@@ -1,0 +1,371 @@
+//! A box hierarchy over the particles: the self-collision broadphase of SEEDS section A
+//! (VcCPBD, "collisions are found through a box hierarchy (depth 5)"), the alternative to the
+//! spatial hash of section C.
+//!
+//! # Method
+//! **Build** (once): the particle ids are split recursively at the median of the longest axis
+//! of their bounding box (ties broken by id, so the split is deterministic) down to a fixed
+//! depth `D`. The tree is complete and stored implicitly in heap order: node `k` has children
+//! `2k+1` and `2k+2`, the `2^D` leaves are nodes `2^D - 1 .. 2^(D+1) - 1`, and leaf `l` holds the
+//! particles `order[leaf_start[l] .. leaf_start[l+1]]` (sizes differ by at most one).
+//!
+//! **Refit** (each step): the topology is kept and every box recomputed bottom-up: leaf boxes
+//! from their particles, then level by level each box the union of its two children. Cheaper
+//! than a rebuild, but boxes grow loose as the cloth deforms far from the build state; build
+//! again then. NaN coordinates are ignored by the box (it stays tight around the finite
+//! ones); infinite ones make it infinite, which is correct, only slow.
+//!
+//! **Query**: for each particle, a depth-first walk from the root visits the nodes whose box
+//! meets the particle's search box `[x_i - r, x_i + r]³` (`r` = `max_dist` plus the rounding
+//! margin of [`crate::self_collision::neighbours`]) and tests the particles of the leaves reached with the
+//! shared neighbour predicate, eight at a time (`f32x8`; the serial twin is scalar). Lists
+//! are sorted, so the result equals the hash and the brute force exactly.
+//!
+//! # Shape
+//! [`TreeShape::Depth`] fixes `D` (the paper uses 5: 32 leaves, so ~312 particles a leaf for a
+//! 100x100 cloth); [`TreeShape::LeafSize`] picks the smallest `D` whose leaves hold at most that
+//! many particles (8 to 16 is fast). `D` is at most [`MAX_DEPTH`].
+
+use crate::data::lanes::LANES;
+use crate::self_collision::neighbours::{check_max_dist, check_positions, search_radius, sort_dedup_tail, Candidates, Neighbours, CHUNK};
+use crate::{Result, WeftError};
+use rayon::prelude::*;
+
+/// Deepest tree allowed (2^20 leaves).
+pub const MAX_DEPTH: u32 = 20;
+
+/// How deep to build the tree.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TreeShape {
+    /// Exactly this many levels below the root (the paper: 5).
+    Depth(u32),
+    /// The smallest depth whose leaves hold at most this many particles (capped at
+    /// [`MAX_DEPTH`]).
+    LeafSize(u32),
+}
+
+/// An axis-aligned box; empty when `min > max` (the initial `+inf / -inf` box).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Aabb {
+    /// Lower corner.
+    pub min: [f32; 3],
+    /// Upper corner.
+    pub max: [f32; 3],
+}
+
+impl Aabb {
+    /// The empty box.
+    pub const EMPTY: Aabb = Aabb {
+        min: [f32::INFINITY; 3],
+        max: [f32::NEG_INFINITY; 3],
+    };
+
+    /// Grows the box to hold a point; NaN components leave it unchanged.
+    #[inline(always)]
+    fn grow(&mut self, p: [f32; 3]) {
+        for (a, v) in p.into_iter().enumerate() {
+            self.min[a] = self.min[a].min(v);
+            self.max[a] = self.max[a].max(v);
+        }
+    }
+
+    /// The smallest box holding both.
+    #[inline(always)]
+    fn union(&self, o: &Aabb) -> Aabb {
+        let mut u = *self;
+        for a in 0..3 {
+            u.min[a] = u.min[a].min(o.min[a]);
+            u.max[a] = u.max[a].max(o.max[a]);
+        }
+        u
+    }
+}
+
+/// A complete binary box tree over particles `0..n` (see the module docs).
+#[derive(Debug, Clone)]
+pub struct ParticleTree {
+    depth: u32,
+    n: usize,
+    /// Particle ids in leaf order.
+    order: Vec<u32>,
+    /// Length `2^depth + 1`: leaf `l` holds `order[leaf_start[l]..leaf_start[l+1]]`.
+    leaf_start: Vec<u32>,
+    /// Node boxes in heap order, length `2^(depth+1) - 1`.
+    boxes: Vec<Aabb>,
+    /// Positions in `order` (leaf) order as of the last refit: leaf scans read them
+    /// contiguously.
+    lx: Vec<f32>,
+    ly: Vec<f32>,
+    lz: Vec<f32>,
+    /// Index of each particle in `order`.
+    slot_of: Vec<u32>,
+}
+
+impl ParticleTree {
+    /// Builds the topology over particles `0..n` and fits the boxes (serially; done once).
+    ///
+    /// Errors on short arrays, `Depth(d)` with `d > MAX_DEPTH`, or `LeafSize(0)`.
+    pub fn build(x: &[f32], y: &[f32], z: &[f32], n: usize, shape: TreeShape) -> Result<Self> {
+        check_positions(x, y, z, n)?;
+        let depth = match shape {
+            TreeShape::Depth(d) if d <= MAX_DEPTH => d,
+            TreeShape::Depth(d) => return Err(WeftError::param("depth", d, format!("must be at most {MAX_DEPTH}"))),
+            TreeShape::LeafSize(0) => return Err(WeftError::param("leaf_size", 0, "must be at least 1")),
+            TreeShape::LeafSize(k) => (0..=MAX_DEPTH)
+                .find(|&d| n.div_ceil(1usize << d) <= k as usize)
+                .unwrap_or(MAX_DEPTH),
+        };
+        let mut order: Vec<u32> = (0..n as u32).collect();
+        let mut leaf_start = Vec::with_capacity((1usize << depth) + 1);
+        leaf_start.push(0);
+        split(&mut order, 0, x, y, z, depth, &mut leaf_start);
+        let mut slot_of = vec![0u32; n];
+        for (k, &j) in order.iter().enumerate() {
+            slot_of[j as usize] = k as u32;
+        }
+        let mut tree = Self {
+            depth,
+            n,
+            order,
+            leaf_start,
+            boxes: vec![Aabb::EMPTY; (2usize << depth) - 1],
+            // NaN padding of LANES: lane loads stay in bounds and padded lanes never match.
+            lx: vec![f32::NAN; n + LANES],
+            ly: vec![f32::NAN; n + LANES],
+            lz: vec![f32::NAN; n + LANES],
+            slot_of,
+        };
+        tree.refit_serial(x, y, z, n)?;
+        Ok(tree)
+    }
+
+    /// Levels below the root.
+    pub fn depth(&self) -> u32 {
+        self.depth
+    }
+
+    /// Number of leaves, `2^depth`.
+    pub fn leaf_count(&self) -> usize {
+        1 << self.depth
+    }
+
+    /// Number of particles the tree was built over.
+    pub fn len(&self) -> usize {
+        self.n
+    }
+
+    /// Whether the tree holds no particles.
+    pub fn is_empty(&self) -> bool {
+        self.n == 0
+    }
+
+    /// The particle ids of leaf `l`, or `None` if out of range.
+    pub fn leaf(&self, l: usize) -> Option<&[u32]> {
+        let s = *self.leaf_start.get(l)? as usize;
+        let e = *self.leaf_start.get(l + 1)? as usize;
+        Some(&self.order[s..e])
+    }
+
+    /// The box of node `k` (heap order), or `None` if out of range.
+    pub fn node_box(&self, k: usize) -> Option<Aabb> {
+        self.boxes.get(k).copied()
+    }
+
+    fn first_leaf(&self) -> usize {
+        (1usize << self.depth) - 1
+    }
+
+    fn check_n(&self, x: &[f32], y: &[f32], z: &[f32], n: usize) -> Result<()> {
+        check_positions(x, y, z, n)?;
+        if n != self.n {
+            return Err(WeftError::param(
+                "n",
+                n,
+                format!("must equal the particle count of the build ({})", self.n),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Box of leaf `l` from the leaf-ordered positions.
+    fn leaf_box(&self, l: usize) -> Aabb {
+        let mut b = Aabb::EMPTY;
+        let (s, e) = (self.leaf_start[l] as usize, self.leaf_start[l + 1] as usize);
+        for k in s..e {
+            b.grow([self.lx[k], self.ly[k], self.lz[k]]);
+        }
+        b
+    }
+
+    /// Whether particle `i` is where it was at the last refit (bitwise).
+    #[inline]
+    fn unchanged(&self, x: &[f32], y: &[f32], z: &[f32], i: usize) -> bool {
+        let k = self.slot_of[i] as usize;
+        x[i].to_bits() == self.lx[k].to_bits() && y[i].to_bits() == self.ly[k].to_bits() && z[i].to_bits() == self.lz[k].to_bits()
+    }
+
+    /// Errors unless the positions are those of the last refit.
+    fn check_unchanged(same: bool) -> Result<()> {
+        if same {
+            Ok(())
+        } else {
+            Err(WeftError::param(
+                "x, y, z",
+                "moved",
+                "must be the positions given to the last refit; refit the tree first",
+            ))
+        }
+    }
+
+    /// Recomputes every box for new positions of the same particles, bottom-up, in parallel:
+    /// copies the positions into leaf order, fits the leaves, then each level up. Errors if `n`
+    /// differs from the build or an array is short.
+    pub fn refit(&mut self, x: &[f32], y: &[f32], z: &[f32], n: usize) -> Result<()> {
+        self.check_n(x, y, z, n)?;
+        let fl = self.first_leaf();
+        self.lx[..n]
+            .par_chunks_mut(CHUNK)
+            .zip(self.ly[..n].par_chunks_mut(CHUNK))
+            .zip(self.lz[..n].par_chunks_mut(CHUNK))
+            .zip(self.order.par_chunks(CHUNK))
+            .for_each(|(((cx, cy), cz), ids)| {
+                for (k, &j) in ids.iter().enumerate() {
+                    let j = j as usize;
+                    (cx[k], cy[k], cz[k]) = (x[j], y[j], z[j]);
+                }
+            });
+        let mut boxes = std::mem::take(&mut self.boxes);
+        let this = &*self;
+        boxes[fl..]
+            .par_iter_mut()
+            .with_min_len(64)
+            .enumerate()
+            .for_each(|(l, b)| *b = this.leaf_box(l));
+        for level in (0..self.depth).rev() {
+            let (lo, hi) = ((1usize << level) - 1, (2usize << level) - 1);
+            let (upper, lower) = boxes.split_at_mut(hi);
+            upper[lo..].par_iter_mut().with_min_len(64).enumerate().for_each(|(m, b)| {
+                let c = 2 * (lo + m) + 1 - hi;
+                *b = lower[c].union(&lower[c + 1]);
+            });
+        }
+        self.boxes = boxes;
+        Ok(())
+    }
+
+    /// Serial twin of [`ParticleTree::refit`]; produces identical boxes.
+    pub fn refit_serial(&mut self, x: &[f32], y: &[f32], z: &[f32], n: usize) -> Result<()> {
+        self.check_n(x, y, z, n)?;
+        let fl = self.first_leaf();
+        for (k, &j) in self.order.iter().enumerate() {
+            let j = j as usize;
+            (self.lx[k], self.ly[k], self.lz[k]) = (x[j], y[j], z[j]);
+        }
+        for l in 0..self.leaf_count() {
+            self.boxes[fl + l] = self.leaf_box(l);
+        }
+        for k in (0..fl).rev() {
+            self.boxes[k] = self.boxes[2 * k + 1].union(&self.boxes[2 * k + 2]);
+        }
+        Ok(())
+    }
+
+    /// Boxes as last refitted (heap order), for inspection and tests.
+    pub fn boxes(&self) -> &[Aabb] {
+        &self.boxes
+    }
+
+    /// For every particle, its neighbours within `max_dist`, sorted, into `out`; parallel over
+    /// particles. The positions must be those of the last refit (checked bitwise in one pass:
+    /// leaf scans read the leaf-ordered copy the refit made). Errors if they are not, if `n`
+    /// differs from the build, an array is short, or `max_dist` is negative or non-finite.
+    pub fn query_all(&self, x: &[f32], y: &[f32], z: &[f32], n: usize, max_dist: f32, out: &mut Neighbours) -> Result<()> {
+        self.check_n(x, y, z, n)?;
+        let md2 = check_max_dist(max_dist)?;
+        Self::check_unchanged((0..n).into_par_iter().all(|i| self.unchanged(x, y, z, i)))?;
+        let r = search_radius(max_dist);
+        out.fill_parallel(n, |i, buf| self.scan::<true>(x, y, z, i, md2, r, buf))
+    }
+
+    /// Serial, scalar twin of [`ParticleTree::query_all`] (no threads, no lanes); produces
+    /// identical lists.
+    pub fn query_all_serial(&self, x: &[f32], y: &[f32], z: &[f32], n: usize, max_dist: f32, out: &mut Neighbours) -> Result<()> {
+        self.check_n(x, y, z, n)?;
+        let md2 = check_max_dist(max_dist)?;
+        Self::check_unchanged((0..n).all(|i| self.unchanged(x, y, z, i)))?;
+        let r = search_radius(max_dist);
+        out.fill_serial(n, |i, buf| self.scan::<false>(x, y, z, i, md2, r, buf))
+    }
+
+    /// Appends the sorted neighbours of particle `i` to `buf`.
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    fn scan<const SIMD: bool>(&self, x: &[f32], y: &[f32], z: &[f32], i: usize, md2: f32, r: f32, buf: &mut Vec<u32>) {
+        let (xi, yi, zi) = (x[i], y[i], z[i]);
+        if !(xi.is_finite() && yi.is_finite() && zi.is_finite()) {
+            return;
+        }
+        let (qlo, qhi) = ([xi - r, yi - r, zi - r], [xi + r, yi + r, zi + r]);
+        let fl = self.first_leaf();
+        let start = buf.len();
+        let iu = i as u32;
+        // Depth-first: the stack never holds more than depth + 1 <= 21 nodes.
+        let mut stack = [0u32; 2 * MAX_DEPTH as usize + 2];
+        let mut sp = 1;
+        while sp > 0 {
+            sp -= 1;
+            let k = stack[sp] as usize;
+            let b = &self.boxes[k];
+            if b.min[0] > qhi[0] || b.max[0] < qlo[0] || b.min[1] > qhi[1] || b.max[1] < qlo[1] || b.min[2] > qhi[2] || b.max[2] < qlo[2] {
+                continue;
+            }
+            if k >= fl {
+                let l = k - fl;
+                let range = self.leaf_start[l] as usize..self.leaf_start[l + 1] as usize;
+                let c = Candidates {
+                    above: false,
+                    ids: &self.order,
+                    x: &self.lx,
+                    y: &self.ly,
+                    z: &self.lz,
+                };
+                c.scan::<SIMD>(range, iu, [xi, yi, zi], md2, buf);
+            } else {
+                stack[sp] = (2 * k + 2) as u32;
+                stack[sp + 1] = (2 * k + 1) as u32;
+                sp += 2;
+            }
+        }
+        sort_dedup_tail(buf, start);
+    }
+}
+
+/// Splits `ids` (a node's particles) at the median of the longest axis of their box, down to
+/// `depth`, appending each leaf's end offset to `leaf_start` (leaves left to right).
+fn split(ids: &mut [u32], level: u32, x: &[f32], y: &[f32], z: &[f32], depth: u32, leaf_start: &mut Vec<u32>) {
+    if level == depth {
+        let end = leaf_start.last().copied().unwrap_or(0) + ids.len() as u32;
+        leaf_start.push(end);
+        return;
+    }
+    let mut b = Aabb::EMPTY;
+    for &j in ids.iter() {
+        let j = j as usize;
+        b.grow([x[j], y[j], z[j]]);
+    }
+    let ext = [b.max[0] - b.min[0], b.max[1] - b.min[1], b.max[2] - b.min[2]];
+    let mut axis = 0;
+    for a in 1..3 {
+        if ext[a] > ext[axis] {
+            axis = a;
+        }
+    }
+    let c = [x, y, z][axis];
+    let mid = ids.len() / 2;
+    if mid > 0 {
+        ids.select_nth_unstable_by(mid, |&a, &b| c[a as usize].total_cmp(&c[b as usize]).then(a.cmp(&b)));
+    }
+    let (left, right) = ids.split_at_mut(mid);
+    split(left, level + 1, x, y, z, depth, leaf_start);
+    split(right, level + 1, x, y, z, depth, leaf_start);
+}

@@ -1,0 +1,371 @@
+//! The world: particles, constraints and effects, and the step that advances them.
+//!
+//! One step of length `dt` runs `substeps` substeps of `h = dt / substeps`; each substep:
+//! wind forces (if named) → predict (gravity, drag, forces) → `iterations` sweeps of the
+//! coloured distance constraints and the tethers → update velocities and positions (with
+//! fabric damping if any). See the crate README's Architecture section for the file of each
+//! stage and its scalar twin.
+
+pub mod checkpoint;
+pub(crate) mod keep_awake;
+pub mod metrics;
+pub mod stage_clock;
+pub mod step;
+pub mod strands;
+
+use std::sync::Arc;
+
+use crate::constraints::distance::DistanceInput;
+use crate::constraints::{DistanceSet, TetherSet};
+use crate::data::particles::Particles;
+use crate::error::{Result, WeftError};
+use crate::model::cloth::{ClothDesc, ConstraintKind};
+use crate::model::effects::{Effects, WindState};
+use crate::model::layout::ClothInfo;
+use crate::model::params::SolverParams;
+
+/// A simulated world.
+pub struct World {
+    pub(crate) particles: Particles,
+    pub(crate) distance: DistanceSet,
+    pub(crate) distance_inputs: Vec<DistanceInput>,
+    pub(crate) stretch: Vec<(u32, u32, f32)>,
+    pub(crate) tethers: TetherSet,
+    pub(crate) tether_inputs: Vec<crate::model::cloth::Tether>,
+    pub(crate) triangles: Vec<[u32; 3]>,
+    pub(crate) cloths: Vec<ClothInfo>,
+    pub(crate) damping_rate: Vec<f32>,
+    pub(crate) has_damping: bool,
+    /// Whether a substep's update pass also runs the next substep's predict, chunk by chunk
+    /// (`src/step.rs`; off only in tests that hold the fused path to the separate passes).
+    pub(crate) fuse_predict: bool,
+    pub(crate) damp_factor: Vec<f32>,
+    pub(crate) damp_h: f32,
+    pub(crate) params: SolverParams,
+    pub(crate) effects: Effects,
+    pub(crate) wind: Option<WindState>,
+    pub(crate) pool: Option<Arc<rayon::ThreadPool>>,
+    pub(crate) backup: [Vec<f32>; 6],
+    pub(crate) time: f64,
+    pub(crate) steps: u64,
+    pub(crate) last_h: f32,
+    pub(crate) obstacles: crate::obstacles::ObstacleSet,
+    pub(crate) embed: crate::embed::EmbedState,
+    pub(crate) strands: Vec<crate::model::layout::StrandInfo>,
+    pub(crate) scalps: crate::strands::scalp::ScalpSet,
+    pub(crate) strand_area: Vec<f32>,
+    pub(crate) selfcol: crate::self_collision::SelfCollisionData,
+    /// Scratch of the force-based integrators (force arrays, implicit factorisation).
+    pub(crate) ms: crate::integrate::mass_spring::MassSpringState,
+    /// Per-stage wall time of the step, when on.
+    pub(crate) clock: crate::world::stage_clock::StageClock,
+}
+
+impl World {
+    /// An empty world.
+    pub fn new(params: SolverParams, effects: Effects) -> Result<World> {
+        params.validate()?;
+        effects.validate()?;
+        let pool = make_pool(params.threads)?;
+        Ok(World {
+            particles: Particles::new(),
+            distance: DistanceSet::default(),
+            distance_inputs: Vec::new(),
+            stretch: Vec::new(),
+            tethers: TetherSet::default(),
+            tether_inputs: Vec::new(),
+            triangles: Vec::new(),
+            cloths: Vec::new(),
+            damping_rate: Vec::new(),
+            has_damping: false,
+            fuse_predict: true,
+            damp_factor: Vec::new(),
+            damp_h: f32::NAN,
+            params,
+            effects,
+            wind: None,
+            pool,
+            backup: Default::default(),
+            time: 0.0,
+            steps: 0,
+            last_h: 0.0,
+            obstacles: Default::default(),
+            embed: Default::default(),
+            strands: Vec::new(),
+            scalps: Default::default(),
+            strand_area: Vec::new(),
+            selfcol: Default::default(),
+            ms: Default::default(),
+            clock: Default::default(),
+        })
+    }
+
+    /// Builds a cloth and adds it; returns its index in [`cloths`](Self::cloths).
+    pub fn add_cloth(&mut self, desc: &ClothDesc) -> Result<usize> {
+        let b = desc.build()?;
+        self.check_room_for(b.positions.len())?;
+        let first = self.particles.extend(&b.positions, &b.inv_mass);
+        let first_triangle = self.triangles.len() as u32;
+        self.push_edges(first, &b.edges);
+        for t in &b.tethers {
+            self.tether_inputs.push(crate::model::cloth::Tether {
+                particle: first + t.particle,
+                anchor: first + t.anchor,
+                max_len: t.max_len,
+            });
+        }
+        self.triangles
+            .extend(b.triangles.iter().map(|t| [first + t[0], first + t[1], first + t[2]]));
+        self.damping_rate.resize(self.particles.count(), desc.fabric.damping);
+        self.has_damping |= desc.fabric.damping > 0.0;
+        let cloth_index = self.cloths.len() as u32;
+        self.selfcol
+            .add_cloth(&b.positions, cloth_index, desc.spacing, desc.fabric.thickness);
+        self.cloths.push(ClothInfo {
+            first,
+            rows: desc.rows,
+            cols: desc.cols,
+            first_triangle,
+            triangle_count: b.triangles.len() as u32,
+            thickness: desc.fabric.thickness,
+        });
+        self.rebuild_topology();
+        Ok(self.cloths.len() - 1)
+    }
+
+    /// Refuses a piece that would overflow the `u32` particle indices (before anything changes).
+    pub(crate) fn check_room_for(&self, more: usize) -> Result<()> {
+        let total = self.particles.count() as u64 + more as u64 + 16;
+        if total >= u32::MAX as u64 {
+            return Err(WeftError::param("particles", total, "too many particles for u32 indices"));
+        }
+        Ok(())
+    }
+
+    /// Adds a piece's distance constraints (local indices offset by `first`); stretch ones also
+    /// feed the strain metric.
+    pub(crate) fn push_edges(&mut self, first: u32, edges: &[crate::model::cloth::Edge]) {
+        for e in edges {
+            let (a, bb) = (first + e.a, first + e.b);
+            self.distance_inputs.push(DistanceInput {
+                a,
+                b: bb,
+                rest: e.rest,
+                compliance: e.compliance,
+            });
+            if e.kind == ConstraintKind::Stretch {
+                self.stretch.push((a, bb, e.rest));
+            }
+        }
+    }
+
+    /// Re-lays out constraints and scratch after the particle count changed.
+    pub(crate) fn rebuild_topology(&mut self) {
+        let sink = self.particles.sink();
+        let len = self.particles.padded_len();
+        self.distance = DistanceSet::new(&self.distance_inputs, len, sink);
+        self.tethers = TetherSet::new(&self.tether_inputs, sink);
+        self.wind = self.new_wind_state();
+        self.damp_h = f32::NAN;
+        self.obstacles.invalidate();
+        self.ms = Default::default();
+        for b in &mut self.backup {
+            b.resize(len, 0.0);
+        }
+        self.embed_topology_changed();
+    }
+
+    /// Wind scratch when wind is named: triangle adjacency plus the strand drag areas.
+    fn new_wind_state(&self) -> Option<WindState> {
+        let len = self.particles.padded_len();
+        self.effects.wind.as_ref().map(|_| {
+            let mut w = WindState::new(&self.triangles, len);
+            if !self.strand_area.is_empty() {
+                w.strand_area = self.strand_area.clone();
+                w.strand_area.resize(len, 0.0);
+            }
+            w
+        })
+    }
+
+    /// The solver parameters.
+    pub fn params(&self) -> &SolverParams {
+        &self.params
+    }
+
+    /// Replaces the solver parameters (takes effect at the next step).
+    pub fn set_params(&mut self, params: SolverParams) -> Result<()> {
+        params.validate()?;
+        if params.threads != self.params.threads {
+            self.pool = make_pool(params.threads)?;
+        }
+        self.params = params;
+        Ok(())
+    }
+
+    /// The effects.
+    pub fn effects(&self) -> &Effects {
+        &self.effects
+    }
+
+    /// Replaces the effects (takes effect at the next step).
+    pub fn set_effects(&mut self, effects: Effects) -> Result<()> {
+        effects.validate()?;
+        self.effects = effects;
+        self.wind = self.new_wind_state();
+        Ok(())
+    }
+
+    /// Number of real particles.
+    pub fn particle_count(&self) -> usize {
+        self.particles.count()
+    }
+
+    /// Number of distance constraints.
+    pub fn constraint_count(&self) -> usize {
+        self.distance.len()
+    }
+
+    /// Number of tethers.
+    pub fn tether_count(&self) -> usize {
+        self.tethers.len()
+    }
+
+    /// The coloured distance constraints.
+    pub fn distance_set(&self) -> &DistanceSet {
+        &self.distance
+    }
+
+    /// Number of constraint colours.
+    pub fn colour_count(&self) -> usize {
+        self.distance.colours.len()
+    }
+
+    /// The particle arrays (padded; only the first [`particle_count`](Self::particle_count)
+    /// entries are real).
+    pub fn particles(&self) -> &Particles {
+        &self.particles
+    }
+
+    /// Positions as three slices of length `particle_count`.
+    pub fn positions(&self) -> [&[f32]; 3] {
+        let n = self.particles.count();
+        [&self.particles.x[..n], &self.particles.y[..n], &self.particles.z[..n]]
+    }
+
+    /// Velocities as three slices of length `particle_count`.
+    pub fn velocities(&self) -> [&[f32]; 3] {
+        let n = self.particles.count();
+        [&self.particles.vx[..n], &self.particles.vy[..n], &self.particles.vz[..n]]
+    }
+
+    /// Position of one particle as a `mint` point.
+    pub fn position(&self, i: usize) -> Result<mint::Point3<f32>> {
+        if i >= self.particles.count() {
+            return Err(WeftError::IndexOutOfRange {
+                name: "particle",
+                index: i,
+                len: self.particles.count(),
+            });
+        }
+        Ok(self.particles.position(i).into())
+    }
+
+    /// Writes interleaved positions into `out` (resized to `particle_count`).
+    pub fn positions_interleaved(&self, out: &mut Vec<[f32; 3]>) {
+        let n = self.particles.count();
+        out.clear();
+        out.extend((0..n).map(|i| self.particles.position(i)));
+    }
+
+    /// Render/collision triangles (global particle indices).
+    pub fn triangles(&self) -> &[[u32; 3]] {
+        &self.triangles
+    }
+
+    /// The cloths added so far.
+    pub fn cloths(&self) -> &[ClothInfo] {
+        &self.cloths
+    }
+
+    /// Simulated time, s.
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    /// Steps taken.
+    pub fn steps(&self) -> u64 {
+        self.steps
+    }
+
+    /// Sets the inverse mass of every real particle (0 pins a particle). Tethers keep the
+    /// anchors they were built with.
+    pub fn set_inverse_masses(&mut self, w: &[f32]) -> Result<()> {
+        let n = self.particles.count();
+        if w.len() != n {
+            return Err(WeftError::BufferLength {
+                name: "inverse masses",
+                got: w.len(),
+                expected: n,
+            });
+        }
+        if let Some(bad) = w.iter().find(|v| !(v.is_finite() && **v >= 0.0)) {
+            return Err(WeftError::param("inverse mass", bad, "must be finite and zero or greater"));
+        }
+        self.particles.w[..n].copy_from_slice(w);
+        self.damp_h = f32::NAN;
+        Ok(())
+    }
+
+    /// Sets the position of every real particle (predictions follow).
+    pub fn set_positions(&mut self, x: [&[f32]; 3]) -> Result<()> {
+        check_vec3_buffers(["x", "y", "z"], x, self.particles.count(), "positions must be finite")?;
+        let n = self.particles.count();
+        let p = &mut self.particles;
+        p.x[..n].copy_from_slice(x[0]);
+        p.y[..n].copy_from_slice(x[1]);
+        p.z[..n].copy_from_slice(x[2]);
+        p.px.copy_from_slice(&p.x);
+        p.py.copy_from_slice(&p.y);
+        p.pz.copy_from_slice(&p.z);
+        Ok(())
+    }
+
+    /// Sets the velocity of every real particle (e.g. initial conditions in tests).
+    pub fn set_velocities(&mut self, v: [&[f32]; 3]) -> Result<()> {
+        check_vec3_buffers(["vx", "vy", "vz"], v, self.particles.count(), "velocities must be finite")?;
+        let n = self.particles.count();
+        self.particles.vx[..n].copy_from_slice(v[0]);
+        self.particles.vy[..n].copy_from_slice(v[1]);
+        self.particles.vz[..n].copy_from_slice(v[2]);
+        Ok(())
+    }
+}
+
+fn make_pool(threads: usize) -> Result<Option<Arc<rayon::ThreadPool>>> {
+    if threads == 0 {
+        return Ok(None);
+    }
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map(|p| Some(Arc::new(p)))
+        .map_err(|e| WeftError::param("solver.threads", threads, format!("cannot start the thread pool: {e}")))
+}
+
+/// Checks three caller buffers: length `n` each, every value finite.
+fn check_vec3_buffers(names: [&'static str; 3], b: [&[f32]; 3], n: usize, reason: &str) -> Result<()> {
+    for (name, s) in names.into_iter().zip(b) {
+        if s.len() != n {
+            return Err(WeftError::BufferLength {
+                name,
+                got: s.len(),
+                expected: n,
+            });
+        }
+        if let Some(bad) = s.iter().find(|f| !f.is_finite()) {
+            return Err(WeftError::param(name, bad, reason));
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,433 @@
+//! The step, stage by stage, top to bottom.
+//!
+//! ```text
+//! step(dt):
+//!   kinematic pins: stop last step's moves, v = (target - x) / dt    [embed::kinematic]
+//!   keep a copy of x, v (guard; XPBD: chunk by chunk inside the first predict)
+//!   self-collision pair lists from x (hash or AABB tree)  [self-collision] (if on)
+//!   for each substep h = dt / substeps:
+//!     wind forces per triangle → per particle          [effects]        (if named)
+//!     predict: v += h g + h w f, drag; p = x + h v      [integrate]
+//!     obstacle contacts of x -> p, back along the path  [collide/obstacles] (if any)
+//!     speed clamp relative to the mean velocity        [self-collision]  (if on)
+//!     `iterations` sweeps: distance constraints by colour, tethers   [constraints]
+//!       obstacle projection                             [collide/obstacles] (if any)
+//!       strands pushed out of their scalps              [strands::scalp] (if any)
+//!     pair pass, velocity correction                    [self-collision]  (if on)
+//!     update: v = (p - x) / h, damping; x = p          [integrate]
+//!     obstacle velocity pass: normal part, friction     [collide/obstacles] (if any)
+//!       (both chunk by chunk in one pass; the last substep's pass also checks that the
+//!        chunk's x, v are finite, for the guard)
+//!   (solver.method = symplectic-euler | leapfrog | implicit-euler: the force-based step of
+//!    integrate::mass_spring / integrate::implicit replaces the substep loop above; its drift
+//!    feeds the obstacle and self-collision stages as the prediction p, integrate::contacts)
+//!   on a non-finite value: restore the copy, replay the step with a check after every stage
+//!   to name the stage and particle, and return `Diverged`
+//!
+//! The guard costs no pass of its own over the particles (at 1M particles a copy of x, v
+//! and a scan of them take milliseconds): the copy is made in the first predict's chunks,
+//! which read x and v anyway, and the check in the last update's chunks, while they are in
+//! cache. The force-based methods keep the separate copy and scan.
+//!   kinematic pins land exactly on their targets                     [embed::kinematic]
+//! ```
+
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use crate::data::particles::chunk_finite_simd;
+use crate::error::{positive, Result, WeftError};
+use crate::integrate::{predict, update, PredictParams};
+use crate::model::params::{Backend, Method};
+use crate::self_collision::response::MeanParts;
+use crate::self_collision::response::{clamp_speed, ClampParams};
+use crate::self_collision::{mean_velocity, Active, TRAVEL_FACTOR};
+use crate::world::keep_awake;
+use crate::world::World;
+
+/// Index of the first entry below `n` that is not finite in any of `arrays`.
+fn first_non_finite(arrays: &[&[f32]], n: usize) -> Option<usize> {
+    (0..n).find(|&i| arrays.iter().any(|a| !a[i].is_finite()))
+}
+
+/// What a run of the XPBD substeps found.
+enum Ran {
+    /// Nothing wrong (or nothing checked).
+    Clean,
+    /// The guard's check in the last update found a non-finite value.
+    NonFinite,
+    /// The stage-by-stage check (a replay) found the first non-finite value.
+    Found(usize, &'static str),
+}
+
+impl World {
+    /// Advances the world by `dt` seconds.
+    ///
+    /// With [`guard`](crate::SolverParams::guard) on (the default), a step that produces a
+    /// non-finite value restores the state from before the step and returns
+    /// [`WeftError::Diverged`] naming the first bad particle and the stage that produced it;
+    /// the user's state is never overwritten with NaN.
+    pub fn step(&mut self, dt: f32) -> Result<()> {
+        positive("dt", dt)?;
+        self.clock.start();
+        self.begin_kinematic(dt);
+        let guard = self.params.guard;
+        let method = self.params.method;
+        // XPBD saves the state inside its first predict pass.
+        if guard && method != Method::Xpbd {
+            self.save_backup();
+        }
+        self.clock.lap("pins, guard backup");
+        let ran = match method {
+            Method::Xpbd => Ok(self.in_pool(|w| w.run_substeps(dt, false))),
+            m => self.in_pool(|w| w.run_mass_spring(dt, m)).map(|_| Ran::Clean),
+        };
+        if guard && method != Method::Xpbd && (ran.is_err() || self.particles.first_non_finite().is_some()) {
+            let particle = self.particles.first_non_finite().unwrap_or(0);
+            self.restore_backup();
+            return Err(ran.err().unwrap_or(WeftError::Diverged {
+                particle,
+                stage: method.name(),
+            }));
+        }
+        let ran = ran?;
+        self.clock.lap("leave pool");
+        if matches!(ran, Ran::NonFinite) {
+            self.restore_backup();
+            let found = self.in_pool(|w| w.run_substeps(dt, true));
+            self.restore_backup();
+            let (particle, stage) = match found {
+                Ran::Found(i, stage) => (i, stage),
+                _ => (self.particles.first_non_finite().unwrap_or(0), "step"),
+            };
+            return Err(WeftError::Diverged { particle, stage });
+        }
+        self.clock.lap("guard check");
+        self.finish_kinematic();
+        self.time += dt as f64;
+        self.steps += 1;
+        self.clock.stop("step end");
+        Ok(())
+    }
+
+    fn in_pool<R: Send>(&mut self, f: impl FnOnce(&mut World) -> R + Send) -> R {
+        match self.pool.clone() {
+            // The scalar backend is single-threaded: no pool to enter.
+            _ if self.embed.caller_thread_only || self.params.backend == Backend::Scalar => f(self),
+            // The pool's other workers poll for work through the step's serial parts instead
+            // of sleeping between the passes (`keep_awake`).
+            Some(pool) => pool.install(|| keep_awake::run(|| f(self))),
+            // Enter the global pool once per step (one injected job instead of one per kernel).
+            None => rayon::scope(|_| keep_awake::run(|| f(self))),
+        }
+    }
+
+    fn save_backup(&mut self) {
+        let p = &self.particles;
+        for (dst, src) in self.backup.iter_mut().zip([&p.x, &p.y, &p.z, &p.vx, &p.vy, &p.vz]) {
+            dst.resize(src.len(), 0.0);
+            dst.copy_from_slice(src);
+        }
+    }
+
+    fn restore_backup(&mut self) {
+        let p = &mut self.particles;
+        for (src, dst) in self
+            .backup
+            .iter()
+            .zip([&mut p.x, &mut p.y, &mut p.z, &mut p.vx, &mut p.vy, &mut p.vz])
+        {
+            dst.copy_from_slice(src);
+        }
+        p.px.copy_from_slice(&p.x);
+        p.py.copy_from_slice(&p.y);
+        p.pz.copy_from_slice(&p.z);
+    }
+
+    /// Runs the substeps. With `check`, stops at the first stage that leaves a non-finite
+    /// value and returns it as [`Ran::Found`]; without (the fast path), with the guard on, saves
+    /// the state in the first predict and checks the end state in the last update
+    /// ([`Ran::NonFinite`]).
+    fn run_substeps(&mut self, dt: f32, check: bool) -> Ran {
+        self.clock.lap("enter pool");
+        let n = self.particles.count();
+        let n_sub = self.params.substeps;
+        let h = dt / n_sub as f32;
+        let simd = self.params.backend == Backend::Simd;
+        let parallel = simd && !self.embed.caller_thread_only;
+        if self.has_damping && self.damp_h != h {
+            // In place (no allocation once sized). Pinned particles are kinematic: not damped.
+            let (rate, w) = (&self.damping_rate, &self.particles.w);
+            self.damp_factor.resize(self.particles.padded_len(), 1.0);
+            for (i, f) in self.damp_factor.iter_mut().enumerate() {
+                let c = rate.get(i).copied().unwrap_or(0.0);
+                *f = if w[i] > 0.0 { 1.0 / (1.0 + c * h) } else { 1.0 };
+            }
+            self.damp_h = h;
+        }
+        let inv_h2 = 1.0 / (h * h);
+        self.last_h = h;
+        macro_rules! checkpoint {
+            ($stage:literal, $($a:expr),+) => {
+                if check {
+                    if let Some(i) = first_non_finite(&[$(&$a[..]),+], n) {
+                        return Ran::Found(i, $stage);
+                    }
+                }
+            };
+        }
+        let has_obstacles = !self.obstacles.is_empty();
+        let fused_guard = self.params.guard && !check;
+        let all_finite = std::sync::atomic::AtomicBool::new(true);
+        if has_obstacles {
+            self.obstacles.prepare(&self.particles, &self.cloths, &self.strands);
+        }
+        let sc_start = std::time::Instant::now();
+        let sc = {
+            let p = &self.particles;
+            let on = self.selfcol.begin_step([&p.x, &p.y, &p.z], n, &self.damping_rate);
+            on.unwrap_or(false).then(|| self.selfcol.active()).flatten()
+        };
+        let mut sc_time = sc_start.elapsed();
+        if sc.is_some() {
+            let p = &self.particles;
+            let steps = self.steps;
+            self.selfcol.record_start_state([&p.x, &p.y, &p.z], n, steps, parallel);
+        }
+        self.clock.lap("step setup");
+        // Without wind nothing runs between a substep's update and the next substep's predict,
+        // and both are element-wise, so the update pass runs the next predict on each chunk
+        // while it is in cache: the same bits as two passes, one sweep over 1M particles fewer
+        // a substep.
+        let fuse_next = self.fuse_predict && !check && self.effects.wind.is_none() && self.wind.is_none();
+        // The speed clamp's mean velocity, summed by the predict pass chunk by chunk while the
+        // velocities are in cache (the same sums as `mean_velocity`); obstacles change
+        // velocities between predict and the clamp, so they keep the separate pass.
+        // Its time is self-collision time: summed over the chunks, shared by the threads
+        // (like the obstacles' velocity pass below), and added to the stage's.
+        let mean_ns = AtomicU64::new(0);
+        let mean_parts = (sc.is_some() && self.fuse_predict && !check && !has_obstacles).then(|| MeanParts::new(n));
+        let mean_sink = mean_parts.as_ref().map(|m| (m, &mean_ns));
+        let mut predicted_ahead = false;
+        for s in 0..n_sub {
+            let t = self.time + (s as f64) * (h as f64);
+            if let (Some(w), Some(state)) = (&self.effects.wind, &mut self.wind) {
+                let p = &self.particles;
+                state.compute(w, t, &self.triangles, [&p.x, &p.y, &p.z], [&p.vx, &p.vy, &p.vz], parallel);
+                checkpoint!("wind", state.fx, state.fy, state.fz);
+                self.clock.lap("wind");
+            }
+            {
+                let force = self.wind.as_ref().map(|w| [&w.fx[..], &w.fy[..], &w.fz[..]]);
+                let pp = PredictParams {
+                    h,
+                    gravity: self.effects.gravity,
+                    drag: self.effects.drag,
+                    force,
+                };
+                if predicted_ahead {
+                    // done by the previous substep's update pass
+                } else if fused_guard && s == 0 {
+                    self.particles.for_chunks_saving(parallel, &mut self.backup, |mut c, saved| {
+                        for (dst, src) in saved.into_iter().zip(c.state()) {
+                            dst.copy_from_slice(src);
+                        }
+                        predict(c.reborrow(), &pp, simd);
+                        add_mean(mean_sink, &c, n, simd);
+                    });
+                } else {
+                    self.particles.for_chunks(parallel, |mut c| {
+                        predict(c.reborrow(), &pp, simd);
+                        add_mean(mean_sink, &c, n, simd);
+                    });
+                }
+            }
+            {
+                let p = &self.particles;
+                checkpoint!("predict", p.px, p.py, p.pz, p.vx, p.vy, p.vz);
+            }
+            self.clock.lap("predict");
+            if has_obstacles {
+                let t0 = std::time::Instant::now();
+                let t_end = self.time + ((s + 1) as f64) * (h as f64);
+                self.obstacles.generate(&self.particles, t_end, h, parallel, simd);
+                self.obstacles.resolve(&mut self.particles, h, parallel, simd);
+                self.obstacles.add_busy(t0);
+                let p = &self.particles;
+                checkpoint!("obstacles", p.px, p.py, p.pz);
+                self.clock.lap("obstacle contacts");
+            }
+            if let Some(a) = sc {
+                let t0 = std::time::Instant::now();
+                let mean = mean_parts.as_ref().map(MeanParts::mean);
+                self.self_collision_clamp(a, n_sub, h, parallel, simd, mean);
+                sc_time += t0.elapsed();
+                let p = &self.particles;
+                checkpoint!("self-collision clamp", p.px, p.py, p.pz, p.vx, p.vy, p.vz);
+                self.clock.lap("self-collision clamp");
+            }
+            self.distance.reset_lambda();
+            for _ in 0..self.params.iterations {
+                let p = &mut self.particles;
+                if simd {
+                    self.distance.solve_simd(&mut p.px, &mut p.py, &mut p.pz, &p.w, inv_h2, parallel);
+                } else {
+                    self.distance.solve_scalar(&mut p.px, &mut p.py, &mut p.pz, &p.w, inv_h2);
+                }
+                checkpoint!("constraints", p.px, p.py, p.pz);
+                self.clock.lap("distance constraints");
+                if !self.tethers.is_empty() {
+                    if simd {
+                        self.tethers.solve_simd(&mut p.px, &mut p.py, &mut p.pz, parallel);
+                    } else {
+                        self.tethers.solve_scalar(&mut p.px, &mut p.py, &mut p.pz);
+                    }
+                    checkpoint!("tethers", p.px, p.py, p.pz);
+                    self.clock.lap("tethers");
+                }
+                if has_obstacles {
+                    let t0 = std::time::Instant::now();
+                    self.obstacles.project(p, parallel, simd);
+                    self.obstacles.add_busy(t0);
+                    checkpoint!("obstacles", p.px, p.py, p.pz);
+                    self.clock.lap("obstacle projection");
+                }
+                if !self.scalps.is_empty() {
+                    if parallel {
+                        self.scalps.solve(&mut p.px, &mut p.py, &mut p.pz, &p.w);
+                    } else {
+                        self.scalps.solve_scalar(&mut p.px, &mut p.py, &mut p.pz, &p.w);
+                    }
+                    checkpoint!("scalp", p.px, p.py, p.pz);
+                    self.clock.lap("scalp");
+                }
+            }
+            if let Some(a) = sc {
+                let t0 = std::time::Instant::now();
+                self.self_collision_pairs_pass(a, h, parallel, simd);
+                sc_time += t0.elapsed();
+                let p = &self.particles;
+                checkpoint!("self-collision", p.px, p.py, p.pz);
+                self.clock.lap("self-collision pairs");
+            }
+            let damp = self.has_damping.then_some(&self.damp_factor[..]);
+            if !check {
+                // update, the obstacle velocity pass and (last substep) the guard's check,
+                // chunk by chunk: element-wise, so the same bits as three passes
+                let last = fused_guard && s + 1 == n_sub;
+                let ahead = fuse_next && s + 1 < n_sub;
+                let pp_next = PredictParams {
+                    h,
+                    gravity: self.effects.gravity,
+                    drag: self.effects.drag,
+                    force: None,
+                };
+                let motion = if has_obstacles { self.obstacles.motion() } else { Vec::new() };
+                let (obstacles, finite) = (&self.obstacles, &all_finite);
+                let velocity_ns = std::sync::atomic::AtomicU64::new(0);
+                self.particles.for_chunks(parallel, |mut c| {
+                    update(c.reborrow(), h, damp, simd);
+                    if has_obstacles {
+                        let t0 = std::time::Instant::now();
+                        obstacles.velocity_pass_chunk(&motion, &mut c, simd);
+                        let ns = t0.elapsed().as_nanos() as u64;
+                        velocity_ns.fetch_add(ns, std::sync::atomic::Ordering::Relaxed);
+                    }
+                    if last {
+                        let real = n.saturating_sub(c.start).min(c.x.len());
+                        if !chunk_finite_simd(&c.state(), real) {
+                            finite.store(false, std::sync::atomic::Ordering::Relaxed);
+                        }
+                    }
+                    if ahead {
+                        predict(c.reborrow(), &pp_next, simd);
+                        add_mean(mean_sink, &c, n, simd);
+                    }
+                });
+                predicted_ahead = ahead;
+                if has_obstacles {
+                    // the velocity part's time summed over chunks, shared by the threads
+                    let threads = if parallel { rayon::current_num_threads() as u64 } else { 1 };
+                    let ns = velocity_ns.into_inner() / threads.max(1);
+                    self.obstacles.add_duration(std::time::Duration::from_nanos(ns));
+                }
+                self.clock.lap("update, obstacle velocity, next predict");
+                continue;
+            }
+            self.particles.for_chunks(parallel, |c| update(c, h, damp, simd));
+            let p = &self.particles;
+            checkpoint!("update", p.x, p.y, p.z, p.vx, p.vy, p.vz);
+            self.clock.lap("update");
+            if has_obstacles {
+                let t0 = std::time::Instant::now();
+                self.obstacles.velocity_pass(&mut self.particles, parallel, simd);
+                self.obstacles.add_busy(t0);
+                let p = &self.particles;
+                checkpoint!("obstacles", p.vx, p.vy, p.vz);
+                self.clock.lap("obstacle velocity");
+            }
+        }
+        if sc.is_some() && !check {
+            let threads = if parallel { rayon::current_num_threads() as u64 } else { 1 };
+            sc_time += std::time::Duration::from_nanos(mean_ns.into_inner() / threads.max(1));
+            self.selfcol.stats.time_s += sc_time.as_secs_f64();
+            self.selfcol.stats.steps += 1;
+        }
+        if all_finite.into_inner() {
+            Ran::Clean
+        } else {
+            Ran::NonFinite
+        }
+    }
+}
+
+impl World {
+    /// The self-collision speed clamp (relative to the mean velocity, at most
+    /// `TRAVEL_FACTOR d / substeps` per substep), then the predictions kept as box centres.
+    /// `mean` is the mean velocity when the predict pass summed it already.
+    pub(crate) fn self_collision_clamp(&mut self, a: Active, n_sub: u32, h: f32, parallel: bool, simd: bool, mean: Option<[f32; 3]>) {
+        let n = self.particles.count();
+        let p = &self.particles;
+        let mean = mean.unwrap_or_else(|| mean_velocity([&p.vx, &p.vy, &p.vz], &p.w, n, parallel, simd));
+        let cp = ClampParams {
+            mean,
+            limit: TRAVEL_FACTOR * a.d / n_sub as f32,
+            h,
+        };
+        // Each chunk also copies the predictions of its active blocks (one parallel pass),
+        // unless the correction derives them (no obstacles).
+        let sink = self.selfcol.prediction_sink(self.obstacles.is_empty());
+        self.particles.for_chunks(parallel, |mut c| {
+            clamp_speed(c.reborrow(), &cp, simd);
+            if let Some(s) = &sink {
+                s.keep(c.start, [&*c.px, &*c.py, &*c.pz]);
+            }
+        });
+    }
+
+    /// The self-collision pair pass and its correction of the predictions `p`.
+    pub(crate) fn self_collision_pairs_pass(&mut self, a: Active, h: f32, parallel: bool, simd: bool) {
+        let n = self.particles.count();
+        let p = &self.particles;
+        self.selfcol
+            .pair_pass([&p.x, &p.y, &p.z], [&p.px, &p.py, &p.pz], &p.w, n, parallel, simd);
+        let ap = a.apply_params(h);
+        let derive = self.selfcol.derives_centres(self.obstacles.is_empty());
+        let p = &mut self.particles;
+        let v = derive.then_some([&p.vx[..], &p.vy[..], &p.vz[..]]);
+        self.selfcol
+            .apply([&p.x, &p.y, &p.z], &p.w, v, [&mut p.px, &mut p.py, &mut p.pz], ap, parallel, simd);
+    }
+}
+
+/// Adds a chunk's predicted velocities to the mean-velocity sums, when they are kept, and
+/// the time it took to the nanoseconds counter beside them.
+fn add_mean(sink: Option<(&MeanParts, &AtomicU64)>, c: &crate::data::particles::ParticleChunk<'_>, n: usize, simd: bool) {
+    if let Some((m, ns)) = sink {
+        let t0 = std::time::Instant::now();
+        m.add(c.start, [&c.vx[..], &c.vy[..], &c.vz[..]], c.w, n, simd);
+        ns.fetch_add(t0.elapsed().as_nanos() as u64, Ordering::Relaxed);
+    }
+}
+
+#[cfg(test)]
+#[path = "step_fusion_tests.rs"]
+mod fusion_tests;
