@@ -1,6 +1,6 @@
 //! Collision detection.
 //!
-//! **Obstacles** (SEEDS.md section D, Landovskaya, Landovsky & Frolovsky): a validated
+//! **Obstacles** (Landovskaya, Landovsky & Frolovsky): a validated
 //! [`mesh::TriMesh`] (from arrays or [`mesh_obj`] files), three interchangeable face
 //! broadphases behind [`face_broadphase::FaceBroadphase`] (the paper's uniform [`grid`], a
 //! [`bvh`], a [`face_hash`]), the segment/proximity [`narrow`]phase, the position/velocity
@@ -10,10 +10,10 @@
 //!
 //! **Self-collision**: finding, for every particle, the particles within a distance
 //! `max_dist`, two methods with one answer:
-//! * [`hash::SpatialHash`] — the spatial hash of SEEDS section C (Müller's dense hash: cells of
+//! * [`hash::SpatialHash`] — Müller's dense spatial hash ("Ten Minute Physics": cells of
 //!   side `spacing`, counting sort into `cell_start` / `cell_entries`, 27-cell queries). Built
 //!   once per step, before the substeps.
-//! * [`particle_tree::ParticleTree`] — the box hierarchy of SEEDS section A (VcCPBD): an AABB
+//! * [`particle_tree::ParticleTree`] — the box hierarchy of the VcCPBD paper (Shapri, Sulaiman & Bade 2016): an AABB
 //!   tree built once and refitted every step.
 //!
 //! Both fill a [`neighbours::Neighbours`] (CSR lists, the paper's `firstAdjId` / `adjIds`) with
