@@ -30,8 +30,7 @@
 //!
 //! # Scans
 //! Only the active blocks are checked for displacement and copied
-//! ([`max_disp2_blocks`](super::self_near_moves::max_disp2_blocks)): every near pair has both
-//! ends in them. A rebuild tests eight candidates at a time from an `[x, y, z, 0]` copy of the
+//! (`self_near_moves::max_disp2_blocks`): every near pair has both ends in them. A rebuild tests eight candidates at a time from an `[x, y, z, 0]` copy of the
 //! positions, and runs in parallel over ranges of particles of about
 //! [`NEAR_CHUNK`](super::self_near_scan::NEAR_CHUNK) candidate entries, each range into its own
 //! buffer, joined in order: the same list on any thread count. The eight-lane gathers take no
