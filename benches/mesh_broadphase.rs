@@ -1,4 +1,4 @@
-//! The paper's table (SEEDS.md section D) as a micro-benchmark: one contact query per cloth
+//! The table of Landovskaya, Landovsky & Frolovsky as a micro-benchmark: one contact query per cloth
 //! particle against a dress form, for each broadphase. The paper's runs: 32500 particles
 //! against 4800 faces with grids 1x1x1, 5x5x5, 15x30x15, and 15000 particles against 8350
 //! faces with 1x1x1 and 25x25x25. Particles sit near the surface (as cloth draped on a form):

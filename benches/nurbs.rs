@@ -1,4 +1,4 @@
-//! NURBS evaluation: local against global per point (SEEDS.md B), and the SIMD batch kernels
+//! NURBS evaluation: local against global per point (the NURBS thesis' claim), and the SIMD batch kernels
 //! against their scalar twins.
 //!
 //! Run briefly with `cargo bench --bench nurbs -- --warm-up-time 1 --measurement-time 2`.

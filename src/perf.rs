@@ -67,7 +67,7 @@ pub fn cloth_world(n: usize, threads: usize) -> Result<World> {
     Ok(w)
 }
 
-/// The fold of `weft reproduce vccpbd` (SEEDS.md section A): a `size x size` cloth of 1 m
+/// The fold of `weft reproduce vccpbd` (Shapri, Sulaiman & Bade 2016, VcCPBD): a `size x size` cloth of 1 m
 /// in `fabric` with the thickness of its spacing, hung over its middle row 1.5 m up, so that
 /// both halves fall and fold face to face, with `self_collision` on. `params` gives threads,
 /// substeps, iterations and backend; its `dt` is replaced by the fabric's, which is also

@@ -1,4 +1,4 @@
-//! Mesh-obstacle collision invariants (SEEDS.md section D): every broadphase gives the same
+//! Mesh-obstacle collision invariants (after Landovskaya, Landovsky & Frolovsky): every broadphase gives the same
 //! contacts bit for bit, crossing segments never tunnel, degenerate positions give no NaN,
 //! and the parallel batch equals the serial one for any thread count.
 

@@ -12,12 +12,8 @@
 //! [block plan](super::blocks) lets the kernel use contiguous loads and stores (or a fixed
 //! permutation of a 16-particle window) instead of gathers and scatters.
 //!
-//! Tried and not kept: the whole sweep as one rayon broadcast with the threads of a private
-//! pool meeting at a spinning barrier between colours (instead of a fork and join per colour).
-//! The same bits, but on `weft reproduce landovsky --only "4800 grid 15x30x15"` the median wall
-//! time was 0.762 s against 0.748 s (14 alternating runs each, idle machine) and, with another
-//! process busy on the second core, 1.72 s against 1.35 s: a barrier waits for a descheduled
-//! thread where work stealing does not.
+//! Each colour is a rayon fork and join, not a spinning barrier between colours on a private
+//! pool: a barrier waits for a descheduled thread where work stealing does not.
 
 use rayon::prelude::*;
 

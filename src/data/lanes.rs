@@ -2,8 +2,9 @@
 //!
 //! Kernels are written over [`Vec3x8`] (eight 3-vectors in three `f32x8` registers) and read
 //! like the math. Particle arrays are padded to a multiple of [`LANES`] so that hot loops have
-//! no scalar tail. Gather and scatter are the only places that index particle arrays through
-//! constraint indices; they are here so that the `unsafe` they need lives in one file.
+//! no scalar tail. The unchecked loads, gathers and scatters, and the shared write handle
+//! [`SharedVec3`], are defined here with their safety contracts; their callers (the
+//! constraint, spring and self-collision kernels) check the indices once before using them.
 //!
 //! No kernel uses fused multiply-add: `a * b + c` rounds twice in both the SIMD kernels and
 //! their scalar twins, so the two agree bit for bit whatever target features the build enables.
@@ -186,14 +187,11 @@ pub fn idx8(f: impl Fn(usize) -> u32) -> Idx8 {
 /// `_mm256_set_ps` of eight scalar loads (an array on the stack, reloaded as a vector, cost
 /// a store-forwarding stall that made the self-collision candidate test twice as slow,
 /// measured). Pure data movement: no result bit depends on it. The AVX2 hardware gather
-/// (`vgatherdps`, the indices checked against the length first) measured slower on this
-/// Zen 3 machine (session 12, self-collision timeline, basic VcCPBD, one thread, three
-/// alternate runs: pairs column 41.4-42.8 -> 44.4-46.3 ms).
+/// (`vgatherdps`) is not used: it was slower than eight scalar loads on Zen 3.
 #[inline(always)]
 pub fn gather1(s: &[f32], idx: &Idx8) -> F32s {
     // Its own checked loads rather than a check of the largest index and
-    // [`gather1_unchecked`]: that cost the distance solve's gathers 2.4% more instructions
-    // (callgrind over the self-collision timeline, 1 798 -> 1 841 million).
+    // [`gather1_unchecked`]: that cost the distance solve's gathers more instructions.
     let g = |l: usize| s[idx[l] as usize];
     let v = [g(0), g(1), g(2), g(3), g(4), g(5), g(6), g(7)];
     #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]

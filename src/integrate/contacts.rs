@@ -7,18 +7,18 @@
 //! (`src/step.rs`) run on it exactly as they do after XPBD's constraint sweeps:
 //!
 //! ```text
-//! obstacle contacts of x -> p, back along the path     [collide/obstacles]  (if any)
+//! obstacle contacts of x -> p, back along the path     [obstacles]         (if any)
 //! speed clamp relative to the mean velocity            [self-collision]     (if on)
-//! obstacle projection                                  [collide/obstacles]  (if any)
+//! obstacle projection                                  [obstacles]         (if any)
 //! strands pushed out of their scalps                   [strands::scalp]     (if any)
 //! pair pass, velocity correction                       [self-collision]     (if on)
 //! update: v += (p - p_drift) / h;  x = p                [integrate/contacts]
-//! obstacle velocity pass: normal part, friction        [collide/obstacles]  (if any)
+//! obstacle velocity pass: normal part, friction        [obstacles]         (if any)
 //! ```
 //!
 //! The velocity changes only by what the collision stages moved the prediction: the position
 //! correction becomes a velocity change, as in position-based dynamics (Müller et al. 2006,
-//! section 3.5; the obstacle stages are SEEDS.md section D's). XPBD's update `v = (p - x) / h`
+//! section 3.5; the obstacle stages follow Landovskaya, Landovsky & Frolovsky). XPBD's update `v = (p - x) / h`
 //! would be the same in exact arithmetic, but not in f32 at small substeps: when `h v` is below
 //! half an ulp of `x` the drift rounds back to `x`, and recomputing `v` from positions would
 //! zero the velocity every substep, so a cloth at rest would never start to fall (measured: at

@@ -17,7 +17,7 @@
 //!
 //! followed in both by drag `v <- v / (1 + h w c_drag)` and fabric damping `v <- v / (1 + c h)`
 //! (the same factors as the XPBD update). Symplectic Euler is first order. The leapfrog update
-//! SEEDS.md section D quotes, `v_{n+1} = v_n + h M⁻¹F(r_n, v_n)`, `r_{n+1} = r_n + h v_{n+1}`,
+//! of Landovskaya, Landovsky & Frolovsky, `v_{n+1} = v_n + h M⁻¹F(r_n, v_n)`, `r_{n+1} = r_n + h v_{n+1}`,
 //! is symplectic Euler when read with whole-step velocities; it is leapfrog, and second order,
 //! when `v` is read as the velocity half a step later — which is what kick-drift-kick computes
 //! while still reporting velocities at whole steps. Its force at the end of a substep is the

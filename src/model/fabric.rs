@@ -1,4 +1,4 @@
-//! Fabric descriptions and the four presets of the VcCPBD paper (SEEDS.md section A).
+//! Fabric descriptions and the four presets of the VcCPBD paper (Shapri, Sulaiman & Bade 2016).
 //!
 //! The paper gives, per fabric, the time step, the particle mass and a damping coefficient:
 //!

@@ -3,9 +3,9 @@
 //!
 //! A contact is a *tangent plane*: a point on the obstacle's surface, the outward unit normal
 //! there, and the depth `Th - n.(p - point)`, how far `p` must move along the normal to stand
-//! the cloth thickness `Th` off the surface (SEEDS.md section D: "stand off the face by the
+//! the cloth thickness `Th` off the surface (Landovskaya, Landovsky & Frolovsky: "stand off the face by the
 //! fabric thickness"). The solver keeps `n.(p - point) >= Th` as an inequality constraint
-//! (`src/collide/obstacles.rs`).
+//! (`src/obstacles/`).
 //!
 //! Two tests, in this order (the same two as the mesh narrowphase, `narrow.rs`):
 //!

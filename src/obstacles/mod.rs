@@ -1,5 +1,5 @@
 //! Obstacles in the world: analytic [`Shape`]s and triangle meshes, static or moving with a
-//! constant velocity, and their part of the step (SEEDS.md section D).
+//! constant velocity, and their part of the step (Landovskaya, Landovsky & Frolovsky).
 //!
 //! Per substep of length `h` ending at time `t` (`src/step.rs`):
 //!

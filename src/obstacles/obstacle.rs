@@ -1,6 +1,6 @@
 //! An obstacle of the world: its geometry (an analytic [`Shape`] or a triangle mesh with its
 //! broadphase, face memories and kept candidate lists), its constant velocity and its own
-//! friction coefficient (SEEDS.md section D). The step's stages live in
+//! friction coefficient (Landovskaya, Landovsky & Frolovsky). The step's stages live in
 //! [`obstacles`](crate::obstacles).
 //!
 //! A moving obstacle's place is a function of time, `start + u t` ([`displacement`]), never an

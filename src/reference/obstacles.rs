@@ -1,5 +1,5 @@
 //! Analytic obstacles in f64 for the reference step: plane, sphere, capsule and box, static or
-//! moving with a constant velocity (SEEDS.md section D; the world's version is
+//! moving with a constant velocity (Landovskaya, Landovsky & Frolovsky; the world's version is
 //! `src/collide/{shapes,obstacles,obstacle_kernels}.rs`).
 //!
 //! This is a second, deliberately naive reading of the same response, written from the method

@@ -1,5 +1,5 @@
 //! Cloth self-collision in f64 for the reference step: particle–particle contacts with the
-//! world's rules (SEEDS.md sections A and C; the world's version is
+//! world's rules (Shapri, Sulaiman & Bade 2016 and Müller's "Ten Minute Physics"; the world's version is
 //! `src/collide/{self_collision,self_pairs,response}.rs`), read naively.
 //!
 //! With `d` the collision distance and `r_i` the rest (initial grid) position of particle `i`:
@@ -16,7 +16,7 @@
 //!   that is free, using the predictions `p` of all particles (Jacobi):
 //!
 //! ```text
-//! same cloth and |p_i - p_j| > |r_i - r_j|: no contact (section C's rest rule)
+//! same cloth and |p_i - p_j| > |r_i - r_j|: no contact (Müller's rest rule)
 //! min_dist = min(d, |r_i - r_j|) (d for two cloths);  contact if |p_i - p_j| < min_dist
 //! n = (p_i - p_j)/|p_i - p_j|, else the rest direction, else ±(1,2,3)/√14 by id order
 //! PBD, VcCPBD: c_i += w_i/(w_i + w_j) (min_dist - dist) n

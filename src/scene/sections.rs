@@ -308,7 +308,7 @@ pub enum ClothSurface {
     /// The simulation's own triangles.
     #[default]
     Triangles,
-    /// A cubic NURBS surface whose control points are the particle grid (SEEDS.md B).
+    /// A cubic NURBS surface whose control points are the particle grid (after the NURBS thesis on strands and surfaces).
     Nurbs,
 }
 

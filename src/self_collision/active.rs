@@ -17,36 +17,15 @@
 //!
 //! Per substep the pass computes each contact once for both of its particles
 //! ([`crate::self_collision::pairs::PairCtx::pair_contact`], the same bits as one computation per end;
-//! the compact-step test holds it to the per-particle form), and writes and later zeroes only
-//! the sums of the particles that received a contact (a folded cloth: ~200 contacts spread
-//! over ~170 blocks, whose whole-block zeroing and storing cost four times the contacts,
-//! measured). The correction runs on the touched blocks, consecutive ones in one kernel call.
-//! A particle's sums are zeroed only when its contacts ended (session 5: most contacts last
-//! several substeps, and zeroing then storing them again cost ~60 of the ~1 290 million
-//! instructions of the fold's pair phase; callgrind, timeline example, 150 steps, 1 thread:
-//! 1 292 to 1 230 million, same bits).
+//! the compact-step test holds it to the per-particle form). The contacts are computed in the
+//! parallel candidate search, so the serial part only adds them into the sums. Only the sums
+//! of particles that received a contact are written, and a particle's sums are zeroed only
+//! when its contacts end (most contacts last several substeps; a folded cloth has a few
+//! hundred contacts spread over many blocks, and zeroing whole blocks would cost more than
+//! the contacts). The correction runs on the touched blocks, consecutive ones in one kernel
+//! call.
 //!
-//! Session 6: the contact of each candidate pair ([`PairCtx::pair_contact`]: square root,
-//! division, the rest data) is computed in the parallel candidate search, so the serial part
-//! only adds them. Timers around the two parts (timeline example, 150 steps, two threads,
-//! ~205 candidate pairs a substep): the serial part 13.0 -> 8.4 ms over the run, the parallel
-//! part 10.2 -> 10.7 ms.
-//!
-//! Tried in session 8 on the tethered fold (`weft reproduce vccpbd --tethers 0`: ~4 000
-//! contacts and ~8 000 particles with a contact a substep, where the serial part took about
-//! 1.7 times the parallel search) and not kept:
-//! * the serial part split over ranges of particles, each task walking all the contacts and
-//!   adding only its own particles' sides (the same bits): each of two halves took as long
-//!   as the whole serial walk (timers: ~80 µs either way on two threads);
-//! * finishing and storing the sums block by block in ascending order instead of in
-//!   first-contact order (perf annotate put the loads of that loop on top): one thread,
-//!   `--repeat 3`, sum of the 12 tethered hash rows 16.50-16.92 ms against 16.52-16.64.
-//!
-//! Tried in session 13 and not kept: the contacts computed without bounds checks (the
-//! candidates' largest id checked once against every array `pair_contact` reads): callgrind
-//! over the timeline, one thread, pair phase 728.0 -> 711.1 million instructions, but seven
-//! alternate runs gave the same pairs column (38.9-40.2 against 38.2-41.0 ms): the contacts'
-//! scattered loads, not their checks, set the pace.
+//! The contacts keep their bounds checks: the scattered loads, not the checks, set the pace.
 
 use rayon::prelude::*;
 
@@ -79,9 +58,8 @@ pub(crate) struct ApplyParams {
 /// Where the predicted positions of the active blocks are copied to (the box centres of the
 /// correction), from any chunk of whole blocks, on any thread ([`ActiveSet::prediction_sink`]).
 ///
-/// Session 6: the copy ran serially after the clamp's parallel pass (timers, timeline
-/// example, two threads: 0.018 ms a step, about as much as the clamp itself); each chunk of
-/// the clamp now copies its own blocks.
+/// Each chunk of the clamp's parallel pass copies its own blocks (a serial copy after it cost
+/// about as much as the clamp).
 pub(crate) struct PredictionSink<'a> {
     slot_of_block: &'a [u32],
     /// The compact predictions, written at disjoint slots only (see [`PredictionSink::keep`]).
@@ -250,7 +228,7 @@ impl ActiveSet {
         }
     }
 
-    /// The pair pass over the near pairs `near` (see [`super::self_near`]): the contact sums
+    /// The pair pass over the near pairs `near` (see [`crate::self_collision::near`]): the contact sums
     /// of every particle of the active blocks (zero for particles with no contact).
     ///
     /// Each unordered pair is tested once: the near pairs `(i, j)`, `i < j`, closer than `d`
@@ -351,19 +329,10 @@ impl ActiveSet {
     /// from [`APPLY_PARALLEL_BLOCKS`] touched blocks and more than one worker (a folded
     /// 100x100 cloth touches ~170 a substep).
     ///
-    /// Session 9: the kernel was called once per touched block in parallel, and once per run
-    /// serially, and each call set up its constants from an input struct just written
-    /// (perf annotate: ~37% of the kernel's samples on the two loads at its entry), and one
-    /// thread took the parallel path too. Now one call takes all the runs (the constants set
-    /// up once) and one worker goes serial: timeline example, basic VcCPBD, 150 steps,
-    /// alternate runs, correction column over the run 11.4-11.7 -> 3.8-3.9 ms on one thread,
-    /// 7.6-7.8 -> 4.9-5.3 on two (4.2-4.4 all serial: too close, in the VM's noise, to undo
-    /// the finding below). Session 6 tried 1 024 (serial on the fold): the timeline's
-    /// correction column fell from 0.070 to 0.039 ms a step on two threads, but the step did
-    /// not get faster: the idle second thread went to sleep and the next parallel pass (update
-    /// and predict, outside the stage's timer) paid for waking it (a 100x100 fold run,
-    /// 150 steps, 14 alternate runs: step 2.697 ms a step with the parallel correction
-    /// against 2.788 serial, collision 1.019 against 1.018; slow phase of the VM), not kept.
+    /// One call takes all the runs, so the kernel sets up its constants once. With one worker
+    /// the serial path is taken. A higher parallel threshold made this stage cheaper but not
+    /// the step: an idle second worker went to sleep and the next parallel pass paid to wake
+    /// it (module `keep_awake` now keeps the workers polling during a step).
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn apply(
         &self,

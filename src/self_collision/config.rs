@@ -8,7 +8,7 @@ use crate::world::World;
 /// `(1 - PENETRATION_TOLERANCE) d`.
 pub const PENETRATION_TOLERANCE: f32 = 0.1;
 
-/// Collision response (SEEDS.md section A compares the three).
+/// Collision response (the VcCPBD paper, Shapri, Sulaiman & Bade 2016, compares the three).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Response {
@@ -37,10 +37,10 @@ impl Response {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum SelfBroadphase {
-    /// Spatial hash rebuilt each step (section C).
+    /// Spatial hash rebuilt each step (Müller's "Ten Minute Physics").
     #[default]
     Hash,
-    /// AABB tree built once, refitted each step (section A).
+    /// AABB tree built once, refitted each step (the VcCPBD paper).
     AabbTree,
 }
 
@@ -60,7 +60,7 @@ impl SelfBroadphase {
 pub struct SelfCollision {
     /// Collision distance, m; `None` = the smallest `min(thickness, spacing)` of the cloths.
     pub distance: Option<f32>,
-    /// Friction `μ` in `[0, 1]`: displacements pulled toward the pair average (section C).
+    /// Friction `μ` in `[0, 1]`: displacements pulled toward the pair average (Müller's friction).
     pub friction: f32,
     /// The response.
     pub response: Response,
@@ -68,9 +68,8 @@ pub struct SelfCollision {
     pub broadphase: SelfBroadphase,
     /// Measure the paper's "average collision" after every step (the percentage of particles
     /// in penetration, [`SelfCollisionStats`]). Off by default: the measure has its own
-    /// broadphase query, about a quarter of a step of the 100x100 fold on one thread (0.5-0.6
-    /// of 1.75-2.4 ms); `World::measure_self_collision` measures the current state on demand
-    /// either way.
+    /// broadphase query, about a quarter of a step of a folded cloth;
+    /// `World::measure_self_collision` measures the current state on demand either way.
     #[serde(default)]
     pub measure: bool,
 }

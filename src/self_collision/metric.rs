@@ -2,13 +2,10 @@
 //! [`super`]): the share of particles with a non-neighbour closer than
 //! `(1 - PENETRATION_TOLERANCE) d`, measured outside the timed stage.
 //!
-//! After every step only when the settings ask for it ([`crate::self_collision::SelfCollision::measure`],
-//! session 8): on the 100x100 fold it was a quarter of the step on one thread, 2.33-2.44 ms a
-//! step with it against 1.75-1.83 without (`weft reproduce vccpbd --size 100`, mean over the
-//! hash rows, two alternate runs). Tried and not kept: a hash of its own with cells of the
-//! probe radius instead of the step's (3-6 d cells, ~800 candidates a particle once
-//! folded): the step got slower, 1.56-1.61 -> 1.69-1.72 ms (two threads, three alternate
-//! runs; the many small cells cost more look-ups than the candidates they save).
+//! After every step only when the settings ask for it ([`crate::self_collision::SelfCollision::measure`]): on
+//! a folded cloth it costs a large share of the step. It reuses the step's hash; a hash of its
+//! own with cells of the probe radius made the step slower (more look-ups than the candidates
+//! they save).
 
 use rayon::prelude::*;
 

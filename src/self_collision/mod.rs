@@ -1,4 +1,5 @@
-//! Cloth self-collision as particle–particle contacts (SEEDS.md sections C and A).
+//! Cloth self-collision as particle–particle contacts (Müller's "Ten Minute Physics" self-collision and Shapri,
+//! Sulaiman & Bade 2016, VcCPBD).
 //!
 //! # The stage, once per step and once per substep
 //! Constants: `q = QUERY_FACTOR d` (3), hash cell `CELL_FACTOR q` (1), travel `T = TRAVEL_FACTOR d`
@@ -28,27 +29,23 @@
 //!   it was built, kept while no particle moves more than `0.49 s₂`), and only the blocks that
 //!   received a contact are corrected; both exact too.
 //!
-//!   Why (measured on `weft reproduce vccpbd --size 100`, 150 steps): the hash query was about
-//!   two thirds of the stage and each substep tested all ~100k listed pairs of the folded
-//!   cloth, of which none was in contact. After the fold settles the lists last many steps
-//!   and the near list holds a few hundred pairs; while the cloth falls (the first ~50
-//!   steps, up to 4 d of travel a step) every step still runs the query, which is now the
-//!   largest phase. The skin is `3 d` (`2 d` before session 6) only when the cloth moved at
+//!   Why: on a folded cloth a fresh query every step dominated the stage, and the substeps
+//!   tested thousands of listed pairs of which few were in contact. After the fold settles
+//!   the lists last many steps and the near list holds a few hundred pairs; while the cloth
+//!   falls every step still runs the query. The skin is `3 d` only when the cloth moved at
 //!   most `d` a step since the last build (otherwise zero: a wider reach would cost more than
-//!   the reuse saves; the measurements are in `self_verlet`). With the hash such slow steps
-//!   build no candidate lists at all (session 8): every block is active and the substeps
-//!   query their mid list from a hash of the predicted positions (`self_verlet`,
-//!   `self_near`), refreshed afterwards for the few particles that move past its bound
-//!   (`self_mid`, per-particle references; the same lists). The hash query tests the
-//!   rest-neighbour rule in its eight-lane mask (the `hash_rest` module), so only kept pairs
-//!   leave the lanes, and walks the cells over a half shell (the `hash_cells` module: each
-//!   pair tested once, the rows looked up once a cell; a falling step's query 1.45-1.84 ms
-//!   before, 0.81-0.92 after).
+//!   the reuse saves; see `self_verlet`). With the hash such slow steps build no candidate
+//!   lists at all: every block is active and the substeps query their mid list from a hash of
+//!   the predicted positions (`self_verlet`, `self_near`), refreshed afterwards for the few
+//!   particles that move past its bound (`self_mid`, per-particle references; the same
+//!   lists). The hash query tests the rest-neighbour rule in its eight-lane mask (the
+//!   `hash_rest` module), so only kept pairs leave the lanes, and walks the cells over a half
+//!   shell (the `hash_cells` module: each pair tested once, the rows looked up once a cell).
 //! * **After predict** (each substep): the speed clamp ([`crate::self_collision::response`]) limits a free
 //!   particle's velocity relative to the mean velocity of the free particles to `T / substeps`
 //!   a substep, so two particles close in by at most `2T` in a step: any pair that touches
 //!   during the step was in the lists. (The clamp is relative so a falling cloth still falls at
-//!   full speed; section C clamps absolute speed to one cell a substep.) The clamp bounds the
+//!   full speed; Müller's version clamps absolute speed to one cell a substep.) The clamp bounds the
 //!   predicted motion; the constraint sweeps move particles further, so the bound is the
 //!   model's, not a proof.
 //! * **After the constraint sweeps** (each substep): the pair pass below over the active
@@ -59,7 +56,7 @@
 //!
 //! ```text
 //! rest neighbours (above): same cloth and |r_i - r_j| <= q: never in the lists
-//! rest rule (section C): same cloth and |p_i - p_j| > |r_i - r_j| (rest grid positions): skip
+//! rest rule (Müller): same cloth and |p_i - p_j| > |r_i - r_j| (rest grid positions): skip
 //! min_dist = min(d, |r_i - r_j|);   contact if |p_i - p_j| < min_dist
 //! n = (p_i - p_j) / |p_i - p_j|, or for coincident particles (distance 0) the rest direction
 //!     (r_i - r_j) / |r_i - r_j|, or ±(1, 2, 3)/√14 by id order (antisymmetric, never NaN)
@@ -76,7 +73,7 @@
 //! contact count, the movement-speed correction over the approaching contacts), and the
 //! result is the same on any number of threads; the serial loop is the twin.
 //!
-//! **Movement speed.** The paper (section A) names this response only as the velocity-based
+//! **Movement speed.** The VcCPBD paper names this response only as the velocity-based
 //! technique of current software it compares against and gives no algorithm for it. Our
 //! reading is the usual inelastic velocity response: zero the approaching normal velocity
 //! (fully inelastic) and move the particle along its corrected velocity; it does not push out
@@ -128,9 +125,7 @@ const TREE_LEAF: u32 = 16;
 /// Query radius over collision distance: `q = d + 2 T` with the step's relative travel `T = d`.
 pub const QUERY_FACTOR: f32 = 3.0;
 
-/// Hash cell side over the query radius (section C uses 1; 1.5 was tried with the list reuse
-/// on `weft reproduce vccpbd --size 100 --steps 100` and was no faster: 2.8-3.1 ms query
-/// wall a step against 2.6-2.9 with 1, loaded machine).
+/// Hash cell side over the query radius (Müller's hash uses 1; wider cells were no faster).
 pub const CELL_FACTOR: f32 = 1.0;
 
 /// Rest-neighbour skip radius over the collision distance: pairs of one cloth whose rest

@@ -1,8 +1,10 @@
 //! Self-collision kernels over the particle arrays: the speed clamp and the velocity-correction
-//! pass (SEEDS.md sections A and C), each SIMD (`f32x8`) with a scalar twin that the tests hold
+//! pass (after Shapri, Sulaiman & Bade 2016, "Velocity Correction Position Based Dynamic to
+//! optimize collision computation in cloth simulation", and Müller's "Ten Minute Physics"
+//! self-collision), each SIMD (`f32x8`) with a scalar twin that the tests hold
 //! to it bit for bit (same operations in the same order, no FMA).
 //!
-//! # Speed clamp (section C)
+//! # Speed clamp (Müller)
 //! After predict, a free particle's velocity relative to the mean velocity `m` of the free
 //! particles is limited so that it moves at most `limit` relative to the cloth in one substep:
 //!
@@ -14,13 +16,9 @@
 //! change velocities between predict and the clamp), its predict pass (or the update pass
 //! that runs the next predict) adds each chunk's sums while the chunk is in cache, and the
 //! clamp only reads them: one pass over the particles and one parallel region fewer a
-//! substep, the same bits (`step::fusion_tests`). Measured on the 100x100 fold
-//! (`examples/self_collision_timeline.rs`, 150 steps, 1 thread): callgrind over the substeps
-//! 6 399 to 6 197 million instructions; the timeline's clamp column 0.106 / 0.172 / 0.116 ms a
-//! step before against 0.066 / 0.049 / 0.063 after (binaries run alternately, load ~6 on two
-//! cores).
+//! substep, the same bits (`step::fusion_tests`).
 //!
-//! # Velocity correction (section A, Algorithm 2; section C friction)
+//! # Velocity correction (VcCPBD, Algorithm 2; Müller's friction)
 //! The pair pass ([`crate::self_collision`]) leaves, per particle `i`, the sums over its
 //! contacts of: the position correction `c`, the partners' displacements `f = Σ (p_j - x_j)`,
 //! the unit contact normals `n` (pointing away from the partners), the signed gaps `g`
@@ -41,8 +39,7 @@
 //! the solver moved it. With no obstacles nothing changes the predictions or the velocities
 //! between predict and the speed clamp, so `q = x + h v` exactly (both compute it so) and the
 //! kernel derives it ([`ApplyInput::v`]) instead of reading a copy the clamp made of every
-//! active particle each substep (session 9: with every block active on a slow step that copy
-//! was ~1% of the 100x100 fold's run; one thread, basic VcCPBD 0.603 -> 0.593 ms a step). A particle pushed out of its box is put back to the centre (a guard
+//! active particle each substep. A particle pushed out of its box is put back to the centre (a guard
 //! against the overshooting corrections of tangled layers); inside it, the velocity is
 //! corrected. The VcCPBD line is the paper's velocity correction `v <- (p - δd) + a dt`, `x <- p` written
 //! on positions (the update stage then sets `v = (p - x) / h`): the damped oscillator
@@ -115,9 +112,8 @@ impl ContactSums {
     }
 
     /// The eleven arrays cut to their common length, for many stores ([`SumRows::set`]):
-    /// one bounds check a store instead of one an array (session 11: the pair pass's stores,
-    /// ~600 000 a run of the 100x100 fold, cost ~70 instructions each through
-    /// [`ContactSums::set`]).
+    /// one bounds check a store instead of one an array (the pair pass stores many, and
+    /// [`ContactSums::set`] checks all eleven arrays each time).
     pub(crate) fn rows(&mut self) -> SumRows<'_> {
         let len = self
             .c
@@ -227,9 +223,7 @@ pub(crate) fn apply_runs(inp: &ApplyInput<'_>, p: [&mut [f32]; 3], runs: impl It
 
 /// The eight-lane kernel over runs of blocks (see [`apply_runs`]), its constants set up once.
 /// The arrays' lengths are taken once: a run inside all of them is computed without
-/// per-load bounds checks (session 13), any other with them. Callgrind over the basic fold's
-/// timeline (one thread): 76.1 -> 52.7 million instructions; five alternate runs in a noisy
-/// spell, correction column 4.19-4.66 -> 3.32-4.20 ms.
+/// per-load bounds checks, any other with them.
 fn runs_simd<const VC: bool>(inp: &ApplyInput<'_>, p: [&mut [f32]; 3], runs: impl Iterator<Item = Run>) {
     let [px, py, pz] = p;
     let c = Consts::new(inp);
@@ -424,10 +418,8 @@ pub fn clamp_speed(c: crate::data::particles::ParticleChunk<'_>, cp: &ClampParam
     }
 }
 
-/// The clamp's lanes. Session 12: the group test with unchecked loads (the length checked
-/// once) cut the clamp's instructions over the basic fold's timeline from 65.4 to 47.7
-/// million but not its time (clamp column 5.55-5.69 against 5.58-6.06 ms, three alternate
-/// runs: the pass waits on memory), so the checked loads stay.
+/// The clamp's lanes. The loads keep their bounds checks: the pass waits on memory, and
+/// unchecked loads saved instructions but no time.
 fn clamp_simd(c: crate::data::particles::ParticleChunk<'_>, cp: &ClampParams) {
     let m = Vec3x8::splat(cp.mean);
     let h = F32s::splat(cp.h);
@@ -486,8 +478,7 @@ pub(crate) const MEAN_CHUNK: usize = 4096;
 /// same bits ([`MeanParts`]; the step also fills them inside its predict pass).
 ///
 /// Within a chunk the particles are summed in eight lanes, `f32` over blocks of 64 particles
-/// and `f64` across blocks ([`chunk_sums`]; session 12, four `f64` lanes before: the mean may
-/// differ in its last bits from earlier versions); every path uses this one summation.
+/// and `f64` across blocks ([`chunk_sums`]); every path uses this one summation.
 pub(crate) fn mean_velocity(v: [&[f32]; 3], w: &[f32], n: usize, parallel: bool, simd: bool) -> [f32; 3] {
     let parts = MeanParts::new(n);
     let chunks = n.div_ceil(MEAN_CHUNK);

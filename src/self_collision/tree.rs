@@ -1,6 +1,6 @@
-//! A box hierarchy over the particles: the self-collision broadphase of SEEDS section A
-//! (VcCPBD, "collisions are found through a box hierarchy (depth 5)"), the alternative to the
-//! spatial hash of section C.
+//! A box hierarchy over the particles: the self-collision broadphase of the VcCPBD
+//! paper (Shapri, Sulaiman & Bade 2016, "collisions are found through a box hierarchy (depth 5)"), the alternative to the
+//! spatial hash of Müller's "Ten Minute Physics".
 //!
 //! # Method
 //! **Build** (once): the particle ids are split recursively at the median of the longest axis

@@ -15,98 +15,31 @@
 //! otherwise zero (a falling cloth: a larger reach would cost more than it saves; with a zero
 //! skin the lists are reused only if no particle moved at all).
 //!
-//! # Choice of the skin (measured)
-//! `examples/self_collision_timeline` (100x100 fold, basic VcCPBD, 150 steps, one thread,
-//! load 3-5 on two cores), broadphase = hash build + query, ms a step averaged over the run,
-//! with the query that tests order and rest neighbours in the lanes (`hash_rest`):
+//! # Choice of the skin
+//! A wider skin makes each rebuild's reach (`q + s`) and candidate count larger but lets a
+//! folding cloth keep its lists for several steps. `3 d` balances the broadphase against the
+//! near-list rebuilds that filter the candidates (those run in parallel, so a wider reach
+//! costs them less). Allowing the skin for faster motion (a larger `SLOW_FACTOR`) makes the
+//! falling steps query with the wide reach and still rebuild every step.
 //!
-//! | skin / slow | build + query | rebuilds | pairs (near list) | stage total |
-//! |---|---|---|---|---|
-//! | d / 0.25 d (before) | 0.98-1.29 | 63 | 0.56-0.70 | 1.86-2.42 |
-//! | 0.5 d / 0.25 d | 1.26 | 72 | 0.73 | 2.41 |
-//! | 2 d / d (kept) | 0.69-0.83 | 49 | 0.66-0.81 | 1.65-2.04 |
-//! | 3 d / d | 0.59-0.60 | 47 | 0.76-0.80 | 1.66-1.69 |
-//! | 3 d / 2 d | 1.27 | 38 | 1.11 | 2.74 |
-//!
-//! and on the 12 hash rows of `weft reproduce vccpbd --size 100` (mean ms a step, load 5-6,
-//! so only the broadphase columns are clear): build + query + start 1.52 (d / 0.25 d), 0.91
-//! (2 d / d), 0.85 (3 d / d); pairs 1.55, 1.41, 1.71. The near list of the substeps is built
-//! from the candidate lists, so a wider skin costs there: 2 d is kept as the balance (3 d saves
-//! another ~0.05 ms of broadphase and costs more in the pairs phase).
-//!
-//! With the cell query (`hash_cells`, fifth session; same timeline, load 7-8, three alternate
-//! runs): skin 2 d build + query + start 0.44-0.51 ms a step, pairs 0.71-0.91, 49 rebuilds;
-//! skin d 0.68-0.74, pairs 0.63-0.68, 58 rebuilds (stage total 1.40-1.77 against 1.62-1.73).
-//! The cheaper rebuilds do not make a narrower skin pay for the broadphase, so 2 d stays.
-//! A bound on the displacement relative to the mean displacement (exact too: the lists hold
-//! while `|(x_i - x⁰_i) - t| <= 0.49 s` for one common `t`) was tried with `t` the mean: 49
-//! rebuilds either way (the cloth hangs from a pinned row, so it does not translate as a
-//! whole), broadphase 0.55-0.59 against 0.48-0.53, not kept.
-//!
-//! Session 6 (issue #5 on two threads, with the near-list rebuild in parallel): the skin
-//! measured again on `weft reproduce vccpbd --size 100 --threads 2`, basic VcCPBD hash row,
-//! CPU lock, idle machine, alternate runs. Collision ms a step: skin 2 d 0.603-0.638 (six
-//! runs without the two slow outliers of the VM, 0.690 and 0.854), 3 d 0.582-0.609 (six runs,
-//! one outlier 0.683); query column 0.19-0.23 against 0.16-0.18 (47 rebuilds against 49),
-//! pairs 0.264-0.269 against 0.271-0.281; 1.5 d 0.627-0.641, d 0.675-0.700, 2.5 d
-//! 0.648-0.663, 4 d 0.667-0.672. One thread, two runs each: 2 d 0.804 / 0.811, 3 d 0.802 /
-//! 0.822 (no change). The skin is now 3 d: the wider reach's extra candidates cost the near
-//! list's rebuild, which two threads now share, less than the rebuilds it saves.
-//!
-//! A wider skin makes each rebuild's reach (`q + s`) and candidate count larger but lets the
-//! folding cloth (steps ~42-75, 4.5-9.7 ms of queries a step before) keep its lists for
-//! several steps; allowing the skin for faster motion (`SLOW_FACTOR` 2) makes the falling
-//! steps query with the wide reach and still rebuild every step, which costs more.
-//!
-//! # Slow steps without candidate lists (session 8, hash broadphase)
-//! Once the near list came from a mid list (pairs within `2.5 d`, see [`crate::self_collision::near`]),
-//! the wide candidate lists (reach `6 d`, ~763 000 pairs on the folded 100x100 cloth) were only
-//! a superset to filter the mid list from, and one wide rebuild cost 9-11 ms of a run's
-//! ~80 ms (timeline example, two threads: its first build grows every buffer). With the hash,
-//! a slow step (the same rule: at most `SLOW_FACTOR d` a step) now builds no lists
-//! ([`Plan::Direct`]): every block is active and the substeps query the mid list from a hash
-//! of the predicted positions when it expires (`query_upper_unskipped_cells`, reach
-//! `2.5 d`, the rest rule in the lanes: the same pairs, so the near lists and the results are
-//! the same bits; tests: the lists and positions of the fresh path every step, and the near
-//! list of a hashed mid list against the build from every pair). The motion of such a step is
-//! measured from the previous step's start positions, which the stage keeps anyway. A mid
-//! query costs about twice the filter from the candidates (0.74 against 0.36 ms, two threads),
-//! ~13 of them a basic run. Timeline example, two threads, alternate runs, stage total over
-//! 150 steps: basic VcCPBD 80.1-80.7 -> 77.4-79.2 ms (query column 25.0-25.6 -> 16.5-17.3,
-//! pairs 34.3-34.7 -> 40.2-41.3), in a slow spell of the VM 124.6-125.4 -> 118.3-119.8;
-//! polyester movement speed (five wide rebuilds before) 78.7-80.7 -> 71.3-71.9; the tethered
-//! basic fold (`--tethers 0`) 188.0-201.3 -> 180.6-195.2. On one thread, where runs repeat
-//! within 1-3% on this machine (two threads drift up to 1.35 times), `weft reproduce vccpbd
-//! --size 100 --repeat 3`, two alternate runs: the 12 hash rows' medians sum to 7.92-8.18 ms
-//! before against 7.24-7.44 after (the mid lists copied to pairs, next paragraph), the basic
-//! rows 0.70-0.77 against 0.66-0.79 (unchanged within the noise: there one wide rebuild went
-//! and 13 mid queries of ~1.35 ms each came). The tree keeps the wide lists (its query is the
-//! slow part either way).
-//!
-//! Session 13, `SLOW_FACTOR` 1.5, 2 and 4 (more of the fall without candidate lists; timeline,
-//! basic VcCPBD, one thread, two runs each): stage 82.0-83.2, 95.0-95.8 and 100.5 ms against
-//! 78.7-79.1; the query column fell (24.5 -> 11.2, 4.4, 1.3 ms) but the substeps' mid queries
-//! and refreshes of a fast cloth cost more (pairs 39.2 -> 57-58, 78-79, 87 ms). 1 stays.
-//!
-//! Tried in session 13 and not kept: going direct also on a fast step (up to 1.5 d a step)
-//! when the last build's candidates were dense (at least 2, 3 or 4 pairs a particle: the
-//! steps of the impact, whose queries keep 47 000-110 000 pairs). Timeline, basic VcCPBD, one
-//! thread, two runs each: query column 22.8-23.0 -> 19.5-20.8 ms, pairs 38.9-39.1 ->
-//! 42.4-44.5, stage 77.2-77.6 -> 78.0-79.1.
-//!
-//! The hashed mid list is copied to pairs for the near rebuilds' eight-lane filter (with ~7
-//! partners a particle the scan over lists ran its scalar tail): 7.49-7.85 -> 7.43 ms (sum
-//! above). Tried and not kept: `MID_SKIN` 1.5 and 2 (fewer mid queries, larger mid lists):
-//! sums 7.08-7.31 and 7.23-7.34 against 7.18-7.32; the candidates of a falling step filtered
-//! as pairs too (cached per build): 7.38-7.45 against 7.19-7.41.
+//! # Slow steps without candidate lists (hash broadphase)
+//! The near list comes from a mid list (see [`crate::self_collision::near`]), so on a folded cloth the
+//! wide candidate lists would only be a superset to filter the mid list from, and one wide
+//! rebuild is expensive. With the hash, a slow step (at most `SLOW_FACTOR d` a step) builds no
+//! lists ([`Plan::Direct`]): every block is active and the substeps query the mid list from a
+//! hash of the predicted positions when it expires (`query_upper_unskipped_cells`, the rest
+//! rule in the lanes). These are the same pairs, so the near lists and the results are the
+//! same bits; the tests compare the lists and positions with the fresh path every step, and
+//! the near list of a hashed mid list with the build from every pair. The motion of such a
+//! step is measured from the previous step's start positions, which the stage keeps anyway.
+//! The AABB tree keeps the wide lists (its query is the slow part either way).
 
 use crate::data::lanes::{load, F32s, LANES};
 use crate::self_collision::config::SelfBroadphase;
 use crate::self_collision::neighbours::Neighbours;
 
 /// Skin of the candidate lists over the collision distance, when the cloth moves slowly
-/// (measured, see the module docs: 2 on one thread, 3 since the near-list rebuild runs on
-/// two).
+/// (see the module docs).
 pub const SKIN_FACTOR: f32 = 3.0;
 
 /// Largest displacement a step (over the collision distance) for which the skin is used.

@@ -1,4 +1,4 @@
-//! Hair strands: the AHS builder (attaching hairs to a scalp, SEEDS.md B) and its physics.
+//! Hair strands: the AHS builder (attaching hairs to a scalp, from the NURBS thesis on strands and surfaces) and its physics.
 //!
 //! AHS, as in the thesis: given a scalp surface `C`, `n` strands of `m` control points and a
 //! segment length `leng`, for each root point `P` on `C` take the direction `dir` = the surface

@@ -1,6 +1,6 @@
 //! Strands (hair) on a scalp, and the smooth curves and surfaces they are drawn with.
 //!
-//! - [`hair`]: the AHS builder (SEEDS.md B): roots spread over a scalp, each strand grown along
+//! - [`hair`]: the AHS builder (attaching hairs to a scalp, from the NURBS thesis): roots spread over a scalp, each strand grown along
 //!   the scalp normal, simulated as particles with stretch and bending distance constraints;
 //! - [`scalp`]: the scalp shape, the Fibonacci root placement and the scalp collision stage;
 //! - [`attach`]: adding strands to a world (`World::add_strands`);

@@ -1,4 +1,4 @@
-//! NURBS curves and surfaces with local evaluation (SEEDS.md B, thesis section 2.2).
+//! NURBS curves and surfaces with local evaluation (the thesis on NURBS strands and surfaces, section 2.2).
 //!
 //! A NURBS curve of degree `p` over control points `P_i` with weights `w_i > 0` is
 //!

@@ -1,4 +1,4 @@
-//! Timing of global against local NURBS evaluation, for the reproduction of SEEDS.md B.
+//! Timing of global against local NURBS evaluation, for the reproduction of the NURBS thesis' claim.
 //!
 //! The thesis claims (section 2.2.2, "complexity"): evaluating one point of a curve costs
 //! `O(n l)` with the global formula 2.8 and `O(k l)` with the local formula 2.11; for a surface

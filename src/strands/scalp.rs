@@ -6,7 +6,7 @@
 //! normal there is `∇f ∝ ((x-c_x)/a², (y-c_y)/b², (z-c_z)/c²)`. Hair grows on the patch
 //! `θ_min <= θ <= θ_max` (degrees in the API and in scene files).
 //!
-//! **Root placement** (SEEDS.md B, AHS: "for each root point P on the scalp C"): roots must be
+//! **Root placement** (the NURBS thesis, AHS: "for each root point P on the scalp C"): roots must be
 //! spread evenly and deterministically. [`Scalp::roots`] uses a Fibonacci spiral on the patch:
 //! root `i` of `n` takes `cosθ_i = cosθ_min + (i + ½)/n · (cosθ_max - cosθ_min)` (equal area
 //! bands on a sphere) and `φ_i = i · 2π/ϕ²` (the golden angle), so neighbouring roots never line

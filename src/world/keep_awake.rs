@@ -3,11 +3,9 @@
 //! A step is a chain of short parallel passes (predict, clamp, constraint sweeps, the
 //! self-collision pair pass and correction, update) with short serial parts between them. A
 //! rayon worker that finds no work for a few microseconds goes to sleep, and the next pass
-//! pays for waking it. Measured on the two-core VM this project runs on (a two-thread pool,
-//! `rayon::join` of two 20 µs halves after a serial gap, 300 repetitions, median): 20.6 µs
-//! after gaps of 0-10 µs, 36-37 µs after 20 µs, 38-59 µs after 40-400 µs. With the other
-//! worker polling instead (it takes and runs pending work with `rayon::yield_now` and
-//! otherwise spins) the same join took 20.6 µs after every gap.
+//! pays for waking it: on a two-thread pool, a wake-up after a serial gap of 20 µs or more
+//! added 15-40 µs to a pass of about 20 µs. With the other workers polling instead (they take
+//! and run pending work with `rayon::yield_now` and otherwise spin) the pass starts at once.
 //!
 //! [`run`] does this for the length of one call: the pollers are the other halves of
 //! `rayon::join`s (no allocation: the steady-state step allocates nothing), they only run
@@ -17,11 +15,6 @@
 //! or on a pool of one thread, the call just runs. On a pool shared with other work (the
 //! global pool with `threads = 0`), a poller may pick up an unrelated job, and the step then
 //! returns when that job is done, as a rayon join that steals work while it waits does.
-//!
-//! Measured on the 100x100 fold (`weft reproduce vccpbd --size 100 --threads 2`, three
-//! alternate runs, basic fabric hash rows): step 1.67-1.75 ms -> 1.62-1.69 ms, collision
-//! within the noise; `perf stat` on `examples/self_collision_timeline 150 2`: 896-939
-//! context switches -> 363-458, elapsed 0.264-0.272 s -> 0.252-0.254 s.
 
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 

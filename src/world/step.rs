@@ -8,14 +8,14 @@
 //!   for each substep h = dt / substeps:
 //!     wind forces per triangle → per particle          [effects]        (if named)
 //!     predict: v += h g + h w f, drag; p = x + h v      [integrate]
-//!     obstacle contacts of x -> p, back along the path  [collide/obstacles] (if any)
+//!     obstacle contacts of x -> p, back along the path  [obstacles]        (if any)
 //!     speed clamp relative to the mean velocity        [self-collision]  (if on)
 //!     `iterations` sweeps: distance constraints by colour, tethers   [constraints]
-//!       obstacle projection                             [collide/obstacles] (if any)
+//!       obstacle projection                             [obstacles]        (if any)
 //!       strands pushed out of their scalps              [strands::scalp] (if any)
 //!     pair pass, velocity correction                    [self-collision]  (if on)
 //!     update: v = (p - x) / h, damping; x = p          [integrate]
-//!     obstacle velocity pass: normal part, friction     [collide/obstacles] (if any)
+//!     obstacle velocity pass: normal part, friction     [obstacles]        (if any)
 //!       (both chunk by chunk in one pass; the last substep's pass also checks that the
 //!        chunk's x, v are finite, for the guard)
 //!   (solver.method = symplectic-euler | leapfrog | implicit-euler: the force-based step of

@@ -4,9 +4,9 @@
 //! weft run scenes/hanging.toml            # simulate, write out/hanging/{final.png,frames.png,summary.json}
 //! weft check scenes/flag.toml             # what the scene will simulate, and its memory
 //! weft run --resume out/big/checkpoint.bin
-//! weft reproduce nurbs [--json]           # a source paper's table (SEEDS.md B)
-//! weft reproduce landovsky --quick        # our seconds beside the paper's (SEEDS.md D)
-//! weft reproduce vccpbd --quick           # the VcCPBD paper's table, ours beside theirs (SEEDS.md A)
+//! weft reproduce nurbs [--json]           # the NURBS thesis' cost claim
+//! weft reproduce landovsky --quick        # our seconds beside Landovskaya et al.'s
+//! weft reproduce vccpbd --quick           # the VcCPBD paper's table, ours beside theirs
 //! weft reproduce small-steps              # Macklin et al. 2019 chain: substeps against iterations
 //! weft accuracy scenes/hanging.toml --plot out/hanging/accuracy.svg
 //! ```

@@ -3,7 +3,7 @@
 //! Cloth is drawn as its triangles, or (with `--nurbs-surface` / `[output] cloth_surface =
 //! "nurbs"`) as a NURBS surface whose control points are the cloth's particle grid. Strands are
 //! drawn as smooth NURBS curves through their simulated points (root and tip exact, the rest
-//! smoothed; SEEDS.md B), and each scalp as a shaded ellipsoid mesh.
+//! smoothed, as in the NURBS thesis), and each scalp as a shaded ellipsoid mesh.
 
 use weft::model::shapes::Shape;
 use weft::obstacles::Geometry;

@@ -1,5 +1,5 @@
-//! Procedural dress forms ("mannequins"): the obstacles of the paper's table (SEEDS.md
-//! section D used female dress forms of 4800 and 8350 faces).
+//! Procedural dress forms ("mannequins"): the obstacles of the paper's table
+//! (Landovskaya, Landovsky & Frolovsky used female dress forms of 4800 and 8350 faces).
 //!
 //! The form is a body of revolution with an elliptical cross-section: at height `y` the
 //! section is `(a(y) cos th, y, b(y) sin th)`, the half-widths `a` (side to side) and `b`

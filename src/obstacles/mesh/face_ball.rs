@@ -29,17 +29,10 @@
 //! too often, never "inside" wrongly. A particle that leaves its ball sorts its list again;
 //! a non-finite position or reach never holds a ball.
 //!
-//! **Measured** (`weft reproduce landovsky --only "4800 grid 15x30x15"`, the plain row, idle
-//! machine, alternating runs): with the quarter-reach margin a kept list of 9.4 faces on
-//! average has 1.7 near faces, and the ball vouches for 85% of the kept-list steps (with the
-//! gathering margin, one reach plus four steps, 4.6 near faces and 92%; with no margin 1.2
-//! faces and 74%). Wall time of the row 0.527 s against 0.551 s without the ball (medians of
-//! seven alternating runs, faster in six pairs and equal in one), CPU 1.02 s against 1.08 s.
-//! Margins of 0.15, 0.4 reach and 0.5 to 2 steps measured within the noise of this one.
-//! The contact pass then also skips, eight lanes at once, the particles whose ball has no
-//! near face and vouches for the step ([`vouches_simd`], `mesh_pass::skip_lanes_simd`):
-//! 0.490 s against 0.498 s with the ball tested lane by lane and 0.531 s without the ball
-//! (medians of seven alternating runs of the three binaries; CPU 0.93, 0.98, 1.04 s).
+//! With the quarter-reach margin most kept-list steps are vouched for by the ball and test
+//! one or two near faces instead of the whole list. The contact pass also skips, eight lanes
+//! at once, the particles whose ball has no near face and vouches for the step
+//! ([`vouches_simd`], `mesh_pass::skip_lanes_simd`).
 //!
 //! The pad `s` is `1e-6 (1 + max |o_k|)`: above the `f64` rounding of the distances (about
 //! `1e-15` relative) and of the crossing point, and above the `f32` rounding of the stored

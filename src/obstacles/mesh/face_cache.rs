@@ -16,13 +16,9 @@
 //!
 //! The margin bounds the motion of the coming steps: [`margin`] is `MARGIN_REACH` reaches plus
 //! [`MARGIN_STEPS`] times the step's largest coordinate change, so a particle moving steadily
-//! gathers at most every few steps and a resting one keeps its list. Measured (callgrind,
-//! instructions of the contact pass over `weft reproduce landovsky --only "4800 grid 15x30x15"`,
-//! both rows with warm-up): margins of `0.5` reach `+ 4` steps cost the same as `1 + 4`
-//! (-0.3%: 1.4x the gathers for 7% less narrowphase), `0.25 + 2` cost 6.6% more (2.6x the
-//! gathers for 12% less narrowphase); the lists stay long (about 15 faces) whatever the
-//! margin, set by the size of the faces' boxes, so the margin stays `1 + 4`. A mesh that
-//! moves (a new
+//! gathers at most every few steps and a resting one keeps its list. A smaller margin means
+//! more gathers for a little less narrowphase; the lists stay about as long whatever the
+//! margin (set by the size of the faces' boxes). A mesh that moves (a new
 //! [`TriMesh::stamp`]) empties every list ([`FaceCache::sync`]). A particle owns its entry,
 //! so the cache changes nothing about thread-count independence.
 //!
@@ -30,32 +26,15 @@
 //! ([`CacheBlock`]): the gathered boxes and list lengths of the eight particles sit together
 //! as eight-lane arrays (the hot part, 224 bytes, read for every particle near the mesh), and
 //! the face ids in a separate heap block (the cold part, read only when a list is not empty).
-//! The first layout kept one 104-byte entry per particle (box, length and ids together); a
-//! profile of `weft reproduce landovsky` showed the load of that entry's box as the costliest
-//! instruction of the contact pass (the entries of 32 500 particles, 3.4 MB, streamed through
-//! the caches every substep, most of them for particles whose list was empty). With the split
-//! the common "kept box, no face" case reads 28 bytes per particle, and the contact pass
-//! tests it for eight particles at once ([`CacheBlock::held_empty`],
-//! `mesh_pass::skip_lanes_simd`).
+//! One entry per particle (box, length and ids together) made the load of the entry's box the
+//! costliest instruction of the contact pass: the entries streamed through the caches every
+//! substep, most of them for particles whose list was empty. With the split the common "kept
+//! box, no face" case reads 28 bytes per particle, and the contact pass tests it for eight
+//! particles at once ([`CacheBlock::held_empty`], `mesh_pass::skip_lanes_simd`).
 //!
-//! **Tried and not kept (measured on `weft reproduce landovsky --only "4800 grid 15x30x15"`,
-//! 400 warm-up + 500 timed iterations; callgrind with a 512 KB last-level cache model; wall
-//! times of alternating runs, idle machine, 14 runs each).** Per tested particle the pass
-//! scans 7.9 listed faces, 2.55 pass the box test, 1.72 reach the closest-point search and
-//! 0.36 end in a contact. (1) A two-stage SIMD pre-test of the list (the box test eight faces
-//! at a time, then a conservative `f32` plane and edge-distance test on 64-byte per-face
-//! records) cut the exact narrowphase calls from 19.3 M to 8.3 M, but the pass went from
-//! 9.99 G to 11.27 G instructions, last-level misses from 43.2 M to 40.8 M; the row's median
-//! wall time went from 0.748 s (0.628-1.007) to 0.762 s (0.617-1.097) in one series and was
-//! 2.6% lower in another (paired median ratio 0.974, faster in 14 of 20 pairs): within the
-//! run-to-run noise, not worth its ~450 lines (records, transposes, twins). A
-//! one-stage version with 96-byte records cost more misses (63.0 M first-level against 50.7 M).
-//! (2) The eight lists of a block in one pooled array instead of a boxed block of inline
-//! lists: 3.6 M fewer last-level misses (measured with the one-stage test), no measurable time. (3) Prefetching the next block's
-//! lists: no measurable time. (4) Dropping, at gather time, faces whose plane misses the
-//! gathered box: the lists hardly shrink (narrowphase instructions -3%), gathering costs +24%.
-//! The profile points elsewhere: in the cache model the cloth's distance sweep (twelve colours,
-//! each over the whole 32 500-particle cloth) has 117 M of the run's 230 M last-level misses.
+//! The list is tested face by face with the exact narrowphase: a SIMD pre-test of the list
+//! (boxes and conservative planes eight faces at a time) saved narrowphase calls but no wall
+//! time, and this pass is not where a mesh scene's cache misses are (the distance sweeps are).
 
 use crate::data::lanes::LANES;
 use crate::obstacles::mesh::broadphase::FaceBroadphase;

@@ -1,4 +1,4 @@
-//! The paper's face memory (Landovskaya, Landovsky & Frolovsky, SEEDS.md section D).
+//! The paper's face memory (Landovskaya, Landovsky & Frolovsky).
 //!
 //! **The paper's rule.** After a particle crossed a face and was put back, "special conditions
 //! apply: while it stays in the region of the crossed face, the force acting on it is the

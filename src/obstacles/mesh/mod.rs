@@ -1,7 +1,6 @@
 //! Triangle-mesh obstacles: validated storage with per-face caches.
 //!
-//! An obstacle in Landovskaya, Landovsky & Frolovsky ("cloth against polyhedral solids",
-//! SEEDS.md section D) is "a finite set of points that are the vertices of its triangular
+//! An obstacle in Landovskaya, Landovsky & Frolovsky ("cloth against polyhedral solids") is "a finite set of points that are the vertices of its triangular
 //! faces". [`TriMesh`] keeps exactly that, plus what every query needs again and again:
 //!
 //! * the unit face normal `n = (b - a) x (c - a) / |(b - a) x (c - a)|` (counter-clockwise

@@ -1,4 +1,4 @@
-//! Narrowphase: a particle's step `x -> p` against the faces of a mesh (SEEDS.md section D).
+//! Narrowphase: a particle's step `x -> p` against the faces of a mesh (Landovskaya, Landovsky & Frolovsky).
 //!
 //! The paper checks, after each integration step, whether the particle's trajectory crossed a
 //! face, finds the crossing point, and puts the particle back on its own side at the fabric

@@ -1,5 +1,5 @@
 //! Stage 2 of the obstacle step for a mesh obstacle: the contacts of one block of eight
-//! particles ([`obstacles`](crate::obstacles) module doc; SEEDS.md section D).
+//! particles ([`obstacles`](crate::obstacles) module doc; Landovskaya, Landovsky & Frolovsky).
 //!
 //! For each live particle of the block (a real particle with inverse mass `w > 0`) the path
 //! is `x - u h -> p` in the obstacle's frame and its query box `Q` is the path's box grown by

@@ -1,4 +1,4 @@
-//! Response to a mesh contact (SEEDS.md section D): put the particle back on its side at the
+//! Response to a mesh contact (Landovskaya, Landovsky & Frolovsky): put the particle back on its side at the
 //! fabric thickness, and correct its velocity.
 //!
 //! **Position.** The paper returns the particle "along its trajectory" until it stands the
@@ -8,10 +8,9 @@
 //! `tau = (hx - Th) / (hx - hp)`. That needs the particle to approach the face (`hx > hp`) and
 //! to have started at least `Th` away (`hx >= Th`). Otherwise there is no such point on the
 //! path: a particle that started inside the layer and crossed the plane (`hx > 0 > hp`) stays
-//! where it started, which lies before the crossing (session 11: pushing its `p`, which can
-//! lie deep behind the plane and far along the path, along the normal left a particle thrown
-//! at ~85 m/s into a concave region of the dress form 2.3 mm inside a neighbouring face,
-//! `tests/obstacles.rs`); one that rested inside the layer or slid along it without crossing
+//! where it started, which lies before the crossing (pushing its `p`, which can lie deep
+//! behind the plane and far along the path, along the normal can leave a fast particle in a
+//! concave region inside a neighbouring face, `tests/obstacles.rs`); one that rested inside the layer or slid along it without crossing
 //! is pushed along the normal by `Th - hp`, keeping its sliding.
 //!
 //! **Velocity.** Inelastic contact with Coulomb friction: if the velocity points into the face

@@ -1,5 +1,4 @@
-//! Spatial hash for cloth self-collision: SEEDS section C (after Müller, "Ten Minute Physics"
-//! 11 and 15).
+//! Spatial hash for cloth self-collision, after Müller, "Ten Minute Physics" 11 and 15.
 //!
 //! # Method
 //! Space is cut into cubic cells of side `spacing`; particle `i` lies in cell
@@ -30,10 +29,8 @@
 //!
 //! # Choices
 //! * `table_size` is the smallest power of two `>= 2n` (at least 16): the paper's "about twice
-//!   the particle count", rounded to a power of two so the modulo is a mask. Session 9 tried
-//!   others on the 100x100 fold (`examples/self_collision_timeline`, one thread, two alternate
-//!   runs, query column over the run): `n / 2` 31.5-31.9 ms, `n` 27.4-27.9, `2 n` 26.3-26.6,
-//!   `4 n` 26.2-26.3 with a slower build (4.6-4.7 against 4.1-4.2 ms); `2 n` stays.
+//!   the particle count", rounded to a power of two so the modulo is a mask (smaller tables
+//!   made the query slower, larger ones the build).
 //! * Bucket of cell `(cx, cy, cz)` = `row(cy, cz) + cx` modulo `table_size`: the cells of one
 //!   row along x sit in consecutive buckets, so a query reads each row of its search box as one
 //!   contiguous range of `cell_entries` (9 to 16 ranges instead of 27 to 64 cells). The row's
@@ -197,9 +194,7 @@ impl SpatialHash {
     /// i32`: the same integers as [`SpatialHash::coord`]), else one by one (the twin). The
     /// particles of a cloth row often share the cell row `(cy, cz)` (a row along x shares it
     /// all along), so the row's hashed base is reused from the particle before when it is the
-    /// same row: the same value without the two 64-bit multiplications. Session 11, a build
-    /// of the falling 100x100 fold (step 20, one thread, 400 builds a round, three rounds):
-    /// 66-67 µs median before (one particle at a time, every row hashed), 42 after.
+    /// same row: the same value without the two 64-bit multiplications.
     fn fill_buckets(&self, p: [&[f32]; 3], start: usize, out: &mut [u32], simd: bool) {
         let mut rows = RowMemo::new(self);
         let mut k = 0;

@@ -1,4 +1,4 @@
-//! The query of the spatial hash (`queryAll`, SEEDS section C): for each particle, its
+//! The query of the spatial hash (`queryAll` of Müller's "Ten Minute Physics" hash): for each particle, its
 //! neighbours within `max_dist`, read row by row from the cells of the build (the method is
 //! in [`super`]).
 

@@ -11,7 +11,7 @@
 //!
 //! sorted ascending: exactly [`SpatialHash::query_upper_filtered`] with the filter
 //! `keep(i, j) = !(cloth_i == cloth_j && dist2(r_i, r_j) <= skip * skip)`, the rest-neighbour
-//! rule of SEEDS section C as the self-collision stage applies it (`rest_skipped` in
+//! rule of Müller's "Ten Minute Physics" self-collision as the self-collision stage applies it (`rest_skipped` in
 //! [`crate::self_collision`]; the rest distance is computed there as
 //! `(r_i - r_j)` per axis, squared and summed in the same order, no FMA, so both decide alike).
 //!
@@ -25,15 +25,8 @@
 //! kept pairs reach scalar code, and a particle with nothing kept skips the sort. The query
 //! reads the positions from the build's cell-ordered copy (the query particle's through its
 //! slot), so unlike [`SpatialHash::query_all`] it needs no pass checking that it was given the
-//! build's positions.
-//!
-//! Measured with `examples/self_collision_timeline` (100x100 fold, basic VcCPBD, 150 steps,
-//! one thread, skin `d` as before, load 4-6 on two cores): hash query 1.87 ms a step on
-//! average before, 0.92-1.06 after; a falling step (every pair within reach is a rest
-//! neighbour) 1.4-3.1 ms before, 0.9-1.9 after; a folded rebuild (reach 4 d) 4-17 ms before,
-//! 2.7-9.4 after. `perf` before: `rest_skipped` alone was 4.9% of the whole run, the sort
-//! 3.8%; after, the lane loop is the cost (the candidates scanned, 9 to 16 rows of 3 to 4
-//! cells a particle), and the skin policy (`self_verlet`) decides how often it runs.
+//! build's positions. The lane loop is then the cost (the candidates scanned), and the skin policy
+//! (`self_verlet`) decides how often it runs.
 
 use crate::data::lanes::{load_idx, F32s, Vec3x8, LANES};
 use crate::self_collision::hash::{SpatialHash, NO_BUCKET};

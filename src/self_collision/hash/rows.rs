@@ -2,7 +2,7 @@
 //! is small enough, the mixing hash otherwise (the bucket of a cell is its row's base plus
 //! `cx`, see [`super`]).
 //!
-//! # Linear rows (session 13)
+//! # Linear rows
 //! With the mixing hash the rows of a cell's neighbourhood (`cy ± 1`, `cz + 1`) land at random
 //! places in the table, so the self-collision query (module `cells`) reads each from a
 //! random place in the slot arrays: eight arrays of 40 kB for 10 000 particles, with the
@@ -16,12 +16,6 @@
 //! bucket holds cells whose numbers differ by a multiple of the table size, far apart). A box
 //! larger than that (a particle thrown far away) keeps the mixing hash, whose collisions do
 //! not line up.
-//!
-//! Measured (one thread, alternate runs against the build before): timeline example, basic
-//! VcCPBD, 150 steps, three runs each: query column 24.3-24.4 -> 22.9-23.2 ms, build 2.9 ->
-//! 3.1 (the box pass), stage total 79.2-79.4 -> 77.3-78.2. `weft reproduce vccpbd --size 100
-//! --repeat 3`, two rounds: sum of the 12 hash rows 5.96 / 5.67 ms before, 5.66 / 5.68 after
-//! (the VM's speed moved between the rounds), basic VcCPBD 0.579 / 0.556 -> 0.549 / 0.542 ms.
 //!
 //! The map is a pure function of the positions (the box of this build), so the tables stay
 //! the same on any number of threads and between the build and its serial twin.

@@ -1,5 +1,5 @@
 //! The mid list of a slow step queried from a spatial hash, refreshed particle by particle
-//! (session 9; the mid list itself is described in [`crate::self_collision::near`]).
+//! (the mid list itself is described in [`crate::self_collision::near`]).
 //!
 //! # Per-particle references
 //! The mid list holds the pairs within `r₁` of the *references* `a`, one position a particle,
@@ -25,26 +25,19 @@
 //! When a position is not finite, or a probe falls far off the hash's scale, the caller
 //! makes a full build.
 //!
-//! # Rehash (session 11)
+//! # Rehash
 //! Each refresh tests its particles against every stale one, so the stale particles are
-//! capped (`n / STALE_SHARE`, at least `STALE_MIN`). Past the cap the caller used to make a
-//! full build: a hash of the predicted positions and a query of every particle (~1.6-1.9
-//! ms on the folded 100x100 cloth, one thread), although only 12 to 77 particles had moved
-//! (instrumented: the three full builds after the first of a basic VcCPBD run, steps 48, 55
-//! and 61). Now the hash is built again from the references (~0.06 ms), the moved
-//! particles' new ones included, so it holds every reference exactly and none is stale; the
-//! build's pairs keep those with no stale or moved end (their references are the build's),
-//! the refreshes' pairs (each has a stale end) are folded in, and the moved particles are
-//! probed in the new hash. The list is then exactly `M` (tested against every pair at each
+//! capped (`n / STALE_SHARE`, at least `STALE_MIN`). Past the cap the hash is built again from
+//! the references, the moved particles' new ones included, so it holds every reference
+//! exactly and none is stale: much cheaper than a full query when only a few dozen particles
+//! moved. The build's pairs keep those with no stale or moved end (their references are the
+//! build's), the refreshes' pairs (each has a stale end) are folded in, and the moved particles
+//! are probed in the new hash. The list is then exactly `M` (tested against every pair at each
 //! rehash). A full build is still made when more particles than the cap move at once.
-//! Rehashing without that compaction (the build's outdated pairs and the extra pairs kept
-//! as they are, still exact as a superset) measured slightly slower: timeline, basic VcCPBD,
-//! three alternate runs, 81.0-83.5 against 80.0-82.0 ms.
 //!
 //! # Why
-//! On the 100x100 fold (basic VcCPBD, 150 steps, one thread) the 13 mid queries of a run were
-//! each triggered by 1 to 9 of the 10 000 particles passing the bound (~1.35 ms a query:
-//! 17.6 ms of the stage's ~110). A refresh probes those few particles and merges the lists.
+//! On a folded cloth a mid list typically expires because a handful of particles pass the
+//! bound; a refresh probes those few and merges the lists instead of querying every particle.
 
 use crate::data::lanes::{finite_lanes, load, F32s, LANES};
 use crate::self_collision::hash::SpatialHash;
@@ -299,8 +292,7 @@ impl HashedMid {
 
 /// The particles `i < n` farther than `√lim2` from `at` into `out`, ascending; `false` (and
 /// `out` unspecified) when a position or a distance is not finite. Eight particles at a time
-/// when `simd` (session 11: the refreshes' scan of every particle, ~20 instructions a
-/// particle one by one), else one by one (the twin; the same list, the same operations).
+/// when `simd`, else one by one (the twin; the same list, the same operations).
 pub(crate) fn moved_past(p: [&[f32]; 3], at: [&[f32]; 3], n: usize, lim2: f32, simd: bool, out: &mut Vec<u32>) -> bool {
     out.clear();
     let mut i = 0;

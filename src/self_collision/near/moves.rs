@@ -39,9 +39,7 @@ pub(crate) fn max_disp2_blocks(p: [&[f32]; 3], at: [&[f32]; 3], blocks: &[u32], 
     }
     let mut mv = F32s::splat(0.0);
     let mut bad = F32s::splat(0.0);
-    // The compact arrays by block (eight lanes each), so their loads need no bounds checks
-    // (session 11, with the plain `max` below: callgrind over the timeline example's 1 564
-    // checks, 97.7 -> 72.9 million instructions).
+    // The compact arrays by block (eight lanes each), so their loads need no bounds checks.
     fn chunks(a: &[f32], compact: usize) -> std::slice::ChunksExact<'_, f32> {
         a[..compact].chunks_exact(LANES)
     }
@@ -50,7 +48,7 @@ pub(crate) fn max_disp2_blocks(p: [&[f32]; 3], at: [&[f32]; 3], blocks: &[u32], 
         let g = b as usize * LANES;
         if simd && g + LANES <= len {
             // Written out: `[0, 1, 2].map(..)` compiled to an out-of-line call per coordinate
-            // here (callgrind: ~110 of the ~1600 million instructions of the pair phase).
+            // here.
             let vx = load(p[0], g) - load(ax, 0);
             let vy = load(p[1], g) - load(ay, 0);
             let vz = load(p[2], g) - load(az, 0);

@@ -111,7 +111,7 @@ pub(crate) fn filter_range(pairs: &[(u32, u32)], p: [&[f32]; 3], r: f32, simd: b
     let mut done = 0;
     let r2 = r * r;
     // Every index below the copy's length, checked once, so the gathers need no checks
-    // (session 12, with the pair pass's: see `PairCtx::near_candidates`).
+    // (as in the pair pass's: see `PairCtx::near_candidates`).
     let top = largest_id(pairs);
     if simd && (top as usize) < xyz.len() {
         let r2v = F32s::splat(r2);
@@ -184,8 +184,7 @@ fn near_len(cand: &Neighbours, p: [&[f32]; 3], n: usize) -> usize {
 /// values either way).
 fn fill_xyz(p: [&[f32]; 3], n: usize, parallel: bool, xyz: &mut Vec<[f32; 4]>) {
     const BLOCK: usize = 2048;
-    // Every entry is overwritten below: zero only new entries (a rebuild used to clear and
-    // zero all `n`, ~9% of the near updates' instructions in callgrind).
+    // Every entry is overwritten below: zero only new entries.
     xyz.resize(n, [0.0; 4]);
     let (x, y, z) = (&p[0][..n], &p[1][..n], &p[2][..n]);
     let one = |b: usize, dst: &mut [[f32; 4]]| {
@@ -242,8 +241,8 @@ fn collect_range(
             let groups = list.as_chunks::<LANES>().0;
             for js in groups {
                 let idx = idx8(|l| js[l]);
-                // Checked here: a per-list check before the loop measured more instructions
-                // (callgrind over the timeline: 118.4 -> 131.1 million; the lists are short).
+                // Checked here: a per-list check before the loop costs more (the lists are
+                // short).
                 let q = gather_xyzw8(xyz, &idx);
                 let v = [piv[0] - q[0], piv[1] - q[1], piv[2] - q[2]];
                 let d2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];

@@ -2,7 +2,7 @@
 //!
 //! The self-collision broadphase ([`crate::self_collision::hash`], [`crate::self_collision::tree`]) answers one
 //! question for every particle `i`: which particles `j != i` lie within `max_dist`? The answer
-//! is stored the way SEEDS section C stores it (`firstAdjId` / `adjIds`): the neighbours of `i`
+//! is stored the way Müller's "Ten Minute Physics" hash stores it (`firstAdjId` / `adjIds`): the neighbours of `i`
 //! are `ids[first[i] .. first[i + 1]]`.
 //!
 //! # The neighbour predicate

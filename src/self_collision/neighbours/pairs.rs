@@ -12,24 +12,16 @@
 //!    sort of the pairs, least significant key first);
 //! 3. drop repeated ids (adjacent now), the lists being compacted in one serial pass.
 //!
-//! Measured on the folded rebuilds of the 100x100 fold (485 000 pairs, reach 5 d, loaded
-//! machine): scatter then `sort_unstable` of every list 8.8-10.1 ms; the two counting sorts
-//! 1.6-4.3 ms, back to back (the emission of the pairs, 4-5 ms, is now the larger part).
+//! The two counting sorts cost a fraction of a scatter followed by a comparison sort of every
+//! list (a folded cloth emits hundreds of thousands of pairs).
 //!
 //! Sorting and de-duplicating make the lists canonical: they do not depend on the order the
 //! pairs were emitted in, nor on the number of threads, so they equal the lists of any other
 //! upper query (each pair once, in the list of its smaller id).
 //!
-//! The assembly is serial. Tried in session 6 and not kept (issue #5 on two threads; timers
-//! around the emission and the assembly, timeline example, 150 steps, 49 rebuilds, CPU lock,
-//! idle machine): the tasks filing each pair by the range of its smaller id (one buffer a
-//! range of `2^shift` particles) and the ranges assembled in parallel, then joined. With at
-//! most 16 ranges of at least 256 particles (10 at 10 000) the assembly took 11.0 ms in all
-//! on two threads against 10.7-11.3 serial (the fold's pairs are filed under the lower half's
-//! ids: half the ranges hold them all, and joining the ranges' lists cost 1.7-2.0 ms), and
-//! 13.6 on one thread; with up to 64 ranges 18.5 ms (each range's counting sort on `j`
-//! walks all the partners above it, so the work grows with the ranges). The emission into
-//! range buffers was also slower on one thread (33-34 to 37 ms).
+//! The assembly is serial: filing the pairs into ranges of particles assembled in parallel
+//! was no faster on two threads (a folded cloth's pairs crowd into a few ranges, and joining
+//! the ranges' lists costs what the parallel sorts save).
 
 use crate::self_collision::neighbours::{prefix_sum, Neighbours};
 use crate::Result;

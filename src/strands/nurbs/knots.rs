@@ -5,10 +5,10 @@
 //! domain `[t_p, t_{n_ctrl}]`; "clamped" means the first and last knots are repeated `k`
 //! times so that the curve starts at the first control point and ends at the last.
 //!
-//! # Index mapping to the paper (SEEDS.md B, formula 2.9)
+//! # Index mapping to the paper (the NURBS thesis, formula 2.9)
 //! The paper counts `n + 1` control points `P_0 ..= P_n` and uses the *order* `k` (its
 //! `N_{i,1}` is the piecewise-constant basis), so `n = n_ctrl - 1` and `k = p + 1`. Its knot
-//! formula, as digested in SEEDS.md, is
+//! formula is
 //!
 //! ```text
 //! knot_i = 0                      for 0 <= i < k

@@ -1,5 +1,5 @@
 //! Smooth curves and sheets drawn over simulated particles (the paper draws strands and cloth
-//! as NURBS whose control points are the simulated points, SEEDS.md B / AHS last step).
+//! as NURBS whose control points are the simulated points, the NURBS thesis, AHS last step).
 //!
 //! The particles become the control points, with unit weights and the clamped uniform knot
 //! vector. The curve therefore passes *through* the first and last particle (a strand's root

@@ -1,5 +1,5 @@
 //! `weft reproduce landovsky [--quick] [--json] [--png DIR] [--only TEXT]`: the timing table of
-//! Landovskaya, Landovsky & Frolovsky (SEEDS.md section D).
+//! Landovskaya, Landovsky & Frolovsky (cloth against polyhedral solids).
 //!
 //! The paper drops fabric (particles at the warp/weft crossings) on dress-form meshes of 4800
 //! and 8350 faces and times 500 or 150 "iterations" with uniform grids of 1x1x1, 5x5x5,

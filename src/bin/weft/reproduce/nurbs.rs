@@ -1,5 +1,5 @@
-//! `weft reproduce nurbs [--json]`: the thesis' complexity claim for NURBS evaluation (SEEDS.md
-//! B, section 2.2.2): a point costs `O(n)` with the global sum and `O(k)` with the local one, so
+//! `weft reproduce nurbs [--json]`: the thesis' complexity claim for NURBS evaluation (the thesis on
+//! NURBS strands and surfaces, section 2.2.2): a point costs `O(n)` with the global sum and `O(k)` with the local one, so
 //! local time per point must stay flat as the number of control points `n` grows while global
 //! time grows with `n` (with `n²` for an `n x n` surface). Measured by
 //! [`weft::strands::nurbs_timing::nurbs_timing`]; surfaces stop at

@@ -1,6 +1,6 @@
 //! `weft reproduce vccpbd`: the collision-time table of Shapri, Sulaiman & Bade (2016),
 //! "Velocity Correction Position Based Dynamic to optimize collision computation in cloth
-//! simulation" (SEEDS.md section A).
+//! simulation".
 //!
 //! The paper times the collision stage of a cloth falling and folding onto itself, for three
 //! grid sizes and four fabric presets (its dt, particle mass and damping), with three
@@ -11,77 +11,30 @@
 //! paper's "average collision" (percentage of particles in penetration after each step).
 //! The paper's machine was a Core 2 Duo at 1.5 GHz running C#/XNA; ours is whatever runs this.
 //!
-//! Threads: the table runs on one thread by default (`--threads 2` or `0` for more). The
-//! paper's program was single-threaded, and on the shared two-core machine this was measured
-//! on, two threads did not lower the collision CPU time and changed the wall time by less than
-//! the run-to-run noise (before the list reuse, 150 steps, 100x100: 7.5-9.7 ms collision CPU
-//! a step on one thread, 7.9-9.9 ms on two). With the reuse (candidate lists kept across
-//! steps, near lists across substeps) a re-check on a loaded machine (load 5-8) gave 1.8-2.9
-//! ms collision wall a step on two threads against 2.5-5.2 on one, within the noise of that
-//! load. With the rest-neighbour lanes in the hash query, the wider skin and the cheaper
-//! substep passes (2026-11-23, idle machine, the 12 hash rows of `--size 100`): 1.13-1.56
-//! ms collision a step on one thread (16.4-27.9x the paper), 0.94-1.18 ms on two
-//! (20.5-38.9x); the query gains from the second thread, the substep passes do not. One thread
-//! stays the default so the table compares like with like (the paper's program used one);
-//! `--threads 2` prints the other figure. The results are
-//! the same bits on any thread count. Session 7 (mid list, pollers, `--size 100`, two
-//! alternate runs against the session's starting build): the basic rows, the slowest, 0.574-
-//! 0.687 ms collision a step on two threads (41.2-46.0x; 0.637-0.764 ms, 33.5-43.0x before)
-//! against 0.726-0.820 ms on one (30.2-37.7x; 0.855-1.022 ms before); two threads now clearly
-//! pay, but the default stays one thread for the reason above. Session 8 (slow steps without
-//! candidate lists, `self_verlet`), medians of `--repeat 3` on one thread: 0.52-0.79 ms
-//! collision a step over the 12 hash rows (30.6-59.2x), the basic rows 0.66-0.79 (30.6-41.4x);
-//! one thread repeats within 1-3% here, two threads drift by up to 1.35 times between runs
-//! (medians of `--repeat 5`: 0.41-0.69 ms, slowest rows 38-53x depending on the spell).
-//! Session 9 (mid lists refreshed per particle, one correction call for all runs, no copy of
-//! the box centres), medians of `--repeat 3` on one thread: 0.425-0.630 ms over the 12 hash
-//! rows (41.9-74.0x), sum 5.97 ms against 7.53 at the session's start; the basic rows
-//! 0.564-0.630 (41.9-48.5x) are the only ones below 50x. Two threads swing between spells of
-//! the VM: in good ones, `--repeat 5`, every run of every hash row at least 51.1x (basic
-//! VcCPBD 0.432-0.474 ms, the goal met for all three responses); in slow ones the basic rows
-//! take 0.68-0.75 ms (33-41x, slower than one thread). Session 10 (two near skins,
-//! `self_near_fast`), two rounds of two alternate runs of `--repeat 3` on one thread: the
-//! movement-speed rows 2-8% faster (basic 0.590-0.613 ms, 46.2-48.0x), the others within -2%
-//! to +3%; the 12 rows' sum 5.69-5.87 ms against 5.70-5.95 (the VM's speed moved between the
-//! rounds). The basic rows are still the only ones below 50x (basic PBD at 49.3-50.7x in the
-//! faster round, VcCPBD 42.7-44.1x). Two threads, a good spell, `--repeat 3`: every run of
-//! every hash row at least 50.2x (basic VcCPBD 0.434-0.482 ms).
-//! Session 13 (linear hash rows, the member test in lanes, the falling near list from pairs,
-//! the mid path's near skin at `d / 8`, the correction's unchecked runs), `--repeat 3` on one
-//! thread, two runs alternating with the session's starting build: the 12 hash rows' sum
-//! 5.55 / 5.55 -> 4.88 / 5.12 ms, every hash row at least 51.8x (basic VcCPBD 0.537 / 0.541
-//! -> 0.467 / 0.468 ms, 44.8-45.1x -> 51.8x; basic PBD 60.2-60.8x, movement speed
-//! 53.7-54.5x), average collision 0.000%; two threads, one run: at least 57.1x. The margin on
-//! one thread is ~4%, less than the VM's spell-to-spell drift (up to ~12%), so a slow spell
-//! can still put the basic VcCPBD row below 50x.
+//! Threads: the table runs on one thread by default (`--threads 2` or `0` for more), because
+//! the paper's program was single-threaded and the table should compare like with like. The
+//! results are the same bits on any thread count.
 //!
 //! A second table splits the collision time by phase (hash build, query, the rest of the step
 //! start, substep pair passes, substep corrections, the speed clamp) and gives the number of
 //! steps that ran the broadphase (the others reused the candidate lists).
 //!
 //! Substeps: 10 by default (`--substeps`). With 5 the fold still runs but the cloth does not
-//! converge (the largest strain went from 1.05-1.5 to 3.9-5.5, average collision from 0.000%
-//! to 0.3-1.2%), so 10 stays.
+//! converge (the largest strain and the average collision grow several times).
 //!
-//! Stretch (session 8): "converge" above is relative. The strain column is the largest
-//! `|l - l0| / l0` over all constraints, and at the paper's time steps with 10 substeps and no
-//! tethers the cloth stretches a great deal near the line: on the 100x100 basic fold 28% of
-//! the stretch and shear edges are 20-100% longer than at rest and ~250 more than 100%
-//! (cotton: 1 edge), the same with self-collision off, so this is the solver's convergence
-//! (one Gauss-Seidel sweep a substep over 50 rows of hanging cloth), not the collision
-//! response; 40 substeps give 21% at most, 100 give 9%. `--tethers SLACK` ties every particle
-//! to the pinned row (long-range attachments, slack a fraction of the rest distance): with
-//! slack 0 the largest strain is 25-26% and 89% of the edges are within 1% of their rest
-//! length. That cloth folds tighter (its two layers touch over most of their area, ~4 000
-//! contacts a substep against ~280), and the collision stage costs 2.1-2.4 times more:
-//! `--size 100 --threads 2 --repeat 5`, medians, 1.07-1.25 ms a step with tethers (19-34x the
-//! paper) against 0.41-0.63 ms without (43-79x). The table keeps the untethered fold by
-//! default, like the figures of the sessions before; the tethered rows are the harder case
-//! and are quoted beside them.
+//! Stretch: the strain column is the largest `|l - l0| / l0` over all constraints. At the
+//! paper's time steps with 10 substeps and no tethers the cloth stretches a great deal near
+//! the line, with self-collision on or off: this is the solver's convergence (one Gauss-Seidel
+//! sweep a substep over 50 rows of hanging cloth), not the collision response; more substeps
+//! reduce it. `--tethers SLACK` ties every particle to the pinned row (long-range attachments,
+//! slack a fraction of the rest distance): with slack 0 nearly every edge stays within 1% of
+//! its rest length. That cloth folds tighter (its two layers touch over most of their area,
+//! an order of magnitude more contacts a substep), and the collision stage costs about twice
+//! as much. The table keeps the untethered fold by default; the tethered rows are the harder
+//! case.
 //!
 //! `--repeat N` runs every row N times and keeps the run with the median collision time,
-//! with the spread in a last table: single runs on the shared two-core machine this was
-//! measured on drift by up to 1.35 times between runs (slow spells of the VM).
+//! with the spread in a last table: single runs on a shared machine drift between runs.
 
 use std::process::ExitCode;
 use std::time::Instant;

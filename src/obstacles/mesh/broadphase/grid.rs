@@ -1,5 +1,4 @@
-//! The paper's uniform grid over a mesh obstacle (Landovskaya, Landovsky & Frolovsky, SEEDS.md
-//! section D).
+//! The paper's uniform grid over a mesh obstacle (Landovskaya, Landovsky & Frolovsky).
 //!
 //! Build: take the obstacle's axis-aligned box `[lo, hi]` ("a parallelepiped whose faces pass
 //! through the object's extreme points"), split it into `nx x ny x nz` equal cells, and give

@@ -19,9 +19,6 @@ use crate::Result;
 /// the contact reach and a margin of a few steps' motion, a face size or two across. With
 /// cells of two face sizes such a box spans about two cells per axis, and each cell holds a
 /// handful of faces; one face size visits about three times as many cells for the same faces.
-/// Measured with callgrind on `weft reproduce landovsky --only "32500 4800 hash"` (500
-/// steps, one thread): 17.0 G instructions in the steps with one face size, 15.5 G with two,
-/// 15.5 G with three.
 pub const AUTO_CELL_FACES: f32 = 2.0;
 /// A face spanning more cells than this is not hashed but returned by every query.
 pub const BIG_FACE_CELLS: u64 = 64;

@@ -35,7 +35,7 @@ impl SpatialHash {
     /// [`SpatialHash::member`] of slots `k..min(k + 8, e)` at once, as bits (bit `l` for slot
     /// `k + l`): the same comparisons in `f32` lanes, a lane whose cell is NaN or beyond
     /// `2^22` decided by the scalar test. The slot arrays are padded by a lane group, so the
-    /// loads stay inside them. Session 13: the scalar test took ~100 instructions a particle
+    /// loads stay inside them. The scalar test costs about a hundred instructions a particle
     /// (three floors, three saturating conversions and their range checks an axis).
     #[inline(always)]
     pub(super) fn member_lanes(&self, k: usize, e: usize, home: [i32; 3], r: f32) -> u32 {

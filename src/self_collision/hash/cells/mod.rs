@@ -29,52 +29,13 @@
 //! scatter, sort each list, drop repeats) makes the lists canonical, equal to the particle
 //! query's bit for bit on any number of threads.
 //!
-//! # Measured
-//! `examples/self_collision_timeline` (100x100 fold, basic VcCPBD, 150 steps, one thread,
-//! load 5 on two cores, the particle query and this one run alternately, two rounds), ms a
-//! step: hash query averaged over the run 0.625 / 0.904 before, 0.423 / 0.460 after; a falling
-//! step's query (steps 0-45, averaged) 1.45 / 1.84 before, 0.81 / 0.92 after. The folded
-//! rebuilds at reach 5 d (steps 46 and 49) stayed at 8-10 ms: there the cost is the kept
-//! pairs (48 a particle), whose assembly the two counting sorts of `neighbours_pairs` cut.
-//!
-//! `examples/self_query_bench` (same build, both queries alternately, 150 repetitions, min;
-//! the VM's speed varies 2x between runs, so compare within a line): step 20 (falling, reach
-//! 3 d) particle query 0.66-1.34 ms, cell query 0.27-0.54 (0.41x); step 46 (folded, reach
-//! 5 d, 485 103 pairs) 4.4-8.7 ms against 3.4-5.3 (0.6-0.8x).
-//!
-//! Scanning the member's own bucket and the next cell of its row as one range (they are
-//! adjacent in the slots unless the row wraps): falling step 0.504-0.703 -> 0.486-0.666 ms
-//! (three alternate pairs). The falling cloth holds 6-7 particles an occupied bucket.
-//!
-//! Tried and not kept: cells wider than the reach (1.25 and 1.5 times; the half shell needs
-//! at least the reach): step 20 cell query 0.64 and 0.96 ms against 0.40-0.54 at 1.0, more
-//! candidates a member for the same look-ups. Computing every mask of a block without the
-//! branch on the distance mask (the branch is taken about half the time while falling):
-//! cell / particle ratio 0.37-0.41 against 0.41-0.42, within the noise, so the simpler
-//! branching kernel stays.
-//!
-//! Session 12: the lane scan loads without bounds checks (the slot arrays are padded by a
-//! lane group, so a range ending inside them can be checked once): callgrind over the basic
-//! fold's timeline, one thread, step start 573.6 -> 530.1 million instructions; three
-//! alternate runs, query column 27.2-27.3 -> 26.5-26.8 ms.
-//!
-//! Tried in session 11 and not kept (a falling step's query, step 20 of the basic fold,
-//! ~7.9 million instructions, ~12 lane groups a member at ~45% lane use; alternate runs of a
-//! micro-bench, 500-1000 queries each): each row range cut once into lane-width slices, so
-//! the loads need no bounds checks: 333-338 against 285-306 µs (the per-range setup outweighs
-//! the checks; a range is ~2.4 groups); the rows of a cell scanned once for a batch of up to
-//! eight members (each group loaded once): 158.4 against 158.6 million instructions for 20
-//! queries, the same time; the rows copied once a cell into one padded buffer that every
-//! member scans in full groups: 365-369 against 301-303 µs (1 468 against 1 391-1 421 at the
-//! impact, step 44): the copy costs more than the partial groups it saves.
-//!
-//! Tried in session 13 and not kept: the members of a cell in the lanes (up to eight, loaded
-//! once) and each candidate of the half shell broadcast against them, one lane group a
-//! candidate for the whole cell. Most candidates of a cloth lie within reach of some member,
-//! so nearly every one also ran the rest test; callgrind of 20 falling-step queries 754 ->
-//! 821 million instructions, and in the timeline (three alternate runs) the query column
-//! 24.5-25.9 -> 26.0-27.7 ms, slower at every falling step, although a warm-cache micro-bench
-//! had it 3-10% faster.
+//! # Choices
+//! The member's own bucket and the next cell of its row are scanned as one range (they are
+//! adjacent in the slots unless the row wraps). Cells are as wide as the reach (the half shell
+//! needs at least that; wider cells only add candidates). The lane scan loads without bounds
+//! checks: the slot arrays are padded by a lane group, so a range ending inside them is
+//! checked once. The members are tested one at a time against lane groups of candidates;
+//! putting a cell's members in the lanes instead made every candidate run the rest test.
 
 use crate::data::lanes::{load, load_idx, load_idx_unchecked, load_unchecked, F32s, Vec3x8, LANES};
 use crate::self_collision::hash::SpatialHash;
