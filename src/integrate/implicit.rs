@@ -36,9 +36,10 @@ use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
 use faer::sparse::{Argsort, Pair, SparseColMat, SymbolicSparseColMat};
 use faer::Side;
 
+use crate::constraints::DistanceSet;
+use crate::data::particles::Particles;
 use crate::error::{Result, WeftError};
 use crate::integrate::springs::spring_stiffness;
-use crate::world::World;
 
 /// Marks a particle that is not an unknown (pinned).
 const NOT_FREE: u32 = u32::MAX;
@@ -83,8 +84,7 @@ fn spring_block(xa: [f64; 3], xb: [f64; 3], rest: f64, k: f64) -> ([[f64; 3]; 3]
 }
 
 impl ImplicitState {
-    fn new(world: &World) -> Result<ImplicitState> {
-        let p = world.particles();
+    fn new(p: &Particles, distance: &DistanceSet, stiffness: f32) -> Result<ImplicitState> {
         let n = p.count();
         let mut free = vec![NOT_FREE; n];
         let mut n_free = 0u32;
@@ -94,9 +94,7 @@ impl ImplicitState {
                 n_free += 1;
             }
         }
-        let stiffness = world.params.stiffness;
-        let springs = world
-            .distance
+        let springs = distance
             .colours
             .iter()
             .flat_map(|c| {
@@ -115,7 +113,7 @@ impl ImplicitState {
             rhs: Vec::new(),
         };
         let mut idx = Vec::new();
-        layout.assemble(world, 0.0, |r, c| idx.push(Pair { row: r, col: c }));
+        layout.assemble(p, 0.0, |r, c| idx.push(Pair { row: r, col: c }));
         let solver = if layout.n_dof > 0 {
             let (pattern, argsort) = SymbolicSparseColMat::try_new_from_indices(layout.n_dof, layout.n_dof, &idx).map_err(faer_err)?;
             let symbolic = SymbolicLlt::try_new(pattern.as_ref(), Side::Lower).map_err(faer_err)?;
@@ -126,13 +124,12 @@ impl ImplicitState {
         Ok(ImplicitState { layout, solver })
     }
 
-    /// Whether this layout still fits the world.
-    fn fits(&self, world: &World) -> bool {
-        let p = world.particles();
+    /// Whether this layout still fits the particles, constraints and stiffness.
+    fn fits(&self, p: &Particles, distance: &DistanceSet, stiffness: f32) -> bool {
         let l = &self.layout;
-        l.stiffness == world.params.stiffness
+        l.stiffness == stiffness
             && l.free.len() == p.count()
-            && l.springs.len() == world.distance.len()
+            && l.springs.len() == distance.len()
             && l.free.iter().zip(&p.w).all(|(&f, &w)| (f != NOT_FREE) == (w > 0.0))
     }
 }
@@ -141,8 +138,7 @@ impl Layout {
     /// Fills `vals` (lower triangle of `M - h² K`, in a fixed order that depends only on the
     /// layout) and `rhs` (`h (F + h K v)` without external forces), calling `index` with each
     /// entry's row and column in that same order.
-    fn assemble(&mut self, world: &World, h: f64, mut index: impl FnMut(usize, usize)) {
-        let p = world.particles();
+    fn assemble(&mut self, p: &Particles, h: f64, mut index: impl FnMut(usize, usize)) {
         self.vals.clear();
         self.rhs.clear();
         self.rhs.resize(self.n_dof, 0.0);
@@ -198,26 +194,41 @@ fn faer_err(e: impl std::fmt::Debug) -> WeftError {
     WeftError::param("solver.method", "implicit-euler", format!("sparse solver failed: {e:?}"))
 }
 
-impl World {
-    /// One implicit Euler substep of length `h` at time `t`. With `keep_x` the drift writes only
-    /// the prediction `p` for the collision stages ([`crate::integrate::contacts`]).
-    pub(crate) fn implicit_substep(&mut self, h: f32, t: f64, keep_x: bool) -> Result<()> {
-        let mut state = match self.ms.implicit.take() {
-            Some(st) if st.fits(self) => st,
-            _ => ImplicitState::new(self)?,
+/// What one implicit substep reads besides the particles and constraints.
+pub(crate) struct ImplicitSubstep<'a> {
+    /// Substep length, s.
+    pub h: f32,
+    /// Spring stiffness of zero-compliance constraints, N/m.
+    pub stiffness: f32,
+    /// Gravity, m/s², if named.
+    pub gravity: Option<[f32; 3]>,
+    /// Wind force per particle, N, if named (computed at the substep's start).
+    pub wind: Option<[&'a [f32]; 3]>,
+    /// Drag coefficient, if named.
+    pub drag: Option<f32>,
+    /// Per-particle damping factor for this `h`, if any fabric damps.
+    pub damp: Option<&'a [f32]>,
+    /// Write only the prediction `p` (the collision stages follow and then set `x`).
+    pub keep_x: bool,
+}
+
+impl ImplicitState {
+    /// One implicit Euler substep: `state` is reused when it still fits, rebuilt otherwise.
+    pub(crate) fn substep(
+        slot: &mut Option<ImplicitState>,
+        p: &mut Particles,
+        distance: &DistanceSet,
+        sub: &ImplicitSubstep<'_>,
+    ) -> Result<()> {
+        let mut state = match slot.take() {
+            Some(st) if st.fits(p, distance, sub.stiffness) => st,
+            _ => ImplicitState::new(p, distance, sub.stiffness)?,
         };
+        let h = sub.h;
         let hd = h as f64;
         let st = &mut state.layout;
-        st.assemble(self, hd, |_, _| {});
-        let p = &self.particles;
-        let g = self.effects.gravity.map(|g| g.map(f64::from));
-        let wind = match (&self.effects.wind, &mut self.wind) {
-            (Some(w), Some(state)) => {
-                state.compute(w, t, &self.triangles, [&p.x, &p.y, &p.z], [&p.vx, &p.vy, &p.vz], false);
-                Some(state)
-            }
-            _ => None,
-        };
+        st.assemble(p, hd, |_, _| {});
+        let g = sub.gravity.map(|g| g.map(f64::from));
         for (i, &b) in st.free.iter().enumerate() {
             if b == NOT_FREE {
                 continue;
@@ -226,8 +237,8 @@ impl World {
             let o = 3 * b as usize;
             for k in 0..3 {
                 let mut f = g.map_or(0.0, |g| m * g[k]);
-                if let Some(ws) = &wind {
-                    f += [ws.fx[i], ws.fy[i], ws.fz[i]][k] as f64;
+                if let Some(w) = &sub.wind {
+                    f += w[k][i] as f64;
                 }
                 st.rhs[o + k] += hd * f;
             }
@@ -240,10 +251,8 @@ impl World {
             })?;
             llt.solve_in_place(faer::MatMut::from_column_major_slice_mut(&mut st.rhs, st.n_dof, 1));
         }
-        let n = self.particles.count();
-        let damp = self.has_damping.then_some(&self.damp_factor);
-        let drag = self.effects.drag.map(|c| c * h);
-        let p = &mut self.particles;
+        let n = p.count();
+        let drag = sub.drag.map(|c| c * h);
         for i in 0..n {
             let mut v = [p.vx[i], p.vy[i], p.vz[i]];
             let b = st.free[i];
@@ -256,17 +265,17 @@ impl World {
                 let s = 1.0 / (1.0 + hc * p.w[i]);
                 v = v.map(|e| e * s);
             }
-            if let Some(d) = damp {
+            if let Some(d) = sub.damp {
                 v = v.map(|e| e * d[i]);
             }
             (p.vx[i], p.vy[i], p.vz[i]) = (v[0], v[1], v[2]);
             let x = [p.x[i] + v[0] * h, p.y[i] + v[1] * h, p.z[i] + v[2] * h];
-            if !keep_x {
+            if !sub.keep_x {
                 (p.x[i], p.y[i], p.z[i]) = (x[0], x[1], x[2]);
             }
             (p.px[i], p.py[i], p.pz[i]) = (x[0], x[1], x[2]);
         }
-        self.ms.implicit = Some(state);
+        *slot = Some(state);
         Ok(())
     }
 }

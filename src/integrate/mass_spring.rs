@@ -29,10 +29,7 @@
 
 use crate::data::lanes::{load, F32s, Vec3x8, LANES};
 use crate::data::particles::ParticleChunk;
-use crate::integrate::springs::{add_spring_forces_scalar, add_spring_forces_simd};
 use crate::model::effects::Effects;
-use crate::model::params::{Backend, Method};
-use crate::world::World;
 
 /// Scratch of the force-based methods, kept by the world between steps.
 #[derive(Default)]
@@ -42,9 +39,9 @@ pub struct MassSpringState {
     /// The implicit solver's factorisation and layout, built on first use.
     pub implicit: Option<crate::integrate::implicit::ImplicitState>,
     /// The predictions before the collision stages moved them (see
-    /// [`crate::integrate::contacts`]).
+    /// [`crate::world::contacts`]).
     pub predicted: [Vec<f32>; 3],
-    /// Velocities before the self-collision speed clamp (see [`crate::integrate::contacts`]).
+    /// Velocities before the self-collision speed clamp (see [`crate::world::contacts`]).
     pub before_clamp: [Vec<f32>; 3],
 }
 
@@ -64,7 +61,7 @@ pub struct KickParams<'a> {
     /// Drift `x += h v` after the kick, with this `h`.
     pub drift: Option<f32>,
     /// The drift writes only the prediction `p = x + h v` and leaves `x` for the collision
-    /// stages (see [`crate::integrate::contacts`]); otherwise it writes both.
+    /// stages (see [`crate::world::contacts`]); otherwise it writes both.
     pub keep_x: bool,
 }
 
@@ -150,7 +147,7 @@ fn kick_scalar(c: ParticleChunk<'_>, p: &KickParams<'_>) {
 }
 
 /// Kick parameters over the force scratch `f`; `close` adds drag and damping.
-fn kick_params<'a>(
+pub(crate) fn kick_params<'a>(
     f: &'a [Vec<f32>; 3],
     damp: Option<&'a [f32]>,
     effects: &Effects,
@@ -167,111 +164,6 @@ fn kick_params<'a>(
         damp: damp.filter(|_| close),
         drift,
         keep_x: false,
-    }
-}
-
-impl World {
-    /// Forces at the current positions (and velocities, for wind) into the scratch arrays.
-    fn compute_forces(&mut self, t: f64) {
-        let len = self.particles.padded_len();
-        let simd = self.params.backend == Backend::Simd;
-        for a in &mut self.ms.f {
-            a.clear();
-            a.resize(len, 0.0);
-        }
-        let p = &self.particles;
-        let x = [&p.x[..], &p.y[..], &p.z[..]];
-        if let (Some(w), Some(state)) = (&self.effects.wind, &mut self.wind) {
-            state.compute(w, t, &self.triangles, x, [&p.vx, &p.vy, &p.vz], simd);
-            self.ms.f[0].copy_from_slice(&state.fx);
-            self.ms.f[1].copy_from_slice(&state.fy);
-            self.ms.f[2].copy_from_slice(&state.fz);
-        }
-        let [fx, fy, fz] = &mut self.ms.f;
-        if simd {
-            add_spring_forces_simd(&self.distance, x, [fx, fy, fz], self.params.stiffness, true);
-        } else {
-            add_spring_forces_scalar(&self.distance, x, [fx, fy, fz], self.params.stiffness);
-        }
-    }
-
-    /// Damping factors for substep length `h` (recomputed only when `h` changes).
-    pub(crate) fn damping_for(&mut self, h: f32) {
-        if self.has_damping && self.damp_h != h {
-            self.damp_factor = self.damping_rate.iter().map(|&c| 1.0 / (1.0 + c * h)).collect();
-            self.damp_factor.resize(self.particles.padded_len(), 1.0);
-            self.damp_h = h;
-        }
-    }
-
-    /// One step of a force-based method (`substeps` substeps; `iterations` is not used), with
-    /// the collision stages after every drift when the world has obstacles or self-collision.
-    pub(crate) fn run_mass_spring(&mut self, dt: f32, method: Method) -> crate::Result<()> {
-        let n_sub = self.params.substeps;
-        let h = dt / n_sub as f32;
-        let simd = self.params.backend == Backend::Simd;
-        let parallel = simd && !self.embed.caller_thread_only;
-        self.damping_for(h);
-        self.last_h = h;
-        let contacts = self.begin_force_contacts(parallel);
-        let keep_x = contacts.any();
-        let leap = method == Method::Leapfrog;
-        if leap {
-            self.compute_forces(self.time);
-        }
-        for s in 0..n_sub {
-            let t = self.time + s as f64 * h as f64;
-            if method == Method::ImplicitEuler {
-                self.implicit_substep(h, t, keep_x)?;
-            } else if leap {
-                // Half kick + drift with F(x_n), contacts, then the half kick with F(x_{n+1})
-                // closing the substep.
-                let mut first = kick_params(
-                    &self.ms.f,
-                    self.has_damping.then_some(&self.damp_factor[..]),
-                    &self.effects,
-                    0.5 * h,
-                    h,
-                    false,
-                    Some(h),
-                );
-                first.keep_x = keep_x;
-                self.particles.for_chunks(parallel, |c| kick(c, &first, simd));
-                if keep_x {
-                    self.force_contact_stages(contacts, s, h, parallel, simd);
-                }
-                self.compute_forces(t + h as f64);
-                let close = kick_params(
-                    &self.ms.f,
-                    self.has_damping.then_some(&self.damp_factor[..]),
-                    &self.effects,
-                    0.5 * h,
-                    h,
-                    true,
-                    None,
-                );
-                self.particles.for_chunks(parallel, |c| kick(c, &close, simd));
-                continue;
-            } else {
-                // Symplectic Euler: one whole kick + drift closing the substep.
-                self.compute_forces(t);
-                let mut close = kick_params(
-                    &self.ms.f,
-                    self.has_damping.then_some(&self.damp_factor[..]),
-                    &self.effects,
-                    h,
-                    h,
-                    true,
-                    Some(h),
-                );
-                close.keep_x = keep_x;
-                self.particles.for_chunks(parallel, |c| kick(c, &close, simd));
-            }
-            if keep_x {
-                self.force_contact_stages(contacts, s, h, parallel, simd);
-            }
-        }
-        Ok(())
     }
 }
 

@@ -16,7 +16,6 @@
 pub mod kernels;
 
 pub use kernels::{predict, update, PredictParams};
-pub mod contacts;
 pub mod implicit;
 pub mod mass_spring;
 pub mod springs;

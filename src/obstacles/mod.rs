@@ -50,7 +50,6 @@ use crate::obstacles::mesh::face_memory::NO_FACE;
 use crate::obstacles::mesh::pass::MeshPass;
 use crate::obstacles::obstacle::displacement;
 pub use crate::obstacles::obstacle::{Geometry, MeshObstacle, Obstacle};
-use crate::world::World;
 
 /// Smallest contact margin beyond the thickness, m.
 pub const MIN_MARGIN: f32 = 3e-3;
@@ -79,6 +78,49 @@ impl ObstacleSet {
     /// Is there no obstacle?
     pub fn is_empty(&self) -> bool {
         self.list.is_empty()
+    }
+
+    /// Adds an obstacle (its shape validated); returns its index.
+    pub fn add(&mut self, obstacle: Obstacle) -> Result<usize> {
+        if let Geometry::Shape(s) = &obstacle.geometry {
+            s.validate()?;
+        }
+        self.list.push(obstacle);
+        self.th.clear();
+        Ok(self.list.len() - 1)
+    }
+
+    /// The obstacles, in the order they were added.
+    pub fn list(&self) -> &[Obstacle] {
+        &self.list
+    }
+
+    /// Sets the Coulomb friction coefficient of obstacles that have none of their own.
+    pub fn set_friction(&mut self, mu: f32) -> Result<()> {
+        non_negative("friction", mu)?;
+        self.friction = mu;
+        Ok(())
+    }
+
+    /// The default friction coefficient.
+    pub fn friction(&self) -> f32 {
+        self.friction
+    }
+
+    /// Wall time spent in the obstacle stages so far.
+    pub fn busy(&self) -> std::time::Duration {
+        self.busy
+    }
+
+    /// How many of the first `n` particles hold a contact with at least one obstacle.
+    pub fn contact_count(&self, n: usize) -> usize {
+        (0..n)
+            .filter(|&i| {
+                self.slots
+                    .iter()
+                    .any(|s| i / LANES < s.blocks() && k::read_slot(&s.data, i).1 != [0.0; 3])
+            })
+            .count()
     }
 
     /// Gathers candidate faces afresh every substep (`true`) or keeps them while they still
@@ -259,11 +301,6 @@ impl ObstacleSet {
             k::velocity_pass(&self.slots, motion, &self.th, c.start, x, v)
         }
     }
-
-    /// The obstacles.
-    pub fn list(&self) -> &[Obstacle] {
-        &self.list
-    }
 }
 
 /// Runs `f(block, slots of the block, its touched flag, face memory of the block, face cache
@@ -309,56 +346,6 @@ where
         for (t, ((chunk, flags), (mem, c))) in blocks.zip(mems.iter_mut().zip(caches.iter_mut())).enumerate() {
             run(t, chunk, flags, mem, c, &mut s);
         }
-    }
-}
-
-impl World {
-    /// Adds an obstacle; returns its index in [`obstacles`](Self::obstacles).
-    pub fn add_obstacle(&mut self, obstacle: Obstacle) -> Result<usize> {
-        if let Geometry::Shape(s) = &obstacle.geometry {
-            s.validate()?;
-        }
-        self.obstacles.list.push(obstacle);
-        self.obstacles.th.clear();
-        Ok(self.obstacles.list.len() - 1)
-    }
-
-    /// The obstacles, in the order they were added.
-    pub fn obstacles(&self) -> &[Obstacle] {
-        &self.obstacles.list
-    }
-
-    /// Sets the Coulomb friction coefficient of obstacles that have none of their own
-    /// (default 0).
-    pub fn set_friction(&mut self, mu: f32) -> Result<()> {
-        non_negative("friction", mu)?;
-        self.obstacles.friction = mu;
-        Ok(())
-    }
-
-    /// Wall time spent in the obstacle stages of all steps so far (contacts, responses,
-    /// projections, velocity passes).
-    pub fn obstacle_time(&self) -> std::time::Duration {
-        self.obstacles.busy
-    }
-
-    /// The default obstacle friction coefficient.
-    pub fn friction(&self) -> f32 {
-        self.obstacles.friction
-    }
-
-    /// How many particles hold a contact with at least one obstacle after the last substep
-    /// (0 before the first step).
-    pub fn obstacle_contacts(&self) -> usize {
-        let n = self.particles.count();
-        (0..n)
-            .filter(|&i| {
-                self.obstacles
-                    .slots
-                    .iter()
-                    .any(|s| i / LANES < s.blocks() && k::read_slot(&s.data, i).1 != [0.0; 3])
-            })
-            .count()
     }
 }
 

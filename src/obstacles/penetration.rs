@@ -8,12 +8,9 @@
 //! normals, so the sign agrees for every face that shares `c`. Open meshes have no inside and
 //! count as zero penetration.
 
-use crate::model::shapes::Shape;
 use crate::obstacles::mesh::broadphase::FaceBroadphase;
 use crate::obstacles::mesh::narrow::closest_point_on_triangle;
 use crate::obstacles::mesh::TriMesh;
-use crate::obstacles::Geometry;
-use crate::world::World;
 
 /// Search radius around a point, m (every face is searched when no face is this close and the
 /// point is inside the mesh box).
@@ -55,28 +52,5 @@ pub fn mesh_signed_distance<B: FaceBroadphase + ?Sized>(mesh: &TriMesh, bp: &B, 
         Some(d) if d.abs() <= PROBE => Some(d),
         _ if inside_box => nearest(&mut (0..mesh.face_count() as u32)),
         _ => None,
-    }
-}
-
-impl World {
-    /// The deepest any particle sits inside any obstacle, m (0 when none does); pinned
-    /// particles included.
-    pub fn max_penetration(&self) -> f32 {
-        let [x, y, z] = self.positions();
-        let mut worst = 0.0f32;
-        let mut scratch = Vec::new();
-        for o in self.obstacles() {
-            let shape: Option<Shape> = o.shape_at(self.time());
-            for i in 0..x.len() {
-                let q = [x[i], y[i], z[i]];
-                let d = match (&shape, o.geometry()) {
-                    (Some(s), _) => Some(s.signed_distance(q)),
-                    (None, Geometry::Mesh(m)) => mesh_signed_distance(m.mesh(), m.broadphase(), q, &mut scratch),
-                    _ => None,
-                };
-                worst = worst.max(-d.unwrap_or(0.0));
-            }
-        }
-        worst
     }
 }

@@ -1,9 +1,6 @@
 //! Self-collision settings, statistics and the world's API for them (the method is in
 //! [`crate::self_collision`]).
 
-use crate::error::Result;
-use crate::world::World;
-
 /// Relative tolerance of the penetration metric: a pair counts as penetrating when closer than
 /// `(1 - PENETRATION_TOLERANCE) d`.
 pub const PENETRATION_TOLERANCE: f32 = 0.1;
@@ -151,56 +148,5 @@ impl SelfCollisionStats {
         } else {
             self.time_s * 1e3 / self.steps as f64
         }
-    }
-}
-
-impl World {
-    /// Turns self-collision on (`Some`) or off (`None`). Off costs nothing in the step.
-    pub fn set_self_collision(&mut self, config: Option<SelfCollision>) -> Result<()> {
-        if let Some(c) = &config {
-            crate::self_collision::validate(c)?;
-        }
-        self.selfcol.config = config;
-        Ok(())
-    }
-
-    /// The self-collision settings, if on.
-    pub fn self_collision(&self) -> Option<&SelfCollision> {
-        self.selfcol.config.as_ref()
-    }
-
-    /// The collision distance in use (configured or `min(thickness, spacing)`), m.
-    pub fn self_collision_distance(&self) -> f32 {
-        self.selfcol.distance()
-    }
-
-    /// The pair lists of the last step: pairs within `3 d` at the step's start, the cloths'
-    /// rest neighbours left out, each pair once in the list of its smaller id (see
-    /// [`crate::self_collision`]), if self-collision has run.
-    pub fn self_collision_pairs(&self) -> Option<&crate::self_collision::neighbours::Neighbours> {
-        self.selfcol.lists()
-    }
-
-    /// Groups of eight consecutive particles the substeps of the last step worked on (those
-    /// holding a particle with a partner in the pair lists).
-    pub fn self_collision_active_blocks(&self) -> usize {
-        self.selfcol.active_blocks()
-    }
-
-    /// Average-collision statistics and self-collision time so far.
-    pub fn self_collision_stats(&self) -> &SelfCollisionStats {
-        &self.selfcol.stats
-    }
-
-    /// Measures the current state's penetration percentage and records it in the statistics
-    /// (once per step count; the step measures the state it starts from, so calling this after
-    /// the last step completes the average). Returns the percentage; 0 when off.
-    pub fn measure_self_collision(&mut self) -> Result<f64> {
-        let n = self.particles.count();
-        let steps = self.steps;
-        let p = &self.particles;
-        let x = [&p.x[..], &p.y[..], &p.z[..]];
-        let parallel = self.params.backend == crate::model::params::Backend::Simd;
-        self.selfcol.measure(x, n, steps, parallel)
     }
 }

@@ -7,8 +7,12 @@
 //! stage and its scalar twin.
 
 pub mod checkpoint;
+pub(crate) mod contacts;
+pub(crate) mod forces;
 pub(crate) mod keep_awake;
 pub mod metrics;
+pub(crate) mod obstacles;
+pub(crate) mod self_collision;
 pub mod stage_clock;
 pub mod step;
 pub mod strands;

@@ -20,7 +20,7 @@
 //!        chunk's x, v are finite, for the guard)
 //!   (solver.method = symplectic-euler | leapfrog | implicit-euler: the force-based step of
 //!    integrate::mass_spring / integrate::implicit replaces the substep loop above; its drift
-//!    feeds the obstacle and self-collision stages as the prediction p, integrate::contacts)
+//!    feeds the obstacle and self-collision stages as the prediction p, world::contacts)
 //!   on a non-finite value: restore the copy, replay the step with a check after every stage
 //!   to name the stage and particle, and return `Diverged`
 //!
