@@ -22,6 +22,7 @@ pub mod params;
 pub mod particles;
 pub mod perf;
 pub mod reference;
+#[cfg(feature = "render")]
 pub mod render;
 pub mod scene;
 pub mod stage_clock;
