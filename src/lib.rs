@@ -15,6 +15,7 @@ pub mod model;
 pub mod obstacles;
 pub mod perf;
 pub mod reference;
+#[cfg(feature = "render")]
 pub mod render;
 pub mod scene;
 pub mod self_collision;

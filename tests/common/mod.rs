@@ -30,6 +30,7 @@ pub fn state_bits(w: &World) -> Vec<u32> {
 }
 
 /// Fraction of a PNG file's pixels that differ from the renderer's background.
+#[cfg(feature = "render")]
 pub fn non_background_fraction(png_path: &std::path::Path) -> f32 {
     let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(png_path).unwrap()));
     let mut reader = decoder.read_info().unwrap();
