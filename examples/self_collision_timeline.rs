@@ -14,7 +14,7 @@
 //! clamp with its mean velocity, summed in the predict pass, and bookkeeping); `rebuild` is 1
 //! when the step ran the broadphase.
 
-use weft::self_collision::config::{Response, SelfBroadphase, SelfCollision};
+use weft::model::self_collision::{Response, SelfBroadphase, SelfCollision};
 use weft::{Fabric, SolverParams};
 
 fn main() -> weft::Result<()> {

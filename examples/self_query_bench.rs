@@ -9,7 +9,7 @@
 //! ```
 
 use std::time::Instant;
-use weft::self_collision::config::{Response, SelfBroadphase, SelfCollision};
+use weft::model::self_collision::{Response, SelfBroadphase, SelfCollision};
 use weft::self_collision::hash::SpatialHash;
 use weft::self_collision::neighbours::Neighbours;
 use weft::{Fabric, SolverParams};

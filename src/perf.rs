@@ -21,7 +21,7 @@ use crate::model::cloth::{ClothDesc, PinSpec};
 use crate::model::effects::Effects;
 use crate::model::fabric::Fabric;
 use crate::model::params::SolverParams;
-use crate::self_collision::config::SelfCollision;
+use crate::model::self_collision::SelfCollision;
 use crate::world::World;
 
 /// Median of `reps` timings of `f`, in seconds.

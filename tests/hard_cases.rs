@@ -221,7 +221,7 @@ fn divergence_names_particle_and_stage_and_keeps_the_state() {
 
 #[test]
 fn self_colliding_particles_moving_1000_times_the_cell_size() {
-    use weft::self_collision::config::SelfCollision;
+    use weft::model::self_collision::SelfCollision;
     let desc = ClothDesc {
         rows: 12,
         cols: 12,

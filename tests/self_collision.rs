@@ -5,8 +5,8 @@
 mod common;
 
 use proptest::prelude::*;
+use weft::model::self_collision::{Response, SelfBroadphase, SelfCollision};
 use weft::scene::Scene;
-use weft::self_collision::config::{Response, SelfBroadphase, SelfCollision};
 use weft::self_collision::neighbours::Neighbours;
 use weft::self_collision::REST_SKIP_FACTOR;
 use weft::{Backend, ClothDesc, Effects, Fabric, SolverParams, World};

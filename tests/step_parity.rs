@@ -98,7 +98,7 @@ proptest! {
     #[test]
     fn simd_step_matches_f64_reference((desc, params, effects) in arb_case()) {
         let mut world = common::world_with(&desc, params.clone(), effects.clone());
-        let mut reference = ReferenceWorld::from_world(&world);
+        let mut reference = ReferenceWorld::new(&world.describe());
         // The control: the same f32 world started one or two ulps away in x (pins kept).
         let mut control = common::world_with(&desc, params.clone(), effects);
         let [x0, y0, z0] = control.positions();

@@ -57,7 +57,7 @@ impl ReferenceKind {
     /// The kind a world needs: [`F64Xpbd`](ReferenceKind::F64Xpbd) when the f64 step
     /// represents all of it, else [`F32World`](ReferenceKind::F32World).
     pub fn for_world(world: &World) -> ReferenceKind {
-        match ReferenceWorld::from_world(world).missing_feature() {
+        match ReferenceWorld::new(&world.describe()).missing_feature() {
             None => ReferenceKind::F64Xpbd,
             Some(_) => ReferenceKind::F32World,
         }
@@ -132,7 +132,7 @@ fn run(make: MakeWorld<'_>, substeps: u32, steps: usize, kind: ReferenceKind) ->
         }
         return Ok((frames, state(&w, true)));
     }
-    let mut r = ReferenceWorld::from_world(&w);
+    let mut r = ReferenceWorld::new(&w.describe());
     let mut frames = vec![r.x.clone()];
     for _ in 0..steps {
         r.step(dt);

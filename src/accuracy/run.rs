@@ -7,8 +7,8 @@ use crate::accuracy::reference::{MakeWorld, Reference, ReferenceKind};
 use crate::accuracy::{pareto, BLOWUP_FACTOR, DIVERGED_RMS};
 use crate::error::{Result, WeftError};
 use crate::model::params::{Backend, Method, SolverParams};
+use crate::model::self_collision::{Response, SelfBroadphase};
 use crate::reference::ReferenceWorld;
-use crate::self_collision::config::{Response, SelfBroadphase};
 use crate::world::World;
 
 /// Arithmetic of a run.
@@ -247,7 +247,7 @@ pub fn run_setting(make: MakeWorld<'_>, reference: &Reference, setting: Setting,
                 "lacks a feature of this scene (mesh obstacles or strand self-collision)",
             ))
         }
-        Precision::F64 if setting.method == Method::Xpbd => Some(ReferenceWorld::from_world(&w)),
+        Precision::F64 if setting.method == Method::Xpbd => Some(ReferenceWorld::new(&w.describe())),
         Precision::F64 => return Err(WeftError::param("precision", "f64", "is available for the xpbd method only")),
     };
     let (mut sum2, mut max_err, mut strain, mut seconds) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);

@@ -154,7 +154,7 @@ fn scenes_with_analytic_collisions_get_the_f64_reference_the_response_grid_and_p
     let variants = grid.iter().filter(|g| g.response.is_some()).count();
     assert_eq!(variants, 2 * (3 * 2 - 1), "every other response x broadphase at 4 and 16 substeps");
     let mut pbd = setting(Method::Xpbd, 4);
-    pbd.response = Some(crate::self_collision::config::Response::Pbd);
+    pbd.response = Some(crate::model::self_collision::Response::Pbd);
     let r = Reference::compute(&make, 2, 16, false).unwrap();
     assert_eq!(r.kind, ReferenceKind::F64Xpbd);
     let o = run_setting(&make, &r, pbd, 2).unwrap();

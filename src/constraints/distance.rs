@@ -21,8 +21,7 @@ use crate::constraints::blocks::{plan, Block, Window, GATHER, RUN, WINDOW};
 use crate::constraints::colour::colour_pairs;
 use crate::data::lanes::{gather1, load, load_idx, pick16, pick16_vec, round_up, store, F32s, SharedVec3, Vec3x8, LANES};
 
-/// Below this length a constraint has no direction and is skipped for the substep.
-pub const MIN_LENGTH: f32 = 1e-9;
+pub use crate::model::params::MIN_LENGTH;
 
 /// Constraints per parallel task (a multiple of the lane width).
 pub const CHUNK: usize = 2048;

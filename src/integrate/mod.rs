@@ -19,3 +19,4 @@ pub use kernels::{predict, update, PredictParams};
 pub mod implicit;
 pub mod mass_spring;
 pub mod springs;
+pub mod wind;

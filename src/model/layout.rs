@@ -1,7 +1,6 @@
 //! Where each piece lives in the world's particle arrays: a cloth's grid and a group of strands
-//! are contiguous particle ranges, with their triangles (cloth) and the scalp (strands).
-
-use crate::strands::scalp::Scalp;
+//! are contiguous particle ranges, with their triangles (cloth) and the scalp (strands). The
+//! scalp's placement and collision kernels are `crate::strands::scalp`.
 
 /// Where one cloth lives in the world's particle arrays.
 #[derive(Clone, Debug, PartialEq)]
@@ -41,4 +40,28 @@ impl StrandInfo {
         let a = self.first as usize + (s as usize) * self.points as usize;
         a..a + self.points as usize
     }
+}
+
+/// An ellipsoidal scalp patch (a sphere is the special case of equal radii).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Scalp {
+    /// Centre, m.
+    pub center: [f32; 3],
+    /// Semi-axes along x, y (up) and z, m.
+    pub radii: [f32; 3],
+    /// Polar-angle range of the hair patch, degrees from `+y` (0 = crown, 180 = chin).
+    pub polar_degrees: [f32; 2],
+}
+
+/// One strand group's collision entry: a particle range and its inflated scalp.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ScalpRange {
+    /// First particle.
+    pub start: usize,
+    /// One past the last particle.
+    pub end: usize,
+    /// Scalp centre.
+    pub center: [f32; 3],
+    /// Scalp radii plus the margin.
+    pub radii: [f32; 3],
 }

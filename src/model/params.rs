@@ -1,5 +1,8 @@
 //! Solver parameters: one plain struct with units and defaults.
 
+/// Below this length a distance constraint has no direction and is skipped for the substep.
+pub const MIN_LENGTH: f32 = 1e-9;
+
 use crate::error::{positive, Result, WeftError};
 
 /// Which implementation of the kernels a world runs.

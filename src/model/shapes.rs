@@ -24,6 +24,9 @@
 //! A moving obstacle is tested in its own frame at the end of the step: the caller shifts the
 //! start by the obstacle's displacement, `x - u h` (relative motion).
 
+/// Smallest obstacle contact margin beyond the particle's thickness, m.
+pub const MIN_MARGIN: f32 = 3e-3;
+
 /// Cosine of the angle below which a plane normal is refused (`|n| = 1` is required).
 const UNIT_TOL: f32 = 1e-3;
 
@@ -95,14 +98,14 @@ fn cross(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
 impl Shape {
     /// Checks the shape: finite values, positive radii and extents, unit plane normal,
     /// orthonormal box axes.
-    pub fn validate(&self) -> crate::Result<()> {
+    pub fn validate(&self) -> crate::error::Result<()> {
         use crate::error::{finite3, positive};
         match self {
             Shape::Plane { point, normal } => {
                 finite3("plane.point", *point)?;
                 finite3("plane.normal", *normal)?;
                 if (dot(*normal, *normal).sqrt() - 1.0).abs() > UNIT_TOL {
-                    return Err(crate::WeftError::param("plane.normal", format!("{normal:?}"), "must have length 1"));
+                    return Err(crate::error::WeftError::param("plane.normal", format!("{normal:?}"), "must have length 1"));
                 }
             }
             Shape::Sphere { center, radius } => {
@@ -124,7 +127,7 @@ impl Shape {
                     for (j, s) in axes.iter().enumerate() {
                         let want = if i == j { 1.0 } else { 0.0 };
                         if (dot(*r, *s) - want).abs() > UNIT_TOL {
-                            return Err(crate::WeftError::param("box.axes", format!("{axes:?}"), "must be orthonormal"));
+                            return Err(crate::error::WeftError::param("box.axes", format!("{axes:?}"), "must be orthonormal"));
                         }
                     }
                 }
@@ -134,10 +137,10 @@ impl Shape {
     }
 
     /// A plane through `point` with normal `normal` (normalised here; must not be zero).
-    pub fn plane(point: [f32; 3], normal: [f32; 3]) -> crate::Result<Shape> {
+    pub fn plane(point: [f32; 3], normal: [f32; 3]) -> crate::error::Result<Shape> {
         let l = dot(normal, normal).sqrt();
         if !(l.is_finite() && l > 0.0) {
-            return Err(crate::WeftError::param(
+            return Err(crate::error::WeftError::param(
                 "plane.normal",
                 format!("{normal:?}"),
                 "must be finite and not zero",

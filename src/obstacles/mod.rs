@@ -51,8 +51,7 @@ use crate::obstacles::mesh::pass::MeshPass;
 use crate::obstacles::obstacle::displacement;
 pub use crate::obstacles::obstacle::{Geometry, MeshObstacle, Obstacle};
 
-/// Smallest contact margin beyond the thickness, m.
-pub const MIN_MARGIN: f32 = 3e-3;
+pub use crate::model::shapes::MIN_MARGIN;
 /// Blocks of eight particles per parallel task.
 const BLOCKS_PER_TASK: usize = 32;
 

@@ -29,8 +29,8 @@ mod self_collision;
 #[cfg(test)]
 mod tests;
 
+use crate::model::description::WorldDescription;
 use crate::model::effects::Effects;
-use crate::world::World;
 use obstacles::{Contact, Obstacle64};
 use self_collision::SelfCollision64;
 
@@ -69,74 +69,68 @@ pub struct ReferenceWorld {
 }
 
 impl ReferenceWorld {
-    /// Copies the state and topology of `world` (constraints in the world's colour order),
-    /// its analytic obstacles and its self-collision. Self-collision takes the cloths' rest
-    /// shapes from the positions now, so copy a world before its first step. Features it cannot
-    /// represent are left out and named by [`missing_feature`](Self::missing_feature).
-    pub fn from_world(world: &World) -> Self {
-        let p = world.particles();
-        let n = p.count();
-        let obstacles: Vec<Option<Obstacle64>> = world
-            .obstacles()
-            .iter()
-            .map(|o| Obstacle64::from_obstacle(o, world.friction()))
-            .collect();
+    /// Copies a world's description (see [`World::describe`](crate::World::describe)):
+    /// state, topology (constraints in the world's colour order), analytic obstacles and
+    /// self-collision. Self-collision takes the cloths' rest shapes from the positions now, so
+    /// describe a world before its first step. Features it cannot represent are left out and
+    /// named by [`missing_feature`](Self::missing_feature).
+    pub fn new(d: &WorldDescription) -> Self {
+        let n = d.positions.len();
+        let obstacles: Vec<Option<Obstacle64>> = d.obstacles.iter().map(|o| Obstacle64::from_desc(o, d.friction)).collect();
         let mut missing = obstacles.iter().any(Option::is_none).then_some("triangle-mesh obstacles");
-        let selfcol = SelfCollision64::from_world(world).unwrap_or_else(|e| {
+        let selfcol = SelfCollision64::from_desc(d).unwrap_or_else(|e| {
             missing = missing.or(Some(e));
             None
         });
         let mut th = vec![0.0; n];
-        for c in &world.cloths {
+        for c in &d.cloths {
             let r = c.first as usize..(c.first + c.rows * c.cols) as usize;
             th[r.start.min(n)..r.end.min(n)].fill(c.thickness as f64);
         }
-        for g in &world.strands {
+        for g in &d.strands {
             let r = g.first as usize..(g.first + g.count * g.points) as usize;
             th[r.start.min(n)..r.end.min(n)].fill(0.5 * g.thickness as f64);
         }
-        let colours = world
-            .distance
+        let colours = d
             .colours
             .iter()
             .map(|c| {
-                (0..c.real)
+                c.iter()
                     .map(|k| Dist {
-                        a: c.a[k] as usize,
-                        b: c.b[k] as usize,
-                        rest: c.rest[k] as f64,
-                        compliance: c.compliance[k] as f64,
+                        a: k.a as usize,
+                        b: k.b as usize,
+                        rest: k.rest as f64,
+                        compliance: k.compliance as f64,
                     })
                     .collect()
             })
             .collect();
         ReferenceWorld {
-            x: (0..n).map(|i| p.position(i).map(f64::from)).collect(),
-            v: (0..n).map(|i| p.velocity(i).map(f64::from)).collect(),
-            w: p.w[..n].iter().map(|&w| w as f64).collect(),
-            damping: world.damping_rate.iter().map(|&d| d as f64).collect(),
+            x: d.positions.iter().map(|p| p.map(f64::from)).collect(),
+            v: d.velocities.iter().map(|v| v.map(f64::from)).collect(),
+            w: d.inv_mass.iter().map(|&w| w as f64).collect(),
+            damping: d.damping.iter().map(|&c| c as f64).collect(),
             colours,
-            tethers: world
-                .tether_inputs
+            tethers: d
+                .tethers
                 .iter()
                 .map(|t| (t.particle as usize, t.anchor as usize, t.max_len as f64))
                 .collect(),
-            triangles: world.triangles().iter().map(|t| t.map(|i| i as usize)).collect(),
-            strand_area: world.strand_area.iter().map(|&a| a as f64).collect(),
-            scalps: world
+            triangles: d.triangles.iter().map(|t| t.map(|i| i as usize)).collect(),
+            strand_area: d.strand_area.iter().map(|&a| a as f64).collect(),
+            scalps: d
                 .scalps
-                .ranges
                 .iter()
                 .map(|r| (r.start, r.end, r.center.map(f64::from), r.radii.map(f64::from)))
                 .collect(),
-            effects: world.effects().clone(),
+            effects: d.effects.clone(),
             obstacles: obstacles.into_iter().flatten().collect(),
             th,
             selfcol,
             missing,
-            substeps: world.params().substeps,
-            iterations: world.params().iterations,
-            time: world.time(),
+            substeps: d.substeps,
+            iterations: d.iterations,
+            time: d.time,
         }
     }
 
@@ -238,7 +232,7 @@ impl ReferenceWorld {
                     let len = norm(d);
                     let alpha = c.compliance / (h * h);
                     let denom = self.w[c.a] + self.w[c.b] + alpha;
-                    if len <= crate::constraints::distance::MIN_LENGTH as f64 || denom <= 0.0 {
+                    if len <= crate::model::params::MIN_LENGTH as f64 || denom <= 0.0 {
                         continue;
                     }
                     let dl = (-(len - c.rest) - alpha * *l) / denom;

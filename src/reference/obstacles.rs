@@ -31,8 +31,9 @@
 //! shape between two samples (a step longer than 1/16 of the shape's size) is missed; with the
 //! reference's small substeps even a crossing needs a step longer than 3 mm.
 
+use crate::model::description::ObstacleDesc;
 use crate::model::shapes::Shape;
-use crate::obstacles::{Geometry, Obstacle, MIN_MARGIN};
+use crate::model::shapes::MIN_MARGIN;
 
 /// A particle this far beyond the thickness still counts as touching (the world's value).
 const TOUCH_SLACK: f64 = 1e-4;
@@ -161,15 +162,12 @@ pub(super) struct Contact {
 
 impl Obstacle64 {
     /// The f64 copy of `o` (`None` for a mesh), with `default_friction` unless it has its own.
-    pub(super) fn from_obstacle(o: &Obstacle, default_friction: f32) -> Option<Obstacle64> {
-        match o.geometry() {
-            Geometry::Shape(s) => Some(Obstacle64 {
-                solid: Solid::from_shape(s),
-                velocity: f64s(o.velocity()),
-                friction: o.friction().unwrap_or(default_friction) as f64,
-            }),
-            Geometry::Mesh(_) => None,
-        }
+    pub(super) fn from_desc(o: &ObstacleDesc, default_friction: f32) -> Option<Obstacle64> {
+        o.shape.as_ref().map(|s| Obstacle64 {
+            solid: Solid::from_shape(s),
+            velocity: f64s(o.velocity),
+            friction: o.friction.unwrap_or(default_friction) as f64,
+        })
     }
 
     /// Signed distance of `q` to the surface at time `t` (negative inside).
@@ -267,7 +265,15 @@ mod tests {
     use super::*;
 
     fn ob(s: Shape) -> Obstacle64 {
-        Obstacle64::from_obstacle(&Obstacle::shape(s).unwrap(), 0.0).unwrap()
+        Obstacle64::from_desc(
+            &ObstacleDesc {
+                shape: Some(s),
+                velocity: [0.0; 3],
+                friction: None,
+            },
+            0.0,
+        )
+        .unwrap()
     }
 
     #[test]

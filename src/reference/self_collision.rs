@@ -29,9 +29,9 @@
 //!   `p = q`, else with `β = min(b h, 1)` (`b` the particle's damping rate) and `n̂ = n/|n|`,
 //!   `p = t - (β (t - x).n̂ + β² g/(4k)) n̂`; PBD and movement speed: `p = t`.
 
-use crate::self_collision::config::Response;
-use crate::self_collision::{BOX_RADIUS, QUERY_FACTOR, REST_SKIP_FACTOR, TRAVEL_FACTOR};
-use crate::world::World;
+use crate::model::description::WorldDescription;
+use crate::model::self_collision::Response;
+use crate::model::self_collision::{BOX_RADIUS, QUERY_FACTOR, REST_SKIP_FACTOR, TRAVEL_FACTOR};
 use std::collections::HashMap;
 
 type V3 = [f64; 3];
@@ -76,15 +76,15 @@ impl SelfCollision64 {
     /// The f64 copy of `world`'s self-collision, `None` when it is off. Rest positions are the
     /// world's positions now (copy a world before its first step). `Err` names what it cannot
     /// represent: particles that belong to no cloth.
-    pub(super) fn from_world(world: &World) -> Result<Option<Self>, &'static str> {
-        let Some(cfg) = world.self_collision() else { return Ok(None) };
-        let d = world.self_collision_distance() as f64;
+    pub(super) fn from_desc(desc: &WorldDescription) -> Result<Option<Self>, &'static str> {
+        let Some(cfg) = &desc.self_collision else { return Ok(None) };
+        let d = desc.self_collision_distance as f64;
         if !(d > 0.0 && d.is_finite()) {
             return Ok(None);
         }
-        let n = world.particle_count();
+        let n = desc.positions.len();
         let mut cloth_of = vec![usize::MAX; n];
-        for (k, c) in world.cloths.iter().enumerate() {
+        for (k, c) in desc.cloths.iter().enumerate() {
             let first = c.first as usize;
             for slot in cloth_of.iter_mut().skip(first).take((c.rows * c.cols) as usize) {
                 *slot = k;
@@ -93,12 +93,11 @@ impl SelfCollision64 {
         if cloth_of.contains(&usize::MAX) {
             return Err("self-collision with particles outside cloths (strands)");
         }
-        let p = world.particles();
         Ok(Some(SelfCollision64 {
             d,
             response: cfg.response,
             friction: cfg.friction as f64,
-            rest: (0..n).map(|i| p.position(i).map(f64::from)).collect(),
+            rest: desc.positions.iter().map(|p| p.map(f64::from)).collect(),
             cloth_of,
             lists: vec![Vec::new(); n],
             q: Vec::new(),

@@ -8,7 +8,7 @@ use crate::model::cloth::{ClothDesc, PinSpec};
 use crate::model::effects::{Effects, Wind};
 use crate::model::fabric::Fabric;
 use crate::model::params::{Backend, Method, SolverParams};
-use crate::self_collision::config::{Response, SelfBroadphase, SelfCollision};
+use crate::model::self_collision::{Response, SelfBroadphase, SelfCollision};
 
 /// `[solver]`.
 #[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]

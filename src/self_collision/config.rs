@@ -1,87 +1,9 @@
-//! Self-collision settings, statistics and the world's API for them (the method is in
-//! [`crate::self_collision`]).
+//! Self-collision statistics: the paper's average collision and the stage's phase times (the
+//! settings are [`crate::model::self_collision`], the method [`crate::self_collision`]).
 
 /// Relative tolerance of the penetration metric: a pair counts as penetrating when closer than
 /// `(1 - PENETRATION_TOLERANCE) d`.
 pub const PENETRATION_TOLERANCE: f32 = 0.1;
-
-/// Collision response (the VcCPBD paper, Shapri, Sulaiman & Bade 2016, compares the three).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Response {
-    /// Position projection of the collision constraints (Algorithm 1, Müller et al. 2006).
-    Pbd,
-    /// Velocity-based: zero the approaching normal velocity and move along the result.
-    MovementSpeed,
-    /// VcCPBD (Algorithm 2): projection, then the box test and damped-oscillator velocity
-    /// correction.
-    #[default]
-    Vccpbd,
-}
-
-impl Response {
-    /// The scene spelling: `pbd`, `movement-speed`, `vccpbd`.
-    pub fn name(self) -> &'static str {
-        match self {
-            Response::Pbd => "pbd",
-            Response::MovementSpeed => "movement-speed",
-            Response::Vccpbd => "vccpbd",
-        }
-    }
-}
-
-/// Self-collision broadphase; both give the same pairs.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum SelfBroadphase {
-    /// Spatial hash rebuilt each step (Müller's "Ten Minute Physics").
-    #[default]
-    Hash,
-    /// AABB tree built once, refitted each step (the VcCPBD paper).
-    AabbTree,
-}
-
-impl SelfBroadphase {
-    /// The scene spelling: `hash`, `aabb-tree`.
-    pub fn name(self) -> &'static str {
-        match self {
-            SelfBroadphase::Hash => "hash",
-            SelfBroadphase::AabbTree => "aabb-tree",
-        }
-    }
-}
-
-/// Self-collision settings (scene table `[effects.self_collision]`).
-#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct SelfCollision {
-    /// Collision distance, m; `None` = the smallest `min(thickness, spacing)` of the cloths.
-    pub distance: Option<f32>,
-    /// Friction `μ` in `[0, 1]`: displacements pulled toward the pair average (Müller's friction).
-    pub friction: f32,
-    /// The response.
-    pub response: Response,
-    /// The broadphase.
-    pub broadphase: SelfBroadphase,
-    /// Measure the paper's "average collision" after every step (the percentage of particles
-    /// in penetration, [`SelfCollisionStats`]). Off by default: the measure has its own
-    /// broadphase query, about a quarter of a step of a folded cloth;
-    /// `World::measure_self_collision` measures the current state on demand either way.
-    #[serde(default)]
-    pub measure: bool,
-}
-
-impl Default for SelfCollision {
-    fn default() -> Self {
-        SelfCollision {
-            distance: None,
-            friction: 0.3,
-            response: Response::default(),
-            broadphase: SelfBroadphase::default(),
-            measure: false,
-        }
-    }
-}
 
 /// The paper's "average collision" and the time self-collision took.
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]

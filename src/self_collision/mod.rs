@@ -114,30 +114,14 @@ pub(crate) use crate::self_collision::response::mean_velocity;
 use crate::self_collision::tree::{ParticleTree, TreeShape};
 use crate::self_collision::verlet::{Plan, VerletLists};
 
-pub use crate::self_collision::config::{
-    Response, SelfBroadphase, SelfCollision, SelfCollisionPhases, SelfCollisionStats, PENETRATION_TOLERANCE,
+pub use crate::model::self_collision::{
+    Response, SelfBroadphase, SelfCollision, BOX_RADIUS, CELL_FACTOR, QUERY_FACTOR, REST_SKIP_FACTOR, TRAVEL_FACTOR,
 };
+pub use crate::self_collision::config::{SelfCollisionPhases, SelfCollisionStats, PENETRATION_TOLERANCE};
 
 /// Leaf size of the AABB tree (the paper's depth 5 gives ~312 particles a leaf at 10 000
 /// particles; 16 queries much faster and gives the same pairs).
 const TREE_LEAF: u32 = 16;
-
-/// Query radius over collision distance: `q = d + 2 T` with the step's relative travel `T = d`.
-pub const QUERY_FACTOR: f32 = 3.0;
-
-/// Hash cell side over the query radius (Müller's hash uses 1; wider cells were no faster).
-pub const CELL_FACTOR: f32 = 1.0;
-
-/// Rest-neighbour skip radius over the collision distance: pairs of one cloth whose rest
-/// distance is at most this are never contacts (the query reach `QUERY_FACTOR`, plus 0.1% so
-/// that lattice pairs lying exactly at the reach are skipped whatever the rounding).
-pub const REST_SKIP_FACTOR: f32 = QUERY_FACTOR * 1.001;
-
-/// VcCPBD box radius over the collision distance (`r / d`).
-pub const BOX_RADIUS: f32 = 1.0;
-
-/// Relative travel allowed in one step over the collision distance (`T / d`).
-pub const TRAVEL_FACTOR: f32 = 1.0;
 
 /// Rest data of the cloths and the runtime state of self-collision, owned by the world.
 #[derive(Clone, Debug, Default)]

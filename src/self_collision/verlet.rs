@@ -35,7 +35,7 @@
 //! The AABB tree keeps the wide lists (its query is the slow part either way).
 
 use crate::data::lanes::{load, F32s, LANES};
-use crate::self_collision::config::SelfBroadphase;
+use crate::model::self_collision::SelfBroadphase;
 use crate::self_collision::neighbours::Neighbours;
 
 /// Skin of the candidate lists over the collision distance, when the cloth moves slowly

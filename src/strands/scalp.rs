@@ -24,17 +24,7 @@
 use rayon::prelude::*;
 
 use crate::error::{finite3, Result, WeftError};
-
-/// An ellipsoidal scalp patch (a sphere is the special case of equal radii).
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct Scalp {
-    /// Centre, m.
-    pub center: [f32; 3],
-    /// Semi-axes along x, y (up) and z, m.
-    pub radii: [f32; 3],
-    /// Polar-angle range of the hair patch, degrees from `+y` (0 = crown, 180 = chin).
-    pub polar_degrees: [f32; 2],
-}
+pub use crate::model::layout::{Scalp, ScalpRange};
 
 impl Scalp {
     /// A whole sphere.
@@ -114,19 +104,6 @@ impl Scalp {
         let q = [0, 1, 2].map(|k| (p[k] - self.center[k]) / self.radii[k]);
         (q[0] * q[0] + q[1] * q[1] + q[2] * q[2]).sqrt()
     }
-}
-
-/// One strand group's collision entry: a particle range and its inflated scalp.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ScalpRange {
-    /// First particle.
-    pub start: usize,
-    /// One past the last particle.
-    pub end: usize,
-    /// Scalp centre.
-    pub center: [f32; 3],
-    /// Scalp radii plus the margin.
-    pub radii: [f32; 3],
 }
 
 /// Particles per parallel task of the scalp stage.

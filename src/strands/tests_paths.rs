@@ -75,7 +75,7 @@ fn strand_step_matches_the_f64_reference() {
         ..Default::default()
     };
     let mut w = super::tests::strand_world(60, 10, effects, params);
-    let mut r = crate::reference::ReferenceWorld::from_world(&w);
+    let mut r = crate::reference::ReferenceWorld::new(&w.describe());
     for _ in 0..10 {
         w.step(1.0 / 60.0).unwrap();
         r.step(1.0 / 60.0);

@@ -251,7 +251,7 @@ mod tests {
     /// velocity at 1/60 s). Counting the clamp twice gave `2 v_c - v`, about -8.8 m/s.
     #[test]
     fn the_speed_clamp_slows_a_fast_particle_instead_of_reflecting_it() {
-        use crate::self_collision::config::SelfCollision;
+        use crate::model::self_collision::SelfCollision;
         for method in [Method::SymplecticEuler, Method::Leapfrog, Method::ImplicitEuler] {
             let fabric = Fabric {
                 stretch_compliance: 1e3,

@@ -8,6 +8,7 @@
 
 pub mod checkpoint;
 pub(crate) mod contacts;
+pub(crate) mod describe;
 pub(crate) mod forces;
 pub(crate) mod keep_awake;
 pub mod metrics;
@@ -23,8 +24,9 @@ use crate::constraints::distance::DistanceInput;
 use crate::constraints::{DistanceSet, TetherSet};
 use crate::data::particles::Particles;
 use crate::error::{Result, WeftError};
+use crate::integrate::wind::WindState;
 use crate::model::cloth::{ClothDesc, ConstraintKind};
-use crate::model::effects::{Effects, WindState};
+use crate::model::effects::Effects;
 use crate::model::layout::ClothInfo;
 use crate::model::params::SolverParams;
 

@@ -66,7 +66,7 @@ fn fused_next_predict_equals_separate_passes_bitwise() {
 /// A 70 x 70 cloth (4900 particles: two mean-velocity chunks) hung over its middle row with
 /// self-collision (VcCPBD): the halves swing under, so the speed clamp acts.
 fn hung(threads: usize, backend: Backend, fuse: bool) -> World {
-    use crate::self_collision::config::{Response, SelfCollision};
+    use crate::model::self_collision::{Response, SelfCollision};
     let params = SolverParams {
         threads,
         substeps: 10,

@@ -127,7 +127,7 @@ fn measure(x: &[[f64; 3]]) -> (f64, f64) {
 /// Runs one configuration for `steps` frames in f32 and in f64.
 pub fn run(substeps: u32, iterations: u32, steps: usize, paper: f64, heavy_at_top: bool) -> weft::Result<[ChainResult; 2]> {
     let mut w = chain(substeps, iterations, heavy_at_top)?;
-    let mut r = ReferenceWorld::from_world(&w);
+    let mut r = ReferenceWorld::new(&w.describe());
     for _ in 0..steps {
         w.step(DT)?;
         r.step(DT as f64);

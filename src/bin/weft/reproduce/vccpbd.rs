@@ -41,7 +41,7 @@ use std::time::Instant;
 
 use clap::Args;
 use serde::Serialize;
-use weft::self_collision::config::{Response, SelfBroadphase, SelfCollision};
+use weft::model::self_collision::{Response, SelfBroadphase, SelfCollision};
 use weft::{Fabric, SolverParams, WeftError, World};
 
 /// Options of `weft reproduce vccpbd`.
