@@ -105,7 +105,11 @@ impl Shape {
                 finite3("plane.point", *point)?;
                 finite3("plane.normal", *normal)?;
                 if (dot(*normal, *normal).sqrt() - 1.0).abs() > UNIT_TOL {
-                    return Err(crate::error::WeftError::param("plane.normal", format!("{normal:?}"), "must have length 1"));
+                    return Err(crate::error::WeftError::param(
+                        "plane.normal",
+                        format!("{normal:?}"),
+                        "must have length 1",
+                    ));
                 }
             }
             Shape::Sphere { center, radius } => {
@@ -127,7 +131,11 @@ impl Shape {
                     for (j, s) in axes.iter().enumerate() {
                         let want = if i == j { 1.0 } else { 0.0 };
                         if (dot(*r, *s) - want).abs() > UNIT_TOL {
-                            return Err(crate::error::WeftError::param("box.axes", format!("{axes:?}"), "must be orthonormal"));
+                            return Err(crate::error::WeftError::param(
+                                "box.axes",
+                                format!("{axes:?}"),
+                                "must be orthonormal",
+                            ));
                         }
                     }
                 }

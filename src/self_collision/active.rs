@@ -30,9 +30,10 @@
 use rayon::prelude::*;
 
 use crate::data::lanes::{SharedVec3, Vec3x8, LANES};
+use crate::model::self_collision::Response;
 use crate::self_collision::neighbours::Neighbours;
 use crate::self_collision::pairs::{PairContact, PairCtx};
-use crate::self_collision::response::{apply_runs, ApplyInput, ApplyMode, ContactSums};
+use crate::self_collision::response::{apply_runs, ApplyInput, ContactSums};
 
 /// Near pairs one parallel task handles in the pair pass's candidate search.
 const PAIR_CHUNK: usize = 2048;
@@ -49,7 +50,7 @@ const INACTIVE: u32 = u32::MAX;
 /// Inputs of [`ActiveSet::apply`] besides the particle arrays.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct ApplyParams {
-    pub mode: ApplyMode,
+    pub response: Response,
     pub friction: f32,
     pub h: f32,
     pub r: f32,
@@ -367,7 +368,7 @@ impl ActiveSet {
                     });
                     let x = [&x[0][g.clone()], &x[1][g.clone()], &x[2][g.clone()]];
                     let v = v.map(|v| [&v[0][g.clone()], &v[1][g.clone()], &v[2][g.clone()]]);
-                    apply_runs(&inp(x, &w[g], v), [a, b, d], runs, ap.mode, simd);
+                    apply_runs(&inp(x, &w[g], v), [a, b, d], runs, ap.response, simd);
                 });
         } else {
             // Runs of touched blocks consecutive both in the compact arrays and in the
@@ -384,7 +385,7 @@ impl ActiveSet {
                 t += run;
                 Some((k, b, run))
             });
-            apply_runs(&inp(x, w, v), [px, py, pz], runs, ap.mode, simd);
+            apply_runs(&inp(x, w, v), [px, py, pz], runs, ap.response, simd);
         }
     }
 

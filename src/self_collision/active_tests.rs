@@ -5,7 +5,7 @@
 
 use super::*;
 use crate::data::lanes::LANES;
-use crate::self_collision::response::{apply, ApplyInput, ApplyMode, ContactSums};
+use crate::self_collision::response::{apply, ApplyInput, ContactSums};
 use crate::test_rng::signed;
 
 /// A `rows x cols` cloth of spacing `s` folded in half across a row (second layer `gap` above),
@@ -97,7 +97,7 @@ fn reference(data: &SelfCollisionData, x: &[Vec<f32>; 3], p: &[Vec<f32>; 3], w: 
         start: [&x[0], &x[1], &x[2]],
         q2: f32::INFINITY,
         d: a.d,
-        movement: a.response == Response::MovementSpeed,
+        response: a.response,
     };
     let sums: Vec<[f32; 11]> = (0..n).map(|i| ctx.sums(&all, i)).collect();
     let len = p[0].len();
@@ -119,13 +119,8 @@ fn reference(data: &SelfCollisionData, x: &[Vec<f32>; 3], p: &[Vec<f32>; 3], w: 
         h: 0.005,
         r: BOX_RADIUS * a.d,
     };
-    let mode = if a.response == Response::Vccpbd {
-        ApplyMode::Vccpbd
-    } else {
-        ApplyMode::Plain
-    };
     let [o0, o1, o2] = &mut out;
-    apply(&inp, [o0, o1, o2], mode, false);
+    apply(&inp, [o0, o1, o2], a.response, false);
     (out, sums)
 }
 

@@ -177,11 +177,7 @@ impl Active {
     /// The correction pass's parameters for a substep of length `h`.
     pub(crate) fn apply_params(&self, h: f32) -> ApplyParams {
         ApplyParams {
-            mode: if self.response == Response::Vccpbd {
-                crate::self_collision::response::ApplyMode::Vccpbd
-            } else {
-                crate::self_collision::response::ApplyMode::Plain
-            },
+            response: self.response,
             friction: self.friction,
             h,
             r: BOX_RADIUS * self.d,
@@ -413,7 +409,7 @@ impl SelfCollisionData {
             start: [&st.start[0], &st.start[1], &st.start[2]],
             q2: q * q,
             d: a.d,
-            movement: a.response == Response::MovementSpeed,
+            response: a.response,
         };
         st.active.pair_pass(&ctx, &st.near.pairs, parallel, simd);
         let ph = &mut self.stats.phases;

@@ -2,6 +2,7 @@
 //! method is described in [`crate::self_collision`]).
 
 use crate::data::lanes::{gather1_unchecked, idx8, F32s, Vec3x8, LANES};
+use crate::model::self_collision::Response;
 use crate::self_collision::near::scan::largest_id;
 use crate::self_collision::neighbours::within;
 #[cfg(test)]
@@ -19,7 +20,7 @@ pub(crate) struct PairCtx<'a> {
     /// Squared query radius: a pair is in the step's lists when within it at the start.
     pub(crate) q2: f32,
     pub(crate) d: f32,
-    pub(crate) movement: bool,
+    pub(crate) response: Response,
 }
 
 /// Unit direction separating coincident particles with no rest direction: `(1, 2, 3)/√14`.
@@ -164,7 +165,7 @@ impl PairCtx<'_> {
                 self.p[1][j] - self.x[1][j],
                 self.p[2][j] - self.x[2][j],
             ];
-            let amount = if self.movement {
+            let amount = if self.response == Response::MovementSpeed {
                 let vn = (di[0] - dj[0]) * nrm[0] + (di[1] - dj[1]) * nrm[1] + (di[2] - dj[2]) * nrm[2];
                 if vn < 0.0 {
                     *approaching += 1.0;
@@ -242,7 +243,7 @@ impl PairCtx<'_> {
             self.p[1][j] - self.x[1][j],
             self.p[2][j] - self.x[2][j],
         ];
-        let (amount, approaching) = if self.movement {
+        let (amount, approaching) = if self.response == Response::MovementSpeed {
             let vn = (di[0] - dj[0]) * nrm[0] + (di[1] - dj[1]) * nrm[1] + (di[2] - dj[2]) * nrm[2];
             if vn < 0.0 {
                 ([-vn * share[0], -vn * share[1]], true)

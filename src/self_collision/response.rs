@@ -54,15 +54,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use rayon::prelude::*;
 
 use crate::data::lanes::{load, load_unchecked, store, store_unchecked, F32s, Vec3x8, LANES};
-
-/// Which correction [`apply`] makes (see the module docs).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ApplyMode {
-    /// Projection (PBD or movement-speed corrections) plus friction.
-    Plain,
-    /// Projection plus friction plus the VcCPBD box test and oscillator.
-    Vccpbd,
-}
+use crate::model::self_collision::Response;
 
 /// Per-particle contact sums from the pair pass, padded to the lane width.
 #[derive(Clone, Debug, Default)]
@@ -184,11 +176,11 @@ pub struct ApplyInput<'a> {
 
 /// Applies the contact sums to the predicted positions `p` of one chunk (lengths a multiple of
 /// [`LANES`]): SIMD when `simd`, else the scalar twin. Same bits either way.
-pub fn apply(inp: &ApplyInput<'_>, p: [&mut [f32]; 3], mode: ApplyMode, simd: bool) {
-    match (mode, simd) {
-        (ApplyMode::Plain, true) => apply_simd::<false>(inp, p),
-        (ApplyMode::Vccpbd, true) => apply_simd::<true>(inp, p),
-        (m, false) => apply_scalar(inp, p, m == ApplyMode::Vccpbd),
+pub fn apply(inp: &ApplyInput<'_>, p: [&mut [f32]; 3], response: Response, simd: bool) {
+    match (response, simd) {
+        (Response::Vccpbd, true) => apply_simd::<true>(inp, p),
+        (_, true) => apply_simd::<false>(inp, p),
+        (r, false) => apply_scalar(inp, p, r == Response::Vccpbd),
     }
 }
 
@@ -200,11 +192,11 @@ pub(crate) type Run = (usize, usize, usize);
 /// unused): per lane the operations of [`apply`] (the same bits), with the constants set up
 /// once for all runs instead of once a call. The scalar backend calls the scalar twin on
 /// each run.
-pub(crate) fn apply_runs(inp: &ApplyInput<'_>, p: [&mut [f32]; 3], runs: impl Iterator<Item = Run>, mode: ApplyMode, simd: bool) {
+pub(crate) fn apply_runs(inp: &ApplyInput<'_>, p: [&mut [f32]; 3], runs: impl Iterator<Item = Run>, response: Response, simd: bool) {
     let [px, py, pz] = p;
-    match (mode, simd) {
-        (ApplyMode::Plain, true) => runs_simd::<false>(inp, [px, py, pz], runs),
-        (ApplyMode::Vccpbd, true) => runs_simd::<true>(inp, [px, py, pz], runs),
+    match (response, simd) {
+        (Response::Vccpbd, true) => runs_simd::<true>(inp, [px, py, pz], runs),
+        (_, true) => runs_simd::<false>(inp, [px, py, pz], runs),
         (m, false) => {
             for (k, b, len) in runs {
                 let g = b * LANES..(b + len) * LANES;
@@ -215,7 +207,7 @@ pub(crate) fn apply_runs(inp: &ApplyInput<'_>, p: [&mut [f32]; 3], runs: impl It
                     v: inp.v.map(|v| [&v[0][g.clone()], &v[1][g.clone()], &v[2][g.clone()]]),
                     ..*inp
                 };
-                apply_scalar(&one, [&mut px[g.clone()], &mut py[g.clone()], &mut pz[g]], m == ApplyMode::Vccpbd);
+                apply_scalar(&one, [&mut px[g.clone()], &mut py[g.clone()], &mut pz[g]], m == Response::Vccpbd);
             }
         }
     }

@@ -1,5 +1,6 @@
 use super::*;
 use crate::data::particles::Particles;
+use crate::model::self_collision::Response;
 use proptest::prelude::*;
 
 /// xorshift in [-1, 1).
@@ -61,7 +62,7 @@ proptest! {
         let mut rb = rng(seed ^ 77);
         let b: Vec<f32> = (0..len).map(|_| (rb() + 1.0) * 20.0).collect();
         let q: Vec<Vec<f32>> = [&base.px, &base.py, &base.pz].iter().map(|a| a.iter().map(|v| v + 0.003 * rb()).collect()).collect();
-        let mode = if vc { ApplyMode::Vccpbd } else { ApplyMode::Plain };
+        let mode = if vc { Response::Vccpbd } else { Response::Pbd };
         let h = h_milli as f32 * 1e-3;
         let run = |simd: bool, par: bool| {
             let mut p = base.clone();
@@ -127,13 +128,13 @@ fn derived_box_centres_equal_the_copied_ones() {
             let blocks = len / crate::data::lanes::LANES;
             let runs = [(0, 0, 3), (3, 3, blocks - 3)].into_iter();
             let i = inp(xs, &base.w[..], [&v[0][..], &v[1][..], &v[2][..]], 0);
-            super::apply_runs(&i, [&mut p.px[..], &mut p.py[..], &mut p.pz[..]], runs, ApplyMode::Vccpbd, simd);
+            super::apply_runs(&i, [&mut p.px[..], &mut p.py[..], &mut p.pz[..]], runs, Response::Vccpbd, simd);
         } else {
             p.for_chunks(false, |c| {
                 let g = c.start..c.start + c.x.len();
                 let vs = [&v[0][g.clone()], &v[1][g.clone()], &v[2][g]];
                 let i = centres_input([&*c.x, &*c.y, &*c.z], c.w, derive.then_some(vs), &q, &b, &s, c.start, h);
-                apply(&i, [c.px, c.py, c.pz], ApplyMode::Vccpbd, simd);
+                apply(&i, [c.px, c.py, c.pz], Response::Vccpbd, simd);
             });
         }
         p
@@ -205,7 +206,7 @@ fn apply_leaves_pinned_and_contactless_particles_alone() {
             h: 0.01,
             r: 0.01,
         };
-        apply(&inp, [c.px, c.py, c.pz], ApplyMode::Vccpbd, true);
+        apply(&inp, [c.px, c.py, c.pz], Response::Vccpbd, true);
     });
     for i in [0, 3, 7, 14] {
         assert_eq!(p.px[i].to_bits(), base.px[i].to_bits(), "particle {i}");
@@ -238,7 +239,7 @@ fn vccpbd_puts_a_far_moved_particle_back_to_its_box_centre() {
             h: 0.01,
             r: 0.01,
         };
-        apply(&inp, [c.px, c.py, c.pz], ApplyMode::Vccpbd, false);
+        apply(&inp, [c.px, c.py, c.pz], Response::Vccpbd, false);
     });
     assert_eq!(p.px[0], 0.25);
 }
