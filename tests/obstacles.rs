@@ -105,7 +105,7 @@ proptest! {
 /// layer of the face it then crosses, and the response pushed its prediction, 2 mm behind
 /// that face but 20 mm behind a neighbouring one, along the first face's normal only: it
 /// ended 2.3 mm inside. A mesh contact crossed from inside the layer now returns the particle
-/// to its start (`collide::mesh_response`).
+/// to its start (`obstacles::mesh::response`).
 #[test]
 fn fast_particle_sliding_on_the_dress_form_stays_outside() {
     let thrown = (

@@ -1,7 +1,7 @@
 //! Obstacles in the world: analytic [`Shape`]s and triangle meshes, static or moving with a
 //! constant velocity, and their part of the step (Landovskaya, Landovsky & Frolovsky).
 //!
-//! Per substep of length `h` ending at time `t` (`src/step.rs`):
+//! Per substep of length `h` ending at time `t` (`src/world/step.rs`):
 //!
 //! 1. **Place.** Every moving obstacle is put at `start + u t` (meshes: the base mesh
 //!    translated, then the broadphase rebuilt, or refitted for a BVH). Positions are a
@@ -28,7 +28,7 @@
 //! the broadphase work. A world without obstacles
 //! skips all of this: no pass, no allocation.
 //!
-//! Checkpoints (`src/checkpoint.rs`) rebuild obstacles from the scene, and moving obstacles'
+//! Checkpoints (`src/world/checkpoint.rs`) rebuild obstacles from the scene, and moving obstacles'
 //! places are functions of time, so a resumed run is bitwise the uninterrupted one, except
 //! that face memories are not saved: with `face_memory` on, a resumed run starts with empty
 //! memories and may differ slightly.

@@ -1,6 +1,6 @@
 //! Analytic obstacles in f64 for the reference step: plane, sphere, capsule and box, static or
 //! moving with a constant velocity (Landovskaya, Landovsky & Frolovsky; the world's version is
-//! `src/collide/{shapes,obstacles,obstacle_kernels}.rs`).
+//! `src/model/shapes.rs`, `src/obstacles/`).
 //!
 //! This is a second, deliberately naive reading of the same response, written from the method
 //! rather than from the kernels. Every shape is reduced to one query, [`Solid::closest`]: the

@@ -1,6 +1,6 @@
 //! Cloth self-collision in f64 for the reference step: particle–particle contacts with the
 //! world's rules (Shapri, Sulaiman & Bade 2016 and Müller's "Ten Minute Physics"; the world's version is
-//! `src/collide/{self_collision,self_pairs,response}.rs`), read naively.
+//! `src/self_collision/`: `mod.rs`, `pairs.rs`, `response.rs`), read naively.
 //!
 //! With `d` the collision distance and `r_i` the rest (initial grid) position of particle `i`:
 //!

@@ -43,7 +43,7 @@ pub struct World {
     pub(crate) damping_rate: Vec<f32>,
     pub(crate) has_damping: bool,
     /// Whether a substep's update pass also runs the next substep's predict, chunk by chunk
-    /// (`src/step.rs`; off only in tests that hold the fused path to the separate passes).
+    /// (`src/world/step.rs`; off only in tests that hold the fused path to the separate passes).
     pub(crate) fuse_predict: bool,
     pub(crate) damp_factor: Vec<f32>,
     pub(crate) damp_h: f32,
