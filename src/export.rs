@@ -4,7 +4,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use crate::error::Result;
-use crate::world::checkpoint::write_atomic;
+use crate::files::write_atomic;
 
 /// Writes positions and triangles as a Wavefront OBJ file (atomically).
 pub fn write_obj(path: &Path, positions: &[[f32; 3]], triangles: &[[u32; 3]]) -> Result<()> {

@@ -7,7 +7,7 @@ use crate::model::effects::{Effects, Wind};
 use crate::model::fabric::Fabric;
 use crate::model::params::{Backend, SolverParams};
 use crate::scene::Scene;
-use crate::world::World;
+use crate::World;
 
 /// Parses arbitrary bytes as a scene; if it parses, builds the world and runs a few steps when
 /// the scene is small.

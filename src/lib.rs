@@ -8,6 +8,7 @@ pub mod data;
 pub mod embed;
 pub mod error;
 pub mod export;
+pub mod files;
 #[doc(hidden)]
 pub mod fuzzing;
 pub mod integrate;

@@ -22,7 +22,7 @@ use crate::model::effects::Effects;
 use crate::model::fabric::Fabric;
 use crate::model::params::SolverParams;
 use crate::model::self_collision::SelfCollision;
-use crate::world::World;
+use crate::World;
 
 /// Median of `reps` timings of `f`, in seconds.
 pub fn median_secs(reps: usize, mut f: impl FnMut()) -> f64 {
@@ -337,8 +337,7 @@ pub struct StepStageFigure {
 }
 
 /// Wall time per stage of `steps` real steps of `world` ([`World::set_stage_clock`]): what
-/// the step spends where, stages adding up to the step (unlike [`stage_times`], which runs
-/// each stage alone with warmer caches). Leaves the clock off.
+/// the step spends where, stages adding up to the step. Leaves the clock off.
 pub fn step_stage_times(world: &mut World, steps: usize) -> Result<Vec<StepStageFigure>> {
     let dt = world.params().dt;
     world.set_stage_clock(true);
@@ -356,88 +355,4 @@ pub fn step_stage_times(world: &mut World, steps: usize) -> Result<Vec<StepStage
         .collect();
     world.set_stage_clock(false);
     ran.map(|_| out)
-}
-
-/// One stage of the XPBD substep, timed on its own.
-#[derive(Clone, Debug, serde::Serialize)]
-pub struct StageFigure {
-    /// Stage name (as in the step's stage list, [`crate::world::step`]).
-    pub stage: &'static str,
-    /// Milliseconds per substep.
-    pub ms: f64,
-    /// Nanoseconds per particle per substep.
-    pub ns_per_particle: f64,
-}
-
-/// Times each stage of one substep of `world` (XPBD, SIMD, on a pool of `threads` threads),
-/// median of `reps` runs each, running the same kernels the step runs on the world's own
-/// state (which the repeated runs advance; only the cost is of interest). Step the world a few
-/// times first so that contacts exist.
-pub fn stage_times(world: &mut World, threads: usize, reps: usize) -> Result<Vec<StageFigure>> {
-    let pool = pool(threads)?;
-    let n = world.particle_count() as f64;
-    let h = world.params.dt / world.params.substeps as f32;
-    let inv_h2 = 1.0 / (h * h);
-    let t = world.time;
-    let w = world;
-    let mut out = Vec::new();
-    let mut add = |stage, secs: f64| {
-        out.push(StageFigure {
-            stage,
-            ms: secs * 1e3,
-            ns_per_particle: secs * 1e9 / n,
-        })
-    };
-    pool.install(|| {
-        let pp = PredictParams {
-            h,
-            gravity: w.effects.gravity,
-            drag: w.effects.drag,
-            force: None,
-        };
-        add(
-            "predict",
-            median_secs(reps, || w.particles.for_chunks(true, |c| predict(c, &pp, true))),
-        );
-        if !w.obstacles.is_empty() {
-            w.obstacles.prepare(&w.particles, &w.cloths, &w.strands);
-            let contacts = median_secs(reps, || {
-                w.obstacles.generate(&w.particles, t, h, true, true);
-                w.obstacles.resolve(&mut w.particles, h, true, true);
-            });
-            add("obstacle contacts", contacts);
-        }
-        let solve = median_secs(reps, || {
-            let p = &mut w.particles;
-            w.distance.reset_lambda();
-            w.distance.solve_simd(&mut p.px, &mut p.py, &mut p.pz, &p.w, inv_h2, true);
-        });
-        add("distance constraints", solve);
-        if !w.tethers.is_empty() {
-            let p = &mut w.particles;
-            add(
-                "tethers",
-                median_secs(reps, || w.tethers.solve_simd(&mut p.px, &mut p.py, &mut p.pz, true)),
-            );
-        }
-        if !w.obstacles.is_empty() {
-            add(
-                "obstacle projection",
-                median_secs(reps, || w.obstacles.project(&mut w.particles, true, true)),
-            );
-        }
-        let sized = w.damp_factor.len() >= w.particles.padded_len();
-        let damp = (w.has_damping && sized).then_some(&w.damp_factor[..]);
-        add(
-            "update",
-            median_secs(reps, || w.particles.for_chunks(true, |c| update(c, h, damp, true))),
-        );
-        if !w.obstacles.is_empty() {
-            add(
-                "obstacle velocity",
-                median_secs(reps, || w.obstacles.velocity_pass(&mut w.particles, true, true)),
-            );
-        }
-    });
-    Ok(out)
 }

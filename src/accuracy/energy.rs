@@ -3,7 +3,7 @@
 
 use super::reference::Reference;
 use super::run::{dist, state64};
-use crate::world::World;
+use crate::World;
 
 /// Kinetic + gravitational + spring energy of `world`'s model at state `(x, v)`, J.
 pub fn model_energy(world: &World, x: &[[f64; 3]], v: &[[f64; 3]]) -> f64 {

@@ -36,7 +36,7 @@ use std::path::{Path, PathBuf};
 use crate::error::{Result, WeftError};
 use crate::model::params::{Method, SolverParams};
 use crate::reference::ReferenceWorld;
-use crate::world::World;
+use crate::World;
 
 /// How a reference is computed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]

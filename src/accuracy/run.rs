@@ -9,7 +9,7 @@ use crate::error::{Result, WeftError};
 use crate::model::params::{Backend, Method, SolverParams};
 use crate::model::self_collision::{Response, SelfBroadphase};
 use crate::reference::ReferenceWorld;
-use crate::world::World;
+use crate::World;
 
 /// Arithmetic of a run.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]

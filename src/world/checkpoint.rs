@@ -6,7 +6,6 @@
 //! `f32` arrays, then a `u64` FNV-1a hash of everything before it. Files are written to a
 //! temporary name and renamed, so a crash never leaves a half-written checkpoint.
 
-use std::io::Write;
 use std::path::Path;
 
 use crate::error::{Result, WeftError};
@@ -37,15 +36,7 @@ fn fnv1a(bytes: &[u8]) -> u64 {
     h
 }
 
-/// Writes `bytes` to `path` through a temporary file and a rename.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
-    let tmp = path.with_extension(format!("{}.tmp", path.extension().and_then(|e| e.to_str()).unwrap_or("")));
-    let mut f = std::fs::File::create(&tmp).map_err(|e| WeftError::io(&tmp, e))?;
-    f.write_all(bytes).map_err(|e| WeftError::io(&tmp, e))?;
-    f.sync_all().map_err(|e| WeftError::io(&tmp, e))?;
-    drop(f);
-    std::fs::rename(&tmp, path).map_err(|e| WeftError::io(path, e))
-}
+pub use crate::files::write_atomic;
 
 impl World {
     /// The checkpoint of the current state.

@@ -1,7 +1,6 @@
 //! Wall time per stage of the real step.
 //!
-//! Timing a stage alone, repeated on the same data (`perf::stage_times`), measures it with
-//! warm caches: at 1M particles the particle arrays (40 MB) and contact slots (28 MB) partly
+//! Timing a stage alone, repeated on the same data, would measure it with warm caches: at 1M particles the particle arrays (40 MB) and contact slots (28 MB) partly
 //! fit a 32 MB last-level cache when one kernel runs over and over, but not when the whole
 //! step, with its 80 MB of constraints, runs between two visits. The sum of such stage times
 //! then falls well short of the step time. The clock answers "where does the step's time go"

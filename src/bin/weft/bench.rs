@@ -22,8 +22,6 @@ struct DrapeFigure {
     substeps: u32,
     iterations: u32,
     ms_per_step: f64,
-    /// Each stage timed alone (warm caches; they do not add up to the step).
-    stages: Vec<perf::StageFigure>,
     /// Where the real step's time goes (adds up to the step).
     step_stages: Vec<perf::StepStageFigure>,
 }
@@ -75,7 +73,6 @@ pub fn bench(json: bool, scenes_dir: &Path) -> weft::Result<ExitCode> {
             substeps: w.params().substeps,
             iterations: w.params().iterations,
             ms_per_step: ms,
-            stages: perf::stage_times(&mut w, 2, 5)?,
             step_stages,
         }
     };
@@ -148,13 +145,6 @@ pub fn bench(json: bool, scenes_dir: &Path) -> weft::Result<ExitCode> {
     println!("  in the step (wall time per stage, adding up to the step):");
     for s in &d.step_stages {
         println!("    {:<26} {:>8.3} ms/step {:>6.1}%", s.stage, s.ms_per_step, s.share * 100.0);
-    }
-    println!("  each stage alone (warm caches):");
-    for s in &d.stages {
-        println!(
-            "    {:<26} {:>8.3} ms/substep {:>7.2} ns/particle",
-            s.stage, s.ms, s.ns_per_particle
-        );
     }
     for s in &report.ms_per_step {
         println!("scene {:<28} {:>8} particles {:>9.3} ms/step", s.scene, s.particles, s.ms_per_step);
