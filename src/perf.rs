@@ -10,6 +10,7 @@
 //! (a triad `a = b + s c` has a different read/write mix and overstates or understates it). Medians over repeated runs, measured in one process so the ratios are comparable;
 //! criterion benches (`cargo bench`) are the careful version of the same figures.
 
+use crate::data::exec::Exec;
 use std::time::Instant;
 
 use crate::constraints::DistanceSet;
@@ -173,10 +174,10 @@ pub fn stream_figures(n: usize, threads: usize, reps: usize) -> Result<Bandwidth
     let mut p = particle_cloud(n);
     let par = threads > 1;
     let pool = pool(threads)?;
-    let scalar = pool.install(|| time_integrate(&mut p, false, false, reps));
+    let scalar = pool.install(|| time_integrate(&mut p, Exec::Scalar, reps));
     let (mut kern, mut ceil) = (Vec::new(), Vec::new());
     for _ in 0..3 {
-        kern.push(pool.install(|| time_integrate(&mut p, true, par, reps)));
+        kern.push(pool.install(|| time_integrate(&mut p, Exec::new(true, par), reps)));
         ceil.push(pool.install(|| time_stream_reference(&mut p, par, reps)));
     }
     let med = |v: &mut Vec<f64>| {
@@ -204,7 +205,8 @@ pub fn particle_cloud(n: usize) -> Particles {
 }
 
 /// Seconds for one predict + update over `p` (SIMD or scalar twin, parallel or not).
-pub fn time_integrate(p: &mut Particles, simd: bool, parallel: bool, reps: usize) -> f64 {
+pub fn time_integrate(p: &mut Particles, exec: Exec, reps: usize) -> f64 {
+    let (simd, parallel) = (exec.simd(), exec.parallel());
     let params = PredictParams {
         h: 1.0 / 600.0,
         gravity: Some([0.0, -9.81, 0.0]),
@@ -218,7 +220,8 @@ pub fn time_integrate(p: &mut Particles, simd: bool, parallel: bool, reps: usize
 }
 
 /// Seconds for one sweep of the distance constraints.
-pub fn time_solve(set: &mut DistanceSet, p: &mut Particles, simd: bool, parallel: bool, reps: usize) -> f64 {
+pub fn time_solve(set: &mut DistanceSet, p: &mut Particles, exec: Exec, reps: usize) -> f64 {
+    let (simd, parallel) = (exec.simd(), exec.parallel());
     let inv_h2 = 3.6e5;
     median_secs(reps, || {
         if simd {
@@ -255,13 +258,13 @@ pub fn kernel_figures(n: usize, reps: usize) -> Result<(KernelFigures, KernelFig
     let count = world.particle_count() as f64;
     let mut p = world.particles().clone();
     let per = |s: f64| s * 1e9 / count;
-    let is = one.install(|| time_integrate(&mut p, false, false, reps));
-    let iv = one.install(|| time_integrate(&mut p, true, false, reps));
-    let i2 = two.install(|| time_integrate(&mut p, true, true, reps));
+    let is = one.install(|| time_integrate(&mut p, Exec::Scalar, reps));
+    let iv = one.install(|| time_integrate(&mut p, Exec::Simd, reps));
+    let i2 = two.install(|| time_integrate(&mut p, Exec::Parallel, reps));
     let mut set = world.distance_set().clone();
-    let ss = one.install(|| time_solve(&mut set, &mut p, false, false, reps));
-    let sv = one.install(|| time_solve(&mut set, &mut p, true, false, reps));
-    let s2 = two.install(|| time_solve(&mut set, &mut p, true, true, reps));
+    let ss = one.install(|| time_solve(&mut set, &mut p, Exec::Scalar, reps));
+    let sv = one.install(|| time_solve(&mut set, &mut p, Exec::Simd, reps));
+    let s2 = two.install(|| time_solve(&mut set, &mut p, Exec::Parallel, reps));
     let fig = |kernel, s: f64, v: f64, t2: f64| KernelFigures {
         kernel,
         particles: count as usize,

@@ -38,6 +38,7 @@ pub mod mesh;
 pub mod obstacle;
 pub mod penetration;
 
+use crate::data::exec::Exec;
 use rayon::prelude::*;
 
 use crate::data::lanes::LANES;
@@ -179,7 +180,8 @@ impl ObstacleSet {
 
     /// Places every obstacle at time `t` and finds the contacts of the step `x -> p` of
     /// length `h` (module doc, stages 1 and 2).
-    pub(crate) fn generate(&mut self, particles: &Particles, t: f64, h: f32, parallel: bool, simd: bool) {
+    pub(crate) fn generate(&mut self, particles: &Particles, t: f64, h: f32, exec: Exec) {
+        let (parallel, simd) = (exec.parallel(), exec.simd());
         let n = particles.count();
         let vel = [&particles.vx[..], &particles.vy[..], &particles.vz[..]];
         for (o, slots) in self.list.iter_mut().zip(&mut self.slots) {
@@ -251,7 +253,8 @@ impl ObstacleSet {
 
     /// Moves every particle back along its path out of its contacts (stage 2, the paper's
     /// response; [`k::resolve_along_path`]).
-    pub(crate) fn resolve(&self, particles: &mut Particles, h: f32, parallel: bool, simd: bool) {
+    pub(crate) fn resolve(&self, particles: &mut Particles, h: f32, exec: Exec) {
+        let (parallel, simd) = (exec.parallel(), exec.simd());
         let shifts: Vec<[f32; 3]> = self.list.iter().map(|o| o.velocity.map(|c| c * h)).collect();
         let (slots, th, mesh) = (&self.slots, &self.th, &self.mesh);
         particles.for_chunks(parallel, |c| {
@@ -265,7 +268,8 @@ impl ObstacleSet {
     }
 
     /// Projects every particle's prediction out of its contacts (stage 3).
-    pub(crate) fn project(&self, particles: &mut Particles, parallel: bool, simd: bool) {
+    pub(crate) fn project(&self, particles: &mut Particles, exec: Exec) {
+        let (parallel, simd) = (exec.parallel(), exec.simd());
         let (slots, th) = (&self.slots, &self.th);
         particles.for_chunks(parallel, |c| {
             if simd {
@@ -277,7 +281,8 @@ impl ObstacleSet {
     }
 
     /// Removes approaching normal velocity and applies friction (stage 4).
-    pub(crate) fn velocity_pass(&self, particles: &mut Particles, parallel: bool, simd: bool) {
+    pub(crate) fn velocity_pass(&self, particles: &mut Particles, exec: Exec) {
+        let (parallel, simd) = (exec.parallel(), exec.simd());
         let motion = self.motion();
         particles.for_chunks(parallel, |mut c| self.velocity_pass_chunk(&motion, &mut c, simd));
     }

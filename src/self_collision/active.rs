@@ -27,6 +27,7 @@
 //!
 //! The contacts keep their bounds checks: the scattered loads, not the checks, set the pace.
 
+use crate::data::exec::Exec;
 use rayon::prelude::*;
 
 use crate::data::lanes::{SharedVec3, Vec3x8, LANES};
@@ -242,7 +243,8 @@ impl ActiveSet {
     /// the particles that received a contact are written (their blocks are the *touched*
     /// blocks the correction runs on); those of the last pass are zeroed first, so every
     /// other sum stays zero.
-    pub(crate) fn pair_pass(&mut self, ctx: &PairCtx<'_>, near: &[(u32, u32)], parallel: bool, simd: bool) {
+    pub(crate) fn pair_pass(&mut self, ctx: &PairCtx<'_>, near: &[(u32, u32)], exec: Exec) {
+        let (parallel, simd) = (exec.parallel(), exec.simd());
         let chunks = near.len().div_ceil(PAIR_CHUNK);
         if self.candidates.len() < chunks {
             self.candidates.resize_with(chunks, Vec::new);
@@ -335,16 +337,8 @@ impl ActiveSet {
     /// the step: an idle second worker went to sleep and the next parallel pass paid to wake
     /// it (module `keep_awake` now keeps the workers polling during a step).
     #[allow(clippy::too_many_arguments)]
-    pub(crate) fn apply(
-        &self,
-        x: [&[f32]; 3],
-        w: &[f32],
-        v: Option<[&[f32]; 3]>,
-        p: [&mut [f32]; 3],
-        ap: ApplyParams,
-        parallel: bool,
-        simd: bool,
-    ) {
+    pub(crate) fn apply(&self, x: [&[f32]; 3], w: &[f32], v: Option<[&[f32]; 3]>, p: [&mut [f32]; 3], ap: ApplyParams, exec: Exec) {
+        let (parallel, simd) = (exec.parallel(), exec.simd());
         let inp = |x, w, v| self.apply_input(x, w, v, ap);
         let [px, py, pz] = p;
         if parallel {

@@ -4,6 +4,7 @@
 //! responses, SIMD and scalar, serial and parallel on one and two threads.
 
 use super::*;
+use crate::data::exec::Exec;
 use crate::data::lanes::LANES;
 use crate::self_collision::response::{apply, ApplyInput, ContactSums};
 use crate::test_rng::signed;
@@ -48,19 +49,18 @@ fn compact(
     p: &[Vec<f32>; 3],
     w: &[f32],
     n: usize,
-    parallel: bool,
-    simd: bool,
+    exec: Exec,
 ) -> ([Vec<f32>; 3], Vec<[f32; 11]>) {
     let damping = vec![0.8f32; n];
     let xs = [&x[0][..], &x[1][..], &x[2][..]];
     assert!(data.begin_step(xs, n, &damping).unwrap());
     let mut out = p.clone();
     data.keep_predictions([&out[0][..], &out[1][..], &out[2][..]]);
-    data.pair_pass(xs, [&p[0][..], &p[1][..], &p[2][..]], w, n, parallel, simd);
+    data.pair_pass(xs, [&p[0][..], &p[1][..], &p[2][..]], w, n, exec);
     let a = data.active().unwrap();
     let ap = a.apply_params(0.005);
     let [o0, o1, o2] = &mut out;
-    data.apply(xs, w, None, [o0, o1, o2], ap, parallel, simd);
+    data.apply(xs, w, None, [o0, o1, o2], ap, exec);
     let st = data.state.as_ref().unwrap();
     let s = &st.active.sums;
     let mut by_particle = vec![[0.0f32; 11]; n];
@@ -151,7 +151,7 @@ fn compact_step_equals_recomputation_from_scratch() {
         for (parallel, simd) in [(false, false), (false, true), (true, true), (true, false)] {
             for threads in [1, 2] {
                 let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-                let (got_p, got_sums) = pool.install(|| compact(&mut data, &x, &p, &w, n, parallel, simd));
+                let (got_p, got_sums) = pool.install(|| compact(&mut data, &x, &p, &w, n, Exec::new(simd, parallel)));
                 for i in 0..n {
                     assert_eq!(
                         got_sums[i].map(f32::to_bits),
@@ -327,7 +327,7 @@ fn consecutive_pair_passes_leave_no_stale_sums() {
         // buffers; each pass zeroes the sums the other left).
         let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
         for (parallel, simd) in [(false, false), (true, true), (false, true), (true, false)] {
-            let (_, got) = pool.install(|| compact(&mut data, &x, &p, &w, n, parallel, simd));
+            let (_, got) = pool.install(|| compact(&mut data, &x, &p, &w, n, Exec::new(simd, parallel)));
             for i in 0..n {
                 assert_eq!(
                     got[i].map(f32::to_bits),
@@ -363,7 +363,7 @@ fn parallel_correction_equals_serial() {
         }
     }
     let w = padded(&vec![1.0f32; n]);
-    let (want, _) = compact(&mut data, &x, &p, &w, n, false, true);
+    let (want, _) = compact(&mut data, &x, &p, &w, n, Exec::Simd);
     assert!(
         data.touched_blocks() > 2 * crate::self_collision::active::APPLY_BLOCKS,
         "{} touched blocks",
@@ -376,7 +376,7 @@ fn parallel_correction_equals_serial() {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         let mut got = p.clone();
         let [g0, g1, g2] = &mut got;
-        pool.install(|| st.active.apply(xs, &w, None, [g0, g1, g2], ap, true, true));
+        pool.install(|| st.active.apply(xs, &w, None, [g0, g1, g2], ap, Exec::Parallel));
         for a in 0..3 {
             assert!(
                 got[a].iter().zip(&want[a]).all(|(u, v)| u.to_bits() == v.to_bits()),

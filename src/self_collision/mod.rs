@@ -98,6 +98,7 @@ pub mod response;
 pub mod tree;
 pub(crate) mod verlet;
 
+use crate::data::exec::Exec;
 use std::sync::OnceLock;
 use std::time::Instant;
 
@@ -383,7 +384,7 @@ impl SelfCollisionData {
     /// The pair pass: updates the near list, then fills the contact sums of the active blocks
     /// from the predicted positions `p`, start positions `x` and inverse masses `w` (see the
     /// module docs). Parallel over fixed chunks when `parallel`; the serial loop is its twin.
-    pub(crate) fn pair_pass(&mut self, x: [&[f32]; 3], p: [&[f32]; 3], w: &[f32], n: usize, parallel: bool, simd: bool) {
+    pub(crate) fn pair_pass(&mut self, x: [&[f32]; 3], p: [&[f32]; 3], w: &[f32], n: usize, exec: Exec) {
         let t0 = Instant::now();
         let Some(a) = self.active() else { return };
         let Some(st) = self.state.as_mut().filter(|s| s.ready) else {
@@ -399,7 +400,7 @@ impl SelfCollisionData {
                 reach: q + st.verlet.skin(),
             }
         };
-        let mid = st.near.update(source, p, &st.active.blocks, n, a.d, simd, parallel);
+        let mid = st.near.update(source, p, &st.active.blocks, n, a.d, exec);
         let ctx = PairCtx {
             x,
             p,
@@ -411,7 +412,7 @@ impl SelfCollisionData {
             d: a.d,
             response: a.response,
         };
-        st.active.pair_pass(&ctx, &st.near.pairs, parallel, simd);
+        st.active.pair_pass(&ctx, &st.near.pairs, exec);
         let ph = &mut self.stats.phases;
         ph.pairs_s += t0.elapsed().as_secs_f64();
         ph.mid_queries += u64::from(mid == MidUpdate::Queried);
@@ -422,21 +423,13 @@ impl SelfCollisionData {
     /// with the substep's velocities `v`, the box centres are derived as `x + h v` instead of
     /// read from the copy the clamp kept (see [`SelfCollisionData::prediction_sink`]).
     #[allow(clippy::too_many_arguments)]
-    pub(crate) fn apply(
-        &mut self,
-        x: [&[f32]; 3],
-        w: &[f32],
-        v: Option<[&[f32]; 3]>,
-        p: [&mut [f32]; 3],
-        ap: ApplyParams,
-        parallel: bool,
-        simd: bool,
-    ) {
+    pub(crate) fn apply(&mut self, x: [&[f32]; 3], w: &[f32], v: Option<[&[f32]; 3]>, p: [&mut [f32]; 3], ap: ApplyParams, exec: Exec) {
+        let simd = exec.simd();
         let t0 = Instant::now();
         if let Some(st) = self.state.as_ref().filter(|s| s.ready) {
             // On one worker the serial path (runs of blocks, one kernel call) is the faster.
-            let parallel = parallel && st.active.touched() >= APPLY_PARALLEL_BLOCKS && rayon::current_num_threads() > 1;
-            st.active.apply(x, w, v, p, ap, parallel, simd);
+            let parallel = exec.parallel() && st.active.touched() >= APPLY_PARALLEL_BLOCKS && rayon::current_num_threads() > 1;
+            st.active.apply(x, w, v, p, ap, Exec::new(simd, parallel));
         }
         self.stats.phases.correction_s += t0.elapsed().as_secs_f64();
     }

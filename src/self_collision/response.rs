@@ -49,6 +49,7 @@
 //! `m x'' = a` term is the external acceleration of the next substep, which predict adds, so it
 //! is not added twice here. `β = min(b h, 1)` keeps the correction from overshooting.
 
+use crate::data::exec::Exec;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use rayon::prelude::*;
@@ -471,7 +472,8 @@ pub(crate) const MEAN_CHUNK: usize = 4096;
 ///
 /// Within a chunk the particles are summed in eight lanes, `f32` over blocks of 64 particles
 /// and `f64` across blocks ([`chunk_sums`]); every path uses this one summation.
-pub(crate) fn mean_velocity(v: [&[f32]; 3], w: &[f32], n: usize, parallel: bool, simd: bool) -> [f32; 3] {
+pub(crate) fn mean_velocity(v: [&[f32]; 3], w: &[f32], n: usize, exec: Exec) -> [f32; 3] {
+    let (parallel, simd) = (exec.parallel(), exec.simd());
     let parts = MeanParts::new(n);
     let chunks = n.div_ceil(MEAN_CHUNK);
     let one = |k: usize| {

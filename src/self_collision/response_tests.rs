@@ -1,4 +1,5 @@
 use super::*;
+use crate::data::exec::Exec;
 use crate::data::particles::Particles;
 use crate::model::self_collision::Response;
 use proptest::prelude::*;
@@ -255,11 +256,11 @@ fn mean_velocity_is_deterministic_and_averages_the_free_particles() {
     for n in [0usize, 1, 3, 5, 9, 63, 64, 65, 520, 4095, 4097, 9001] {
         let p = cloud(n, n as u64 + 3);
         let v = [&p.vx[..], &p.vy[..], &p.vz[..]];
-        let serial = mean_velocity(v, &p.w, n, false, true);
+        let serial = mean_velocity(v, &p.w, n, Exec::Simd);
         for threads in [1, 2] {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
             for simd in [false, true] {
-                let par = pool.install(|| mean_velocity(v, &p.w, n, true, simd));
+                let par = pool.install(|| mean_velocity(v, &p.w, n, Exec::new(simd, true)));
                 assert_eq!(
                     serial.map(f32::to_bits),
                     par.map(f32::to_bits),
@@ -313,7 +314,7 @@ fn mean_parts_filled_by_chunk_ranges_equal_mean_velocity() {
     for n in [1usize, 4096, 4097, 9001, 12_289] {
         let mut p = cloud(n, n as u64 + 11);
         let len = p.vx.len();
-        let want = mean_velocity([&p.vx[..], &p.vy[..], &p.vz[..]], &p.w, n, false, true);
+        let want = mean_velocity([&p.vx[..], &p.vy[..], &p.vz[..]], &p.w, n, Exec::Simd);
         // One range for everything (the serial pass) and single chunks in reverse order.
         let whole = MeanParts::new(n);
         whole.add(0, [&p.vx[..], &p.vy[..], &p.vz[..]], &p.w, n, true);
@@ -342,7 +343,7 @@ fn mean_parts_filled_by_chunk_ranges_equal_mean_velocity() {
             n,
             (lo / MEAN_CHUNK).is_multiple_of(2),
         );
-        let moved = mean_velocity([&p.vx[..], &p.vy[..], &p.vz[..]], &p.w, n, false, true);
+        let moved = mean_velocity([&p.vx[..], &p.vy[..], &p.vz[..]], &p.w, n, Exec::Simd);
         assert_eq!(parts.mean().map(f32::to_bits), moved.map(f32::to_bits), "n {n}");
         assert_ne!(moved[0], want[0], "n {n}");
     }

@@ -28,6 +28,7 @@
 //! kick, so the closing force is evaluated at the corrected positions. A world with neither
 //! obstacles nor self-collision takes none of this path and steps bit for bit as before.
 
+use crate::data::exec::Exec;
 use crate::self_collision::Active;
 use crate::world::World;
 
@@ -77,7 +78,8 @@ impl World {
 
     /// The collision stages of substep `s` (length `h`) on the prediction `p`, then
     /// `v = (p - x) / h`, `x = p` and the obstacle velocity pass (module docs).
-    pub(crate) fn force_contact_stages(&mut self, c: Contacts, s: u32, h: f32, parallel: bool, simd: bool) {
+    pub(crate) fn force_contact_stages(&mut self, c: Contacts, s: u32, h: f32, exec: Exec) {
+        let parallel = exec.parallel();
         let n_sub = self.params.substeps;
         let n = self.particles.count();
         {
@@ -90,8 +92,8 @@ impl World {
         if c.obstacles {
             let t0 = std::time::Instant::now();
             let t_end = self.time + ((s + 1) as f64) * (h as f64);
-            self.obstacles.generate(&self.particles, t_end, h, parallel, simd);
-            self.obstacles.resolve(&mut self.particles, h, parallel, simd);
+            self.obstacles.generate(&self.particles, t_end, h, exec);
+            self.obstacles.resolve(&mut self.particles, h, exec);
             self.obstacles.add_busy(t0);
         }
         if let Some(a) = c.selfcol {
@@ -102,12 +104,12 @@ impl World {
                     dst.extend_from_slice(&src[..n]);
                 }
             }
-            self.self_collision_clamp(a, n_sub, h, parallel, simd, None);
+            self.self_collision_clamp(a, n_sub, h, exec, None);
             self.rebase_clamped_predictions(n);
         }
         if c.obstacles {
             let t0 = std::time::Instant::now();
-            self.obstacles.project(&mut self.particles, parallel, simd);
+            self.obstacles.project(&mut self.particles, exec);
             self.obstacles.add_busy(t0);
         }
         if c.scalps {
@@ -119,7 +121,7 @@ impl World {
             }
         }
         if let Some(a) = c.selfcol {
-            self.self_collision_pairs_pass(a, h, parallel, simd);
+            self.self_collision_pairs_pass(a, h, exec);
         }
         let inv_h = 1.0 / h;
         let p = &mut self.particles;
@@ -132,7 +134,7 @@ impl World {
         }
         if c.obstacles {
             let t0 = std::time::Instant::now();
-            self.obstacles.velocity_pass(&mut self.particles, parallel, simd);
+            self.obstacles.velocity_pass(&mut self.particles, exec);
             self.obstacles.add_busy(t0);
         }
     }

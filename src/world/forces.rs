@@ -48,8 +48,8 @@ impl World {
     pub(crate) fn run_mass_spring(&mut self, dt: f32, method: Method) -> crate::Result<()> {
         let n_sub = self.params.substeps;
         let h = dt / n_sub as f32;
-        let simd = self.params.backend == Backend::Simd;
-        let parallel = simd && !self.embed.caller_thread_only;
+        let exec = self.exec();
+        let (simd, parallel) = (exec.simd(), exec.parallel());
         self.damping_for(h);
         self.last_h = h;
         let contacts = self.begin_force_contacts(parallel);
@@ -77,7 +77,7 @@ impl World {
                 first.keep_x = keep_x;
                 self.particles.for_chunks(parallel, |c| kick(c, &first, simd));
                 if keep_x {
-                    self.force_contact_stages(contacts, s, h, parallel, simd);
+                    self.force_contact_stages(contacts, s, h, exec);
                 }
                 self.compute_forces(t + h as f64);
                 let close = kick_params(
@@ -107,7 +107,7 @@ impl World {
                 self.particles.for_chunks(parallel, |c| kick(c, &close, simd));
             }
             if keep_x {
-                self.force_contact_stages(contacts, s, h, parallel, simd);
+                self.force_contact_stages(contacts, s, h, exec);
             }
         }
         Ok(())

@@ -31,6 +31,7 @@
 //!   kinematic pins land exactly on their targets                     [embed::kinematic]
 //! ```
 
+use crate::data::exec::Exec;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use crate::data::particles::chunk_finite_simd;
@@ -108,6 +109,13 @@ impl World {
         Ok(())
     }
 
+    /// How this world's stages run: the SIMD kernels unless the scalar backend is chosen, in
+    /// parallel chunks unless the world runs on its caller's thread only.
+    pub(crate) fn exec(&self) -> Exec {
+        let simd = self.params.backend == Backend::Simd;
+        Exec::new(simd, simd && !self.embed.caller_thread_only)
+    }
+
     fn in_pool<R: Send>(&mut self, f: impl FnOnce(&mut World) -> R + Send) -> R {
         match self.pool.clone() {
             // The scalar backend is single-threaded: no pool to enter.
@@ -151,8 +159,8 @@ impl World {
         let n = self.particles.count();
         let n_sub = self.params.substeps;
         let h = dt / n_sub as f32;
-        let simd = self.params.backend == Backend::Simd;
-        let parallel = simd && !self.embed.caller_thread_only;
+        let exec = self.exec();
+        let (simd, parallel) = (exec.simd(), exec.parallel());
         if self.has_damping && self.damp_h != h {
             // In place (no allocation once sized). Pinned particles are kinematic: not damped.
             let (rate, w) = (&self.damping_rate, &self.particles.w);
@@ -248,8 +256,8 @@ impl World {
             if has_obstacles {
                 let t0 = std::time::Instant::now();
                 let t_end = self.time + ((s + 1) as f64) * (h as f64);
-                self.obstacles.generate(&self.particles, t_end, h, parallel, simd);
-                self.obstacles.resolve(&mut self.particles, h, parallel, simd);
+                self.obstacles.generate(&self.particles, t_end, h, exec);
+                self.obstacles.resolve(&mut self.particles, h, exec);
                 self.obstacles.add_busy(t0);
                 let p = &self.particles;
                 checkpoint!("obstacles", p.px, p.py, p.pz);
@@ -258,7 +266,7 @@ impl World {
             if let Some(a) = sc {
                 let t0 = std::time::Instant::now();
                 let mean = mean_parts.as_ref().map(MeanParts::mean);
-                self.self_collision_clamp(a, n_sub, h, parallel, simd, mean);
+                self.self_collision_clamp(a, n_sub, h, exec, mean);
                 sc_time += t0.elapsed();
                 let p = &self.particles;
                 checkpoint!("self-collision clamp", p.px, p.py, p.pz, p.vx, p.vy, p.vz);
@@ -285,7 +293,7 @@ impl World {
                 }
                 if has_obstacles {
                     let t0 = std::time::Instant::now();
-                    self.obstacles.project(p, parallel, simd);
+                    self.obstacles.project(p, exec);
                     self.obstacles.add_busy(t0);
                     checkpoint!("obstacles", p.px, p.py, p.pz);
                     self.clock.lap("obstacle projection");
@@ -302,7 +310,7 @@ impl World {
             }
             if let Some(a) = sc {
                 let t0 = std::time::Instant::now();
-                self.self_collision_pairs_pass(a, h, parallel, simd);
+                self.self_collision_pairs_pass(a, h, exec);
                 sc_time += t0.elapsed();
                 let p = &self.particles;
                 checkpoint!("self-collision", p.px, p.py, p.pz);
@@ -358,7 +366,7 @@ impl World {
             self.clock.lap("update");
             if has_obstacles {
                 let t0 = std::time::Instant::now();
-                self.obstacles.velocity_pass(&mut self.particles, parallel, simd);
+                self.obstacles.velocity_pass(&mut self.particles, exec);
                 self.obstacles.add_busy(t0);
                 let p = &self.particles;
                 checkpoint!("obstacles", p.vx, p.vy, p.vz);
@@ -383,10 +391,11 @@ impl World {
     /// The self-collision speed clamp (relative to the mean velocity, at most
     /// `TRAVEL_FACTOR d / substeps` per substep), then the predictions kept as box centres.
     /// `mean` is the mean velocity when the predict pass summed it already.
-    pub(crate) fn self_collision_clamp(&mut self, a: Active, n_sub: u32, h: f32, parallel: bool, simd: bool, mean: Option<[f32; 3]>) {
+    pub(crate) fn self_collision_clamp(&mut self, a: Active, n_sub: u32, h: f32, exec: Exec, mean: Option<[f32; 3]>) {
+        let (parallel, simd) = (exec.parallel(), exec.simd());
         let n = self.particles.count();
         let p = &self.particles;
-        let mean = mean.unwrap_or_else(|| mean_velocity([&p.vx, &p.vy, &p.vz], &p.w, n, parallel, simd));
+        let mean = mean.unwrap_or_else(|| mean_velocity([&p.vx, &p.vy, &p.vz], &p.w, n, exec));
         let cp = ClampParams {
             mean,
             limit: TRAVEL_FACTOR * a.d / n_sub as f32,
@@ -404,17 +413,16 @@ impl World {
     }
 
     /// The self-collision pair pass and its correction of the predictions `p`.
-    pub(crate) fn self_collision_pairs_pass(&mut self, a: Active, h: f32, parallel: bool, simd: bool) {
+    pub(crate) fn self_collision_pairs_pass(&mut self, a: Active, h: f32, exec: Exec) {
         let n = self.particles.count();
         let p = &self.particles;
-        self.selfcol
-            .pair_pass([&p.x, &p.y, &p.z], [&p.px, &p.py, &p.pz], &p.w, n, parallel, simd);
+        self.selfcol.pair_pass([&p.x, &p.y, &p.z], [&p.px, &p.py, &p.pz], &p.w, n, exec);
         let ap = a.apply_params(h);
         let derive = self.selfcol.derives_centres(self.obstacles.is_empty());
         let p = &mut self.particles;
         let v = derive.then_some([&p.vx[..], &p.vy[..], &p.vz[..]]);
         self.selfcol
-            .apply([&p.x, &p.y, &p.z], &p.w, v, [&mut p.px, &mut p.py, &mut p.pz], ap, parallel, simd);
+            .apply([&p.x, &p.y, &p.z], &p.w, v, [&mut p.px, &mut p.py, &mut p.pz], ap, exec);
     }
 }
 

@@ -39,6 +39,7 @@
 //! On a folded cloth a mid list typically expires because a handful of particles pass the
 //! bound; a refresh probes those few and merges the lists instead of querying every particle.
 
+use crate::data::exec::Exec;
 use crate::data::lanes::{finite_lanes, load, F32s, LANES};
 use crate::self_collision::hash::SpatialHash;
 use crate::self_collision::near::moves::as_refs;
@@ -176,9 +177,9 @@ impl HashedMid {
         r: f32,
         rule: RestRule<'_>,
         mid: &mut Vec<(u32, u32)>,
-        parallel: bool,
-        simd: bool,
+        exec: Exec,
     ) -> bool {
+        let (parallel, simd) = (exec.parallel(), exec.simd());
         let covers = blocks.len() * LANES >= n && blocks.iter().enumerate().all(|(k, &b)| b as usize == k);
         let short = at.iter().any(|a| a.len() < n) || p.iter().any(|c| c.len() < n);
         if self.hash.is_none() || self.built != Some((n, r.to_bits())) || !covers || short {

@@ -41,6 +41,7 @@ pub(crate) mod mid;
 pub(crate) mod moves;
 pub(crate) mod scan;
 
+use crate::data::exec::Exec;
 use crate::data::lanes::LANES;
 use crate::self_collision::near::mid::{merge_unique, HashedMid, RestRule};
 use crate::self_collision::near::moves::{as_refs, copy_blocks, max_disp2_blocks};
@@ -142,16 +143,8 @@ impl NearList {
     /// scans run in parallel over ranges of particles when `parallel` (the same lists).
     /// Returns what became of the mid list.
     #[allow(clippy::too_many_arguments)]
-    pub(crate) fn update(
-        &mut self,
-        source: MidSource<'_>,
-        p: [&[f32]; 3],
-        blocks: &[u32],
-        n: usize,
-        d: f32,
-        simd: bool,
-        parallel: bool,
-    ) -> MidUpdate {
+    pub(crate) fn update(&mut self, source: MidSource<'_>, p: [&[f32]; 3], blocks: &[u32], n: usize, d: f32, exec: Exec) -> MidUpdate {
+        let simd = exec.simd();
         // The mid list is used when the candidates reach well past its radius (the wide
         // skin of a folded cloth) or come from the hash (see the module docs).
         let r_mid = d * (1.0 + MID_NEAR_SKIN_MAX + MID_SKIN);
@@ -189,11 +182,11 @@ impl NearList {
                         .extend((0..m).flat_map(|i| cand.of(i).iter().map(move |&j| (i as u32, j))));
                     self.cand_pairs_valid = true;
                 }
-                filter_pairs(&self.cand_pairs, p, n, r, simd, parallel, &mut self.scratch, &mut self.pairs);
+                filter_pairs(&self.cand_pairs, p, n, r, exec, &mut self.scratch, &mut self.pairs);
             }
             source => {
-                mid = self.update_mid(source, p, blocks, n, d, simd, parallel);
-                filter_pairs(&self.mid, p, n, r, simd, parallel, &mut self.scratch, &mut self.pairs);
+                mid = self.update_mid(source, p, blocks, n, d, exec);
+                filter_pairs(&self.mid, p, n, r, exec, &mut self.scratch, &mut self.pairs);
                 let extra = self.hashed.extra();
                 if !extra.is_empty() {
                     // The refreshes' pairs (module `self_mid`): filtered alike, then merged in
@@ -218,16 +211,8 @@ impl NearList {
     /// the candidates, or from every pair. From the hash, only the particles past the bound
     /// are refreshed when that is possible (module `self_mid`; the same list).
     #[allow(clippy::too_many_arguments)]
-    fn update_mid(
-        &mut self,
-        source: MidSource<'_>,
-        p: [&[f32]; 3],
-        blocks: &[u32],
-        n: usize,
-        d: f32,
-        simd: bool,
-        parallel: bool,
-    ) -> MidUpdate {
+    fn update_mid(&mut self, source: MidSource<'_>, p: [&[f32]; 3], blocks: &[u32], n: usize, d: f32, exec: Exec) -> MidUpdate {
+        let (parallel, simd) = (exec.parallel(), exec.simd());
         let lim = 0.5 * SAFE * MID_SKIN * d;
         let r = d * (1.0 + MID_NEAR_SKIN_MAX + MID_SKIN);
         if self.mid_valid && self.mid_at[0].len() == blocks.len() * LANES {
@@ -239,7 +224,7 @@ impl NearList {
                 if m2.is_finite()
                     && self
                         .hashed
-                        .refresh(p, &mut self.mid_at, blocks, n, lim, r, *rule, &mut self.mid, parallel, simd)
+                        .refresh(p, &mut self.mid_at, blocks, n, lim, r, *rule, &mut self.mid, exec)
                 {
                     return MidUpdate::Refreshed;
                 }
@@ -249,7 +234,7 @@ impl NearList {
         self.mid_rebuilds += 1;
         match source {
             MidSource::Candidates { cand, .. } => {
-                collect(cand, p, n, r, simd, parallel, &mut self.scratch, &mut self.mid);
+                collect(cand, p, n, r, exec, &mut self.scratch, &mut self.mid);
                 self.hashed.forget();
                 self.mid_valid = true;
                 MidUpdate::Kept

@@ -3,6 +3,7 @@
 //! candidate lists with and without a mid list.
 
 use super::*;
+use crate::data::exec::Exec;
 use crate::self_collision::near::scan::{collect, ScanScratch};
 use crate::test_rng::signed;
 use proptest::prelude::*;
@@ -47,9 +48,9 @@ proptest! {
                 1 => MidSource::Candidates { cand: &all, reach: 10.0 * d },
                 _ => MidSource::Candidates { cand: &all, reach: 3.0 * d },
             };
-            near.update(src, pr, &blocks, n, d, true, false);
+            near.update(src, pr, &blocks, n, d, Exec::Simd);
             if near.rebuilds > before {
-                collect(&all, pr, n, d + near.skin, false, false, &mut scratch, &mut want);
+                collect(&all, pr, n, d + near.skin, Exec::Scalar, &mut scratch, &mut want);
                 prop_assert_eq!(&near.pairs, &want, "call {}", call);
             }
             for (i, j) in all.pairs() {

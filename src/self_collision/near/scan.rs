@@ -3,6 +3,7 @@
 //! or in parallel over ranges of particles cut by candidate entries (the same list either
 //! way). Used twice: the mid list from the candidate lists, the near list from the mid list.
 
+use crate::data::exec::Exec;
 use crate::data::lanes::{idx8, F32s, Idx8, LANES};
 use crate::self_collision::neighbours::Neighbours;
 use rayon::prelude::*;
@@ -24,16 +25,8 @@ pub(crate) struct ScanScratch {
 /// into its own buffer, the buffers joined in range order: the same list as the serial walk
 /// whatever the number of threads.
 #[allow(clippy::too_many_arguments)]
-pub(crate) fn collect(
-    cand: &Neighbours,
-    p: [&[f32]; 3],
-    n: usize,
-    r: f32,
-    simd: bool,
-    parallel: bool,
-    s: &mut ScanScratch,
-    out: &mut Vec<(u32, u32)>,
-) {
+pub(crate) fn collect(cand: &Neighbours, p: [&[f32]; 3], n: usize, r: f32, exec: Exec, s: &mut ScanScratch, out: &mut Vec<(u32, u32)>) {
+    let (parallel, simd) = (exec.parallel(), exec.simd());
     let n = near_len(cand, p, n);
     chunk_bounds(cand, n, &mut s.bounds);
     let m = s.bounds.len() - 1;
@@ -82,11 +75,11 @@ pub(crate) fn filter_pairs(
     p: [&[f32]; 3],
     n: usize,
     r: f32,
-    simd: bool,
-    parallel: bool,
+    exec: Exec,
     s: &mut ScanScratch,
     out: &mut Vec<(u32, u32)>,
 ) {
+    let (parallel, simd) = (exec.parallel(), exec.simd());
     out.clear();
     if simd {
         let n = n.min(p[0].len()).min(p[1].len()).min(p[2].len());

@@ -2,6 +2,7 @@
 //! one on 1 and 2 threads, the block displacement check.
 
 use super::*;
+use crate::data::exec::Exec;
 use crate::data::lanes::Idx8;
 use crate::self_collision::near::scan::{chunk_bounds, collect, collect_near, filter_pairs, gather_xyzw8, ScanScratch, FILTER_CHUNK};
 use crate::self_collision::neighbours::within;
@@ -55,7 +56,7 @@ fn parallel_rebuild_over_ranges_equals_the_serial_list_on_1_and_2_threads() {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         for (simd, parallel) in [(true, true), (false, true), (true, false)] {
             let (mut scratch, mut got) = (ScanScratch::default(), Vec::new());
-            pool.install(|| collect(&cand, pr, n, r, simd, parallel, &mut scratch, &mut got));
+            pool.install(|| collect(&cand, pr, n, r, Exec::new(simd, parallel), &mut scratch, &mut got));
             assert_eq!(got, want, "{threads} threads, simd {simd}, parallel {parallel}");
         }
     }
@@ -214,9 +215,9 @@ fn near_through_mid(hashed: bool, parallel: bool, reach: f32) {
                 reach: reach * d,
             }
         };
-        near.update(source, pr, &blocks, n, d, true, parallel);
+        near.update(source, pr, &blocks, n, d, Exec::new(true, parallel));
         if near.rebuilds > before {
-            collect(&cand, pr, n, d + near.skin, false, false, &mut scratch, &mut want);
+            collect(&cand, pr, n, d + near.skin, Exec::Scalar, &mut scratch, &mut want);
             assert_eq!(near.pairs, want, "call {call}");
             checked += 1;
             kept += usize::from(near.mid_rebuilds == mid_before);
@@ -286,7 +287,7 @@ fn refreshed_mid(parallel: bool) {
         }
         let pr = [&p[0][..], &p[1][..], &p[2][..]];
         let (before, rehashes) = (near.rebuilds, near.hashed.rehashes);
-        match near.update(MidSource::Hash(rule), pr, &blocks, n, d, true, parallel) {
+        match near.update(MidSource::Hash(rule), pr, &blocks, n, d, Exec::new(true, parallel)) {
             MidUpdate::Refreshed => refreshed += 1,
             MidUpdate::Queried => queried += 1,
             MidUpdate::Kept => {}
@@ -307,7 +308,7 @@ fn refreshed_mid(parallel: bool) {
             rehashed += 1;
         }
         if near.rebuilds > before {
-            collect(&all, pr, n, d + near.skin, false, false, &mut scratch, &mut want);
+            collect(&all, pr, n, d + near.skin, Exec::Scalar, &mut scratch, &mut want);
             assert_eq!(near.pairs, want, "call {call}");
             checked += 1;
         }
@@ -361,9 +362,9 @@ fn jumping_particles_keep_every_contact_listed() {
         }
         let pr = [&p[0][..], &p[1][..], &p[2][..]];
         let before = near.rebuilds;
-        near.update(MidSource::Hash(rule), pr, &blocks, n, d, true, false);
+        near.update(MidSource::Hash(rule), pr, &blocks, n, d, Exec::Simd);
         if near.rebuilds > before {
-            collect(&all, pr, n, d + near.skin, false, false, &mut scratch, &mut want);
+            collect(&all, pr, n, d + near.skin, Exec::Scalar, &mut scratch, &mut want);
             assert_eq!(near.pairs, want, "call {call}");
             if call > 0 {
                 assert_eq!(near.skin, MID_NEAR_SKIN_MAX * d, "call {call}: the mid path's skin");
@@ -399,7 +400,7 @@ fn filter_pairs_simd_and_parallel_equal_the_scalar_filter() {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         for (simd, parallel) in [(false, false), (true, false), (true, true), (false, true)] {
             let (mut s, mut got) = (ScanScratch::default(), vec![(9, 9)]);
-            pool.install(|| filter_pairs(&pairs, pr, n, r, simd, parallel, &mut s, &mut got));
+            pool.install(|| filter_pairs(&pairs, pr, n, r, Exec::new(simd, parallel), &mut s, &mut got));
             assert_eq!(got, want, "{threads} threads, simd {simd}, parallel {parallel}");
         }
     }
