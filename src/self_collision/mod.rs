@@ -111,7 +111,6 @@ use crate::self_collision::near::mid::RestRule;
 use crate::self_collision::near::{MidSource, MidUpdate, NearList};
 use crate::self_collision::neighbours::Neighbours;
 use crate::self_collision::pairs::PairCtx;
-pub(crate) use crate::self_collision::response::mean_velocity;
 use crate::self_collision::tree::{ParticleTree, TreeShape};
 use crate::self_collision::verlet::{Plan, VerletLists};
 

@@ -79,7 +79,6 @@ impl World {
     /// The collision stages of substep `s` (length `h`) on the prediction `p`, then
     /// `v = (p - x) / h`, `x = p` and the obstacle velocity pass (module docs).
     pub(crate) fn force_contact_stages(&mut self, c: Contacts, s: u32, h: f32, exec: Exec) {
-        let parallel = exec.parallel();
         let n_sub = self.params.substeps;
         let n = self.particles.count();
         {
@@ -90,11 +89,7 @@ impl World {
             }
         }
         if c.obstacles {
-            let t0 = std::time::Instant::now();
-            let t_end = self.time + ((s + 1) as f64) * (h as f64);
-            self.obstacles.generate(&self.particles, t_end, h, exec);
-            self.obstacles.resolve(&mut self.particles, h, exec);
-            self.obstacles.add_busy(t0);
+            self.obstacle_contacts_stage(s, h, exec);
         }
         if let Some(a) = c.selfcol {
             {
@@ -108,17 +103,10 @@ impl World {
             self.rebase_clamped_predictions(n);
         }
         if c.obstacles {
-            let t0 = std::time::Instant::now();
-            self.obstacles.project(&mut self.particles, exec);
-            self.obstacles.add_busy(t0);
+            self.obstacle_projection_stage(exec);
         }
         if c.scalps {
-            let p = &mut self.particles;
-            if parallel {
-                self.scalps.solve(&mut p.px, &mut p.py, &mut p.pz, &p.w);
-            } else {
-                self.scalps.solve_scalar(&mut p.px, &mut p.py, &mut p.pz, &p.w);
-            }
+            self.scalp_stage(exec);
         }
         if let Some(a) = c.selfcol {
             self.self_collision_pairs_pass(a, h, exec);
@@ -133,9 +121,7 @@ impl World {
             (p.x[i], p.y[i], p.z[i]) = (p.px[i], p.py[i], p.pz[i]);
         }
         if c.obstacles {
-            let t0 = std::time::Instant::now();
-            self.obstacles.velocity_pass(&mut self.particles, exec);
-            self.obstacles.add_busy(t0);
+            self.obstacle_velocity_stage(exec);
         }
     }
 }

@@ -15,6 +15,7 @@ pub mod metrics;
 pub(crate) mod obstacles;
 pub(crate) mod self_collision;
 pub mod stage_clock;
+pub(crate) mod stages;
 pub mod step;
 pub mod strands;
 

@@ -39,8 +39,6 @@ use crate::error::{positive, Result, WeftError};
 use crate::integrate::{predict, update, PredictParams};
 use crate::model::params::{Backend, Method};
 use crate::self_collision::response::MeanParts;
-use crate::self_collision::response::{clamp_speed, ClampParams};
-use crate::self_collision::{mean_velocity, Active, TRAVEL_FACTOR};
 use crate::world::keep_awake;
 use crate::world::World;
 
@@ -254,11 +252,7 @@ impl World {
             }
             self.clock.lap("predict");
             if has_obstacles {
-                let t0 = std::time::Instant::now();
-                let t_end = self.time + ((s + 1) as f64) * (h as f64);
-                self.obstacles.generate(&self.particles, t_end, h, exec);
-                self.obstacles.resolve(&mut self.particles, h, exec);
-                self.obstacles.add_busy(t0);
+                self.obstacle_contacts_stage(s, h, exec);
                 let p = &self.particles;
                 checkpoint!("obstacles", p.px, p.py, p.pz);
                 self.clock.lap("obstacle contacts");
@@ -274,36 +268,25 @@ impl World {
             }
             self.distance.reset_lambda();
             for _ in 0..self.params.iterations {
-                let p = &mut self.particles;
-                if simd {
-                    self.distance.solve_simd(&mut p.px, &mut p.py, &mut p.pz, &p.w, inv_h2, parallel);
-                } else {
-                    self.distance.solve_scalar(&mut p.px, &mut p.py, &mut p.pz, &p.w, inv_h2);
-                }
+                self.distance_stage(inv_h2, exec);
+                let p = &self.particles;
                 checkpoint!("constraints", p.px, p.py, p.pz);
                 self.clock.lap("distance constraints");
                 if !self.tethers.is_empty() {
-                    if simd {
-                        self.tethers.solve_simd(&mut p.px, &mut p.py, &mut p.pz, parallel);
-                    } else {
-                        self.tethers.solve_scalar(&mut p.px, &mut p.py, &mut p.pz);
-                    }
+                    self.tether_stage(exec);
+                    let p = &self.particles;
                     checkpoint!("tethers", p.px, p.py, p.pz);
                     self.clock.lap("tethers");
                 }
                 if has_obstacles {
-                    let t0 = std::time::Instant::now();
-                    self.obstacles.project(p, exec);
-                    self.obstacles.add_busy(t0);
+                    self.obstacle_projection_stage(exec);
+                    let p = &self.particles;
                     checkpoint!("obstacles", p.px, p.py, p.pz);
                     self.clock.lap("obstacle projection");
                 }
                 if !self.scalps.is_empty() {
-                    if parallel {
-                        self.scalps.solve(&mut p.px, &mut p.py, &mut p.pz, &p.w);
-                    } else {
-                        self.scalps.solve_scalar(&mut p.px, &mut p.py, &mut p.pz, &p.w);
-                    }
+                    self.scalp_stage(exec);
+                    let p = &self.particles;
                     checkpoint!("scalp", p.px, p.py, p.pz);
                     self.clock.lap("scalp");
                 }
@@ -365,9 +348,7 @@ impl World {
             checkpoint!("update", p.x, p.y, p.z, p.vx, p.vy, p.vz);
             self.clock.lap("update");
             if has_obstacles {
-                let t0 = std::time::Instant::now();
-                self.obstacles.velocity_pass(&mut self.particles, exec);
-                self.obstacles.add_busy(t0);
+                self.obstacle_velocity_stage(exec);
                 let p = &self.particles;
                 checkpoint!("obstacles", p.vx, p.vy, p.vz);
                 self.clock.lap("obstacle velocity");
@@ -384,45 +365,6 @@ impl World {
         } else {
             Ran::NonFinite
         }
-    }
-}
-
-impl World {
-    /// The self-collision speed clamp (relative to the mean velocity, at most
-    /// `TRAVEL_FACTOR d / substeps` per substep), then the predictions kept as box centres.
-    /// `mean` is the mean velocity when the predict pass summed it already.
-    pub(crate) fn self_collision_clamp(&mut self, a: Active, n_sub: u32, h: f32, exec: Exec, mean: Option<[f32; 3]>) {
-        let (parallel, simd) = (exec.parallel(), exec.simd());
-        let n = self.particles.count();
-        let p = &self.particles;
-        let mean = mean.unwrap_or_else(|| mean_velocity([&p.vx, &p.vy, &p.vz], &p.w, n, exec));
-        let cp = ClampParams {
-            mean,
-            limit: TRAVEL_FACTOR * a.d / n_sub as f32,
-            h,
-        };
-        // Each chunk also copies the predictions of its active blocks (one parallel pass),
-        // unless the correction derives them (no obstacles).
-        let sink = self.selfcol.prediction_sink(self.obstacles.is_empty());
-        self.particles.for_chunks(parallel, |mut c| {
-            clamp_speed(c.reborrow(), &cp, simd);
-            if let Some(s) = &sink {
-                s.keep(c.start, [&*c.px, &*c.py, &*c.pz]);
-            }
-        });
-    }
-
-    /// The self-collision pair pass and its correction of the predictions `p`.
-    pub(crate) fn self_collision_pairs_pass(&mut self, a: Active, h: f32, exec: Exec) {
-        let n = self.particles.count();
-        let p = &self.particles;
-        self.selfcol.pair_pass([&p.x, &p.y, &p.z], [&p.px, &p.py, &p.pz], &p.w, n, exec);
-        let ap = a.apply_params(h);
-        let derive = self.selfcol.derives_centres(self.obstacles.is_empty());
-        let p = &mut self.particles;
-        let v = derive.then_some([&p.vx[..], &p.vy[..], &p.vz[..]]);
-        self.selfcol
-            .apply([&p.x, &p.y, &p.z], &p.w, v, [&mut p.px, &mut p.py, &mut p.pz], ap, exec);
     }
 }
 
