@@ -7,13 +7,16 @@
 #include <stddef.h>
 #include <stdint.h>
 
+// Longest scene text [`weft_world_create_from_scene`] accepts, bytes (16 MiB).
+#define WEFT_MAX_SCENE_BYTES (16 << 20)
+
 // Result of every C call.
 typedef enum WeftStatus {
   // Success.
   WEFT_STATUS_OK = 0,
   // A required pointer was null.
   WEFT_STATUS_NULL_POINTER = 1,
-  // The world handle is null, unknown or already destroyed.
+  // The handle is null, unknown or already destroyed.
   WEFT_STATUS_INVALID_HANDLE = 2,
   // A parameter is out of range (message names it).
   WEFT_STATUS_INVALID_ARGUMENT = 3,
@@ -27,7 +30,45 @@ typedef enum WeftStatus {
   WEFT_STATUS_PANIC = 7,
   // Any other error (message says which).
   WEFT_STATUS_OTHER = 8,
+  // A triangle mesh cannot be used (message says why).
+  WEFT_STATUS_INVALID_MESH = 9,
+  // Scene text could not be parsed or built (message gives line and column).
+  WEFT_STATUS_SCENE = 10,
+  // File input or output failed (for example a mesh file named by a scene).
+  WEFT_STATUS_IO = 11,
 } WeftStatus;
+
+// Broadphase of a mesh obstacle (the `broadphase` argument of [`weft_world_add_mesh`]).
+typedef enum WeftMeshBroadphase {
+  // Uniform grid sized from the faces.
+  WEFT_MESH_BROADPHASE_GRID = 0,
+  // AABB tree of the faces.
+  WEFT_MESH_BROADPHASE_BVH = 1,
+  // Spatial hash of the faces.
+  WEFT_MESH_BROADPHASE_HASH = 2,
+} WeftMeshBroadphase;
+
+// Self-collision response (the `response` field of [`WeftSelfCollision`]).
+typedef enum WeftResponse {
+  // Position projection of the collision constraints.
+  WEFT_RESPONSE_PBD = 0,
+  // Velocity based: zero the approaching normal velocity.
+  WEFT_RESPONSE_MOVEMENT_SPEED = 1,
+  // Projection, then the VcCPBD velocity correction (the default).
+  WEFT_RESPONSE_VCCPBD = 2,
+} WeftResponse;
+
+// Self-collision broadphase (the `broadphase` field of [`WeftSelfCollision`]); both give the
+// same pairs.
+typedef enum WeftSelfBroadphase {
+  // Spatial hash rebuilt each step (the default).
+  WEFT_SELF_BROADPHASE_HASH = 0,
+  // AABB tree built once, refitted each step.
+  WEFT_SELF_BROADPHASE_AABB_TREE = 1,
+} WeftSelfBroadphase;
+
+// An opaque copy of a world's evolving state (from [`weft_world_snapshot`]).
+typedef struct WeftSnapshot WeftSnapshot;
 
 // An opaque simulated world.
 typedef struct WeftWorld WeftWorld;
@@ -45,6 +86,46 @@ typedef struct WeftSolverParams {
   uint32_t threads;
 } WeftSolverParams;
 
+// Per-obstacle options for the `weft_world_add_*` obstacle functions (null = static, with the
+// world's friction).
+typedef struct WeftObstacleOptions {
+  // Constant velocity, m/s (the obstacle moves from time 0).
+  float velocity[3];
+  // Use `friction` instead of the world's coefficient ([`weft_world_set_friction`]).
+  bool has_friction;
+  // Own Coulomb friction coefficient (>= 0), if `has_friction`.
+  float friction;
+} WeftObstacleOptions;
+
+// Self-collision settings for [`weft_world_set_self_collision`]; get defaults from
+// [`weft_self_collision_default`].
+typedef struct WeftSelfCollision {
+  // A [`WeftResponse`] value.
+  uint32_t response;
+  // A [`WeftSelfBroadphase`] value.
+  uint32_t broadphase;
+  // Collision distance, m (> 0), or 0 for the smallest `min(thickness, spacing)` of the
+  // cloths.
+  float distance;
+  // Friction in `[0, 1]`.
+  float friction;
+  // Measure the percentage of particles in penetration after every step (costs time).
+  bool measure;
+} WeftSelfCollision;
+
+// What one [`weft_world_advance`] call did.
+typedef struct WeftAdvanceReport {
+  // Fixed steps taken.
+  uint32_t steps;
+  // Whether the cap on steps per call was reached.
+  bool capped;
+  // Simulated time dropped because of the cap, s.
+  double dropped_time;
+  // Leftover time as a fraction of a step, in `[0, 1)`: the blend factor for
+  // [`weft_world_copy_interpolated_positions`].
+  float alpha;
+} WeftAdvanceReport;
+
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
@@ -52,8 +133,9 @@ extern "C" {
 // The default solver parameters (1/60 s, 8 substeps, 1 iteration, all cores).
 struct WeftSolverParams weft_solver_params_default(void);
 
-// Creates a world. `params` may be null (defaults); `gravity` points at 3 floats or is null
-// (no gravity). On success `*out` receives the handle; free it with [`weft_world_destroy`].
+// Creates an empty world. `params` may be null (defaults); `gravity` points at 3 floats or is
+// null (no gravity). On success `*out` receives the handle (on failure, null); free it with
+// [`weft_world_destroy`].
 //
 // # Safety
 // Non-null pointers must point at valid, readable values (`gravity`: 3 floats) and `out` at a
@@ -61,6 +143,16 @@ struct WeftSolverParams weft_solver_params_default(void);
 enum WeftStatus weft_world_create(const struct WeftSolverParams *params,
                                   const float *gravity,
                                   struct WeftWorld **out);
+
+// Creates a world from scene text: `len` bytes of UTF-8 TOML at `text` (no terminating NUL
+// needed; at most [`WEFT_MAX_SCENE_BYTES`]), the format of `weft run` scene files (solver,
+// effects including self-collision, cloths, obstacles, strands). Mesh files a scene names are
+// read relative to the working directory. On success `*out` receives the handle (on failure,
+// null; the message gives the line and column); free it with [`weft_world_destroy`].
+//
+// # Safety
+// `text` must point at `len` readable bytes and `out` at a writable handle slot.
+enum WeftStatus weft_world_create_from_scene(const char *text, size_t len, struct WeftWorld **out);
 
 // Adds a `rows x cols` cloth with grid `spacing` (m) whose first particle is at `origin`
 // (3 floats), hanging along -y from a row along +x. `preset` is a fabric preset name
@@ -79,11 +171,126 @@ enum WeftStatus weft_world_add_cloth(struct WeftWorld *world,
                                      bool pin_corners,
                                      uint32_t *out_cloth);
 
-// Advances the world by `dt` seconds.
+// Adds a solid half-space: the plane through `point` (3 floats) with outward normal `normal`
+// (3 floats, normalised here, must not be zero). `options` may be null; `out_index` (may be
+// null) receives the obstacle index.
+//
+// # Safety
+// `point` and `normal` must point at 3 readable floats; `options` and `out_index` as in
+// [`weft_world_add_sphere`].
+enum WeftStatus weft_world_add_plane(struct WeftWorld *world,
+                                     const float *point,
+                                     const float *normal,
+                                     const struct WeftObstacleOptions *options,
+                                     uint32_t *out_index);
+
+// Adds a solid ball at `center` (3 floats) of `radius` m (> 0). `options` may be null (static,
+// world friction); `out_index` (may be null) receives the obstacle index.
+//
+// # Safety
+// `center` must point at 3 readable floats; `options`, if non-null, at a readable
+// [`WeftObstacleOptions`]; `out_index`, if non-null, at a writable `uint32_t`.
+enum WeftStatus weft_world_add_sphere(struct WeftWorld *world,
+                                      const float *center,
+                                      float radius,
+                                      const struct WeftObstacleOptions *options,
+                                      uint32_t *out_index);
+
+// Adds a capsule: all points within `radius` m (> 0) of the segment from `a` to `b` (3 floats
+// each). `options` and `out_index` as in [`weft_world_add_sphere`].
+//
+// # Safety
+// `a` and `b` must point at 3 readable floats; `options` and `out_index` as in
+// [`weft_world_add_sphere`].
+enum WeftStatus weft_world_add_capsule(struct WeftWorld *world,
+                                       const float *a,
+                                       const float *b,
+                                       float radius,
+                                       const struct WeftObstacleOptions *options,
+                                       uint32_t *out_index);
+
+// Adds a solid box at `center` with half extents `half` (3 floats each, > 0), rotated by
+// `rotation_deg` degrees about x, then y, then z (3 floats; null = axis aligned). `options`
+// and `out_index` as in [`weft_world_add_sphere`].
+//
+// # Safety
+// `center` and `half` must point at 3 readable floats, `rotation_deg` too if non-null;
+// `options` and `out_index` as in [`weft_world_add_sphere`].
+enum WeftStatus weft_world_add_box(struct WeftWorld *world,
+                                   const float *center,
+                                   const float *half,
+                                   const float *rotation_deg,
+                                   const struct WeftObstacleOptions *options,
+                                   uint32_t *out_index);
+
+// Adds a triangle-mesh obstacle: `vertex_floats` floats at `vertices` (`x0 y0 z0 x1 ...`, a
+// multiple of 3) and `index_count` vertex indices at `indices` (three per triangle, a multiple
+// of 3). `broadphase` is a [`WeftMeshBroadphase`] value; `face_memory` turns on the per-particle
+// face memory. Zero-area faces are dropped; a mesh with none left, a non-finite vertex or an
+// index out of range gives [`WeftStatus::InvalidMesh`]. The arrays are copied.
+// `options` and `out_index` as in [`weft_world_add_sphere`].
+//
+// # Safety
+// `vertices` must point at `vertex_floats` readable floats, `indices` at `index_count`
+// readable `uint32_t`; `options` and `out_index` as in [`weft_world_add_sphere`].
+enum WeftStatus weft_world_add_mesh(struct WeftWorld *world,
+                                    const float *vertices,
+                                    size_t vertex_floats,
+                                    const uint32_t *indices,
+                                    size_t index_count,
+                                    uint32_t broadphase,
+                                    bool face_memory,
+                                    const struct WeftObstacleOptions *options,
+                                    uint32_t *out_index);
+
+// Sets the Coulomb friction coefficient (>= 0) of obstacles that have none of their own.
+//
+// # Safety
+// `world` must not be used concurrently from another thread.
+enum WeftStatus weft_world_set_friction(struct WeftWorld *world, float mu);
+
+// The default self-collision settings (VcCPBD response, hash broadphase, automatic distance,
+// friction 0.3, no measuring).
+struct WeftSelfCollision weft_self_collision_default(void);
+
+// Turns self-collision on with the settings at `config`, or off if `config` is null.
+// Invalid settings change nothing.
+//
+// # Safety
+// `config`, if non-null, must point at a readable [`WeftSelfCollision`].
+enum WeftStatus weft_world_set_self_collision(struct WeftWorld *world,
+                                              const struct WeftSelfCollision *config);
+
+// Advances the world by one step of `dt` seconds (however long; [`weft_world_advance`] keeps
+// the step length fixed instead).
 //
 // # Safety
 // `world` must not be used concurrently from another thread.
 enum WeftStatus weft_world_step(struct WeftWorld *world, float dt);
+
+// Adds `frame_dt` seconds of display time (finite, >= 0) and takes the whole fixed steps of
+// the solver's `dt` it owes (at most the cap of [`weft_world_set_max_steps_per_advance`],
+// default 8; whole steps beyond it are dropped and reported). `report` (may be null) receives
+// what was done, including the blend factor for
+// [`weft_world_copy_interpolated_positions`]. If a step fails the steps before it stand.
+//
+// # Safety
+// `report`, if non-null, must point at a writable [`WeftAdvanceReport`].
+enum WeftStatus weft_world_advance(struct WeftWorld *world,
+                                   double frame_dt,
+                                   struct WeftAdvanceReport *report);
+
+// Sets the most fixed steps one [`weft_world_advance`] call may take (at least 1).
+//
+// # Safety
+// `world` must not be used concurrently from another thread.
+enum WeftStatus weft_world_set_max_steps_per_advance(struct WeftWorld *world, uint32_t max);
+
+// Writes the number of steps taken so far to `*out`.
+//
+// # Safety
+// `out` must point at a writable `uint64_t`.
+enum WeftStatus weft_world_steps(struct WeftWorld *world, uint64_t *out);
 
 // Writes the number of particles to `*out`.
 //
@@ -98,6 +305,39 @@ enum WeftStatus weft_world_particle_count(struct WeftWorld *world, size_t *out);
 // `out` must point at `len` writable floats.
 enum WeftStatus weft_world_copy_positions(struct WeftWorld *world, float *out, size_t len);
 
+// Copies positions for display between the last two steps taken by [`weft_world_advance`],
+// `x_prev + alpha (x - x_prev)` with `alpha` in `[0, 1]` (usually
+// [`WeftAdvanceReport::alpha`]), interleaved into `out` (`len` = 3 times the particle count).
+// If the last step was not taken by `weft_world_advance`, the current positions are written.
+//
+// # Safety
+// `out` must point at `len` writable floats.
+enum WeftStatus weft_world_copy_interpolated_positions(struct WeftWorld *world,
+                                                       float alpha,
+                                                       float *out,
+                                                       size_t len);
+
+// Copies area-weighted unit vertex normals, interleaved, into `out` (`len` = 3 times the
+// particle count); a particle in no triangle gets the zero vector.
+//
+// # Safety
+// `out` must point at `len` writable floats.
+enum WeftStatus weft_world_copy_normals(struct WeftWorld *world, float *out, size_t len);
+
+// Writes the number of render triangles (all cloths) to `*out`.
+//
+// # Safety
+// `out` must point at a writable `size_t`.
+enum WeftStatus weft_world_triangle_count(struct WeftWorld *world, size_t *out);
+
+// Copies the render triangles as particle indices, `a0 b0 c0 a1 ...`, into `out` (`len` =
+// 3 times the triangle count). They wind counter-clockwise about the normals of
+// [`weft_world_copy_normals`].
+//
+// # Safety
+// `out` must point at `len` writable `uint32_t`.
+enum WeftStatus weft_world_copy_triangles(struct WeftWorld *world, uint32_t *out, size_t len);
+
 // Moves pinned particle `index` to `(x, y, z)` over the next step (kinematic pin).
 //
 // # Safety
@@ -108,12 +348,43 @@ enum WeftStatus weft_world_set_pin_position(struct WeftWorld *world,
                                             float y,
                                             float z);
 
+// Copies the world's evolving state (positions, velocities, pins, time, the advance
+// accumulator) into a new snapshot; `*out` receives its handle (on failure, null). The
+// snapshot is independent of the world: free it with [`weft_snapshot_destroy`], before or
+// after the world.
+//
+// # Safety
+// `out` must point at a writable handle slot.
+enum WeftStatus weft_world_snapshot(struct WeftWorld *world, struct WeftSnapshot **out);
+
+// Puts the world back into the state of `snapshot` (taken from this world, or one with the
+// same particles); the run then continues bit for bit as from the moment it was taken. A
+// snapshot of another particle count gives [`WeftStatus::BufferLength`] and changes nothing.
+// The snapshot stays valid and can be restored again.
+//
+// # Safety
+// `world` must not be used concurrently from another thread.
+enum WeftStatus weft_world_restore(struct WeftWorld *world, const struct WeftSnapshot *snapshot);
+
+// Back to the state before the first step since the last cloth was added.
+//
+// # Safety
+// `world` must not be used concurrently from another thread.
+enum WeftStatus weft_world_reset(struct WeftWorld *world);
+
+// Frees a snapshot. Null, unknown or already freed handles return `InvalidHandle` and change
+// nothing.
+//
+// # Safety
+// `snapshot` must not be in use on another thread.
+enum WeftStatus weft_snapshot_destroy(struct WeftSnapshot *snapshot);
+
 // The message of the last failed call on this thread (empty after a success). The pointer is
-// valid until the next weft call on this thread; never null.
+// valid until the next weft call on this thread; never null. weft owns it: do not free it.
 const char *weft_last_error_message(void);
 
 // Destroys a world. Null, unknown or already destroyed handles return `InvalidHandle` and
-// change nothing.
+// change nothing. Snapshots taken from it stay valid.
 //
 // # Safety
 // `world` must not be in use on another thread.
