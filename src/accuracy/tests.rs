@@ -3,7 +3,7 @@
 use super::*;
 use crate::model::params::Method;
 use crate::scene::Scene;
-use crate::world::World;
+use crate::World;
 
 const SCENE: &str = r#"
 [solver]

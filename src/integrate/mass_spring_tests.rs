@@ -5,8 +5,8 @@ use crate::model::cloth::{ClothDesc, PinSpec};
 use crate::model::effects::{Effects, Wind};
 use crate::model::fabric::Fabric;
 use crate::model::params::{Backend, Method, SolverParams};
-use crate::world::World;
 use crate::WeftError;
+use crate::World;
 
 /// One free particle of mass 1 kg on a spring of stiffness `k` to a pinned particle, pulled
 /// 0.5 m past its rest length of 1 m: `x(t) = 1 + 0.5 cos(√k t)`.

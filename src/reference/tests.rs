@@ -2,7 +2,7 @@
 
 use super::ReferenceWorld;
 use crate::scene::Scene;
-use crate::world::World;
+use crate::World;
 
 /// A small cotton sheet dropped from 0.7 m onto `extra` (scene text: obstacles), tethers off.
 fn sheet(rows: u32, extra: &str, substeps: u32, iterations: u32) -> World {
