@@ -20,7 +20,7 @@ fn committed_header_is_up_to_date() {
     let committed = std::fs::read_to_string(root().join("include/weft.h")).unwrap_or_default();
     assert!(
         generated == committed,
-        "include/weft.h is stale: copy {}/weft.h over it (the build script regenerates it from src/capi.rs)",
+        "include/weft.h is stale: copy {}/weft.h over it (the build script regenerates it from src/capi/)",
         env!("OUT_DIR")
     );
 }
