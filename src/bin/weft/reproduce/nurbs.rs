@@ -52,7 +52,7 @@ fn growth(rows: &[&NurbsTimingRow], f: impl Fn(&NurbsTimingRow) -> f64) -> f64 {
 /// n.
 pub fn text(rows: &[NurbsTimingRow]) -> String {
     let mut s = format!(
-        "NURBS evaluation, ns per point (median), global vs local (SEEDS.md B)\n{:<8} {:>6} {:>6} {:>14} {:>12} {:>10}\n",
+        "NURBS evaluation, ns per point (median), global vs local (the NURBS thesis chapter on thin objects)\n{:<8} {:>6} {:>6} {:>14} {:>12} {:>10}\n",
         "kind", "n", "degree", "global ns/pt", "local ns/pt", "global/loc"
     );
     for r in rows {
