@@ -10,6 +10,7 @@ pub mod error;
 pub mod export;
 #[doc(hidden)]
 pub mod fuzzing;
+pub mod input;
 pub mod integrate;
 pub mod model;
 pub mod obstacles;

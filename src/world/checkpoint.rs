@@ -174,9 +174,9 @@ impl Checkpoint {
         write_atomic(path, &self.to_bytes())
     }
 
-    /// Reads a checkpoint file.
+    /// Reads a checkpoint file (a regular file of at most [`crate::input::CHECKPOINT_LIMIT`] bytes).
     pub fn load(path: &Path) -> Result<Checkpoint> {
-        let b = std::fs::read(path).map_err(|e| WeftError::io(path, e))?;
+        let b = crate::input::read_limited(path, crate::input::CHECKPOINT_LIMIT, "checkpoint")?;
         Checkpoint::from_bytes(&b)
     }
 }
