@@ -50,27 +50,27 @@ unsafe impl GlobalAlloc for Counting {
 static A: Counting = Counting;
 
 const CASES: &[(&str, &str, u32)] = &[
-    ("plain cloth", "[effects]\ngravity = [0.0, -9.81, 0.0]\n", 160),
+    ("plain cloth", "[effects]\ngravity = [0.0, -9.81, 0.0]\n", 120),
     (
         "wind, sphere, tethers",
         "[effects]\ngravity = [0.0, -9.81, 0.0]\n[effects.wind]\nvelocity = [3.0, 0.0, 1.0]\n\
          [[obstacle]]\nkind = \"sphere\"\ncenter = [0.0, 0.0, 0.0]\nradius = 0.5\n",
-        160,
+        120,
     ),
     (
         "self-collision",
         "[effects]\ngravity = [0.0, -9.81, 0.0]\n[effects.self_collision]\nresponse = \"vccpbd\"\n",
-        160,
+        120,
     ),
     (
         "implicit Euler",
         "[solver]\nmethod = \"implicit-euler\"\n[effects]\ngravity = [0.0, -9.81, 0.0]\n",
-        160,
+        80,
     ),
     (
         "implicit Euler, small",
         "[solver]\nmethod = \"implicit-euler\"\n[effects]\ngravity = [0.0, -9.81, 0.0]\n",
-        50,
+        40,
     ),
 ];
 

@@ -20,7 +20,7 @@
 //!
 //! The implicit factor's size is not fixed by the layout but by the fill-in of the ordering:
 //! for a 2-D grid under nested dissection it grows as `n log n`, and the constant is the one
-//! measured at the peak of a factorisation (a 160 × 160 cloth: about 840 bytes per particle
+//! measured at the peak of a factorisation (160 × 160 cloth: about 840 bytes per particle
 //! and `log2 n`, of which 290 stay live).
 //!
 //! Growth of `Vec`s while pieces are appended is not in the table; `tests/memory_budget.rs`
