@@ -28,7 +28,8 @@ pub struct Checkpoint {
     pub state: [Vec<f32>; 6],
 }
 
-fn fnv1a(bytes: &[u8]) -> u64 {
+/// The FNV-1a hash a checkpoint ends with.
+pub fn fnv1a(bytes: &[u8]) -> u64 {
     let mut h = 0xcbf29ce484222325u64;
     for &b in bytes {
         h ^= b as u64;
