@@ -211,6 +211,9 @@ impl World {
         st.assemble(self, hd, |_, _| {});
         let p = &self.particles;
         let g = self.effects.gravity.map(|g| g.map(f64::from));
+        if g.is_some() {
+            crate::model::effects::probe::enter(crate::model::effects::probe::GRAVITY);
+        }
         let wind = match (&self.effects.wind, &mut self.wind) {
             (Some(w), Some(state)) => {
                 state.compute(w, t, &self.triangles, [&p.x, &p.y, &p.z], [&p.vx, &p.vy, &p.vz], false);
@@ -243,6 +246,9 @@ impl World {
         let n = self.particles.count();
         let damp = self.has_damping.then_some(&self.damp_factor);
         let drag = self.effects.drag.map(|c| c * h);
+        if drag.is_some() {
+            crate::model::effects::probe::enter(crate::model::effects::probe::DRAG);
+        }
         let p = &mut self.particles;
         for i in 0..n {
             let mut v = [p.vx[i], p.vy[i], p.vz[i]];
