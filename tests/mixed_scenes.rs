@@ -117,7 +117,7 @@ fn state_bits(w: &World) -> Vec<u32> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(12))]
+    #![proptest_config(ProptestConfig::with_cases(48))]
 
     #[test]
     fn mixed_scenes_hold_their_invariants(c in arb_case()) {
