@@ -14,13 +14,7 @@ use crate::World;
 pub fn scene_bytes(data: &[u8]) {
     let Ok(text) = std::str::from_utf8(data) else { return };
     let Ok(scene) = Scene::parse(text, "fuzz.toml") else { return };
-    // Bound the work: huge but valid scenes are legitimate, just not for a fuzzer.
-    let particles: u64 = scene
-        .cloth
-        .iter()
-        .map(|c| c.get_ref().rows.0 as u64 * c.get_ref().cols.0 as u64)
-        .sum();
-    if particles > 20_000 || scene.solver.substeps.0 > 64 || scene.solver.iterations.0 > 64 {
+    if !small_enough(&scene) {
         return;
     }
     if let Ok(mut w) = scene.world() {
@@ -31,6 +25,57 @@ pub fn scene_bytes(data: &[u8]) {
             }
         }
         let _ = scene.to_toml();
+    }
+}
+
+/// Bounds the work: huge but valid scenes are legitimate, just not for a fuzzer.
+fn small_enough(scene: &Scene) -> bool {
+    let c = scene.memory_counts();
+    let faces: u64 = scene
+        .obstacle
+        .iter()
+        .filter_map(|o| o.get_ref().dress_form.map(|d| d.0 as u64))
+        .sum();
+    let cells: u64 = scene
+        .obstacle
+        .iter()
+        .filter_map(|o| o.get_ref().cells.map(|k| k.iter().map(|c| c.0 as u64).product::<u64>()))
+        .sum();
+    c.particles <= 20_000
+        && c.obstacles <= 16
+        && faces <= 20_000
+        && cells <= 1_000_000
+        && scene.solver.substeps.0 <= 64
+        && scene.solver.iterations.0 <= 64
+}
+
+/// Decodes arbitrary bytes as a checkpoint twice: as they are, and with a valid hash appended
+/// (so the fuzzer reaches the length and scene checks behind the hash). A checkpoint that
+/// decodes is resumed as `weft run --resume` does (scene parsed, world built, state restored)
+/// and stepped when small.
+pub fn checkpoint_bytes(data: &[u8]) {
+    use crate::world::checkpoint::{fnv1a, Checkpoint};
+    let mut hashed = data.to_vec();
+    hashed.extend_from_slice(&fnv1a(data).to_le_bytes());
+    for bytes in [data, &hashed[..]] {
+        let Ok(c) = Checkpoint::from_bytes(bytes) else { continue };
+        let Ok(scene) = Scene::parse(&c.scene, "fuzz-checkpoint") else {
+            continue;
+        };
+        if !small_enough(&scene) {
+            continue;
+        }
+        let Ok(mut w) = scene.world() else { continue };
+        if w.restore(&c).is_err() {
+            continue;
+        }
+        let dt = w.params().dt;
+        for _ in 0..2 {
+            if w.step(dt).is_err() {
+                break;
+            }
+        }
+        let _ = w.checkpoint(&c.scene).to_bytes();
     }
 }
 

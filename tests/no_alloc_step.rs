@@ -1,6 +1,9 @@
 //! Contract: after the first step of a scene whose topology does not change, `World::step`
 //! allocates nothing. A counting global allocator counts every allocation (on any thread) while
-//! a flag is up.
+//! a flag is up. Cloth with wind and pins is run through every way of driving a step; scenes
+//! with obstacles (analytic and meshes, each mesh broadphase), self-collision (both
+//! broadphases, every response), strands and the force-based methods are run on the caller's
+//! thread, with both backends, and from inside a two-thread pool.
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
@@ -89,10 +92,173 @@ fn world(rows: u32, params: SolverParams) -> World {
 
 const STEPS: usize = 200;
 
+/// Steps of the scene scenarios (fewer: their substeps cost more).
+const SCENE_STEPS: usize = 8;
+
+/// A pinned cloth (particle 0 pinned) falling onto what `sc` adds, under gravity and wind.
+fn scene_world(sc: &Scenario, backend: &str, size: u32) -> World {
+    let text = format!(
+        "[solver]\nbackend = \"{backend}\"\n{}\n[effects]\ngravity = [0.0, -9.81, 0.0]\n\
+         [effects.wind]\nvelocity = [1.0, 0.0, 0.5]\n{}\n\
+         [[cloth]]\nrows = {size}\ncols = {size}\nspacing = 0.02\norigin = [-0.24, 0.9, -0.24]\n\
+         v = [0.0, 0.0, 1.0]\npins = [\"first-row-corners\"]\nthickness = 0.01\n{}\n{}",
+        sc.solver, sc.effects, sc.cloth, sc.tables
+    );
+    weft::scene::Scene::parse(&text, &sc.name).unwrap().world().unwrap()
+}
+
+/// A scene scenario: lines added to `[solver]`, after `[effects.wind]`, to the cloth, and
+/// after the cloth.
+struct Scenario {
+    name: String,
+    solver: String,
+    effects: String,
+    cloth: String,
+    tables: String,
+}
+
+fn scenarios(obj: &str) -> Vec<Scenario> {
+    let mut v = Vec::new();
+    let mut add = |name: String, solver: String, effects: String, tables: String| {
+        // The force-based methods get soft springs (explicit integration is stable then).
+        let cloth = if solver.contains("method") {
+            "stretch_compliance = 0.0\nshear_compliance = 0.0\nbend_compliance = 0.0\nmass = 0.01".into()
+        } else {
+            String::new()
+        };
+        v.push(Scenario {
+            name,
+            solver,
+            effects,
+            cloth,
+            tables,
+        })
+    };
+    let obstacles = [
+        (
+            "plane",
+            "kind = \"plane\"\npoint = [0.0, 0.85, 0.0]\nnormal = [0.0, 1.0, 0.0]".to_string(),
+        ),
+        ("sphere", "kind = \"sphere\"\ncenter = [0.0, 0.6, 0.0]\nradius = 0.28".to_string()),
+        (
+            "capsule",
+            "kind = \"capsule\"\na = [-0.3, 0.6, 0.0]\nb = [0.3, 0.6, 0.0]\nradius = 0.28".to_string(),
+        ),
+        (
+            "box",
+            "kind = \"box\"\ncenter = [0.0, 0.6, 0.0]\nhalf_extents = [0.2, 0.28, 0.2]\nrotation = [0.0, 30.0, 0.0]".to_string(),
+        ),
+        (
+            "dress form, grid",
+            "kind = \"mesh\"\ndress_form = 1200\nbroadphase = \"grid\"\nface_memory = true".to_string(),
+        ),
+        (
+            "dress form, bvh",
+            "kind = \"mesh\"\ndress_form = 1200\nbroadphase = \"bvh\"".to_string(),
+        ),
+        (
+            "OBJ mesh, hash",
+            format!("kind = \"mesh\"\nobj = \"{obj}\"\nbroadphase = \"hash\"\noffset = [-0.3, 0.5, -0.3]\nscale = 0.6"),
+        ),
+    ];
+    for (name, table) in obstacles {
+        add(
+            format!("obstacle {name}"),
+            String::new(),
+            String::new(),
+            format!("[[obstacle]]\n{table}\nfriction = 0.3\n"),
+        );
+    }
+    for bp in ["hash", "aabb-tree"] {
+        for response in ["vccpbd", "pbd", "movement-speed"] {
+            add(
+                format!("self-collision {bp} {response}"),
+                String::new(),
+                format!("[effects.self_collision]\nresponse = \"{response}\"\nbroadphase = \"{bp}\"\nfriction = 0.2\n"),
+                String::new(),
+            );
+        }
+    }
+    add(
+        "strands".into(),
+        String::new(),
+        String::new(),
+        "[[strands]]\ncount = 40\npoints = 8\nsegment_length = 0.02\nmass = 0.0001\nthickness = 0.001\n\
+         scalp = { kind = \"sphere\", center = [0.0, 0.4, 0.0], radius = 0.1 }\n"
+            .into(),
+    );
+    for method in ["symplectic-euler", "leapfrog", "implicit-euler"] {
+        add(
+            format!("method {method}"),
+            format!("method = \"{method}\"\nsubsteps = 20\nstiffness = 50.0"),
+            String::new(),
+            String::new(),
+        );
+    }
+    v
+}
+
+/// Scenarios whose step still allocates (see `known_allocating_scenarios`): self-collision
+/// (the mean-velocity partial sums, `MeanParts::new`, once a step), implicit Euler (faer's
+/// numeric factorisation, every substep), mesh obstacles (the face cache's per-block candidate
+/// lists, `CacheBlock::gather`/`store`, and the per-thread candidate scratch grow whenever a
+/// block or a thread meets more candidate faces than before: amortised growth, but not zero).
+const KNOWN_TO_ALLOCATE: [&str; 4] = [
+    "self-collision",
+    "method implicit-euler",
+    "obstacle dress form",
+    "obstacle OBJ mesh",
+];
+
+/// Scene scenarios: allocations after the warm-up on the caller's thread (both backends) and
+/// from inside a two-thread pool (a larger cloth, so the parallel paths run). Returns the
+/// failures (name and the first allocation's backtrace).
+fn scene_failures(known: bool) -> Vec<String> {
+    let dir = std::env::temp_dir().join(format!("weft-noalloc-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let obj = dir.join("tetra.obj");
+    std::fs::write(&obj, "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n").unwrap();
+    let pool = Arc::new(rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap());
+    let mut failures = Vec::new();
+    for sc in scenarios(obj.to_str().unwrap()) {
+        if KNOWN_TO_ALLOCATE.iter().any(|k| sc.name.starts_with(k)) != known {
+            continue;
+        }
+        for (how, backend, size) in [
+            ("caller thread, simd", "simd", 16),
+            ("caller thread, scalar", "scalar", 16),
+            ("inside a 2-thread pool", "simd", 66),
+        ] {
+            let mut w = scene_world(&sc, backend, size);
+            let (c, sites) = if how.starts_with("inside") {
+                w.set_thread_pool(pool.clone());
+                pool.install(|| allocs_in_frames_n(&mut w, SCENE_STEPS))
+            } else {
+                w.set_caller_thread_only(true);
+                allocs_in_frames_n(&mut w, SCENE_STEPS)
+            };
+            if c > 0 {
+                failures.push(format!(
+                    "{}, {how}: {c} allocations; first at\n{}",
+                    sc.name,
+                    sites.first().cloned().unwrap_or_default()
+                ));
+            }
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+    failures
+}
+
 /// Allocations in `STEPS` frames after a warm-up, each frame moving a pin, stepping (through
 /// `step` and `advance`) and reading positions, normals and interpolated positions into
 /// caller buffers. Also returns the backtraces of the allocations.
 fn allocs_in_frames(w: &mut World) -> (usize, Vec<String>) {
+    allocs_in_frames_n(w, STEPS)
+}
+
+/// [`allocs_in_frames`] with `steps` counted frames.
+fn allocs_in_frames_n(w: &mut World, steps: usize) -> (usize, Vec<String>) {
     let dt = w.params().dt;
     let n = w.particle_count();
     let mut pos = vec![[0.0f32; 3]; n];
@@ -116,7 +282,7 @@ fn allocs_in_frames(w: &mut World) -> (usize, Vec<String>) {
     // Let pool threads finish starting (their start-up allocations are not the step's).
     std::thread::sleep(std::time::Duration::from_millis(50));
     let c = count(|| {
-        for k in 4..4 + STEPS {
+        for k in 4..4 + steps {
             frame(w, k);
         }
     });
@@ -179,4 +345,15 @@ fn step_does_not_allocate_after_the_first() {
             }
         }
     }
+    let failures = scene_failures(false);
+    assert!(failures.is_empty(), "steps that allocate:\n{}", failures.join("\n"));
+}
+
+/// The scenarios that still allocate in their step: fails today, listing where. Run alone
+/// (`cargo test --test no_alloc_step -- --ignored`), never beside the other test.
+#[test]
+#[ignore = "self-collision allocates once a step, implicit Euler every substep, the face cache while it grows"]
+fn known_allocating_scenarios() {
+    let failures = scene_failures(true);
+    assert!(failures.is_empty(), "steps that allocate:\n{}", failures.join("\n"));
 }

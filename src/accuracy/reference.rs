@@ -207,7 +207,8 @@ impl Reference {
             format!("{key_text}\n--reference v2 steps={steps} substeps={substeps} extrapolate={extrapolate} kind={kind:?}").as_bytes(),
         );
         let path = Self::path(dir, key);
-        if let Ok(bytes) = std::fs::read(&path) {
+        let expected = (steps as u64 + 2) * world.particle_count() as u64 * 24 + 32;
+        if let Ok(bytes) = crate::files::read_limited(&path, expected, "cached reference") {
             if let Some(r) = Self::decode(&bytes, key, world.particle_count(), steps, world.params().dt, kind) {
                 return Ok((r, true));
             }

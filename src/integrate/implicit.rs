@@ -229,6 +229,9 @@ impl ImplicitState {
         let st = &mut state.layout;
         st.assemble(p, hd, |_, _| {});
         let g = sub.gravity.map(|g| g.map(f64::from));
+        if g.is_some() {
+            crate::model::effects::probe::enter(crate::model::effects::probe::GRAVITY);
+        }
         for (i, &b) in st.free.iter().enumerate() {
             if b == NOT_FREE {
                 continue;
@@ -253,6 +256,9 @@ impl ImplicitState {
         }
         let n = p.count();
         let drag = sub.drag.map(|c| c * h);
+        if drag.is_some() {
+            crate::model::effects::probe::enter(crate::model::effects::probe::DRAG);
+        }
         for i in 0..n {
             let mut v = [p.vx[i], p.vy[i], p.vz[i]];
             let b = st.free[i];

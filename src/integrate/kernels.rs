@@ -39,6 +39,12 @@ fn predict_simd<const G: bool, const D: bool, const F: bool>(c: ParticleChunk<'_
     let hc = F32s::splat(p.h * p.drag.unwrap_or(0.0));
     let empty: [&[f32]; 3] = [&[], &[], &[]];
     let f = p.force.unwrap_or(empty);
+    if G {
+        crate::model::effects::probe::enter(crate::model::effects::probe::GRAVITY);
+    }
+    if D {
+        crate::model::effects::probe::enter(crate::model::effects::probe::DRAG);
+    }
     for i in (0..c.x.len()).step_by(LANES) {
         let w = load(c.w, i);
         let mut v = Vec3x8::load(c.vx, c.vy, c.vz, i);
@@ -68,6 +74,12 @@ fn predict_scalar(c: ParticleChunk<'_>, p: &PredictParams<'_>, has_g: bool, has_
     let g = p.gravity.unwrap_or([0.0; 3]);
     let hc = p.h * p.drag.unwrap_or(0.0);
     let force = p.force.filter(|_| has_f);
+    if has_g {
+        crate::model::effects::probe::enter(crate::model::effects::probe::GRAVITY);
+    }
+    if has_d {
+        crate::model::effects::probe::enter(crate::model::effects::probe::DRAG);
+    }
     for i in 0..c.x.len() {
         let w = c.w[i];
         let (mut vx, mut vy, mut vz) = (c.vx[i], c.vy[i], c.vz[i]);

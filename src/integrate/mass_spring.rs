@@ -75,6 +75,12 @@ pub fn kick(c: ParticleChunk<'_>, p: &KickParams<'_>, simd: bool) {
 }
 
 fn kick_simd(c: ParticleChunk<'_>, p: &KickParams<'_>) {
+    if p.gravity.is_some() {
+        crate::model::effects::probe::enter(crate::model::effects::probe::GRAVITY);
+    }
+    if p.drag_h.is_some() {
+        crate::model::effects::probe::enter(crate::model::effects::probe::DRAG);
+    }
     let hk = F32s::splat(p.hk);
     let zero = F32s::ZERO;
     let one = F32s::ONE;
@@ -110,6 +116,12 @@ fn kick_simd(c: ParticleChunk<'_>, p: &KickParams<'_>) {
 
 /// Scalar twin of the kick kernel.
 fn kick_scalar(c: ParticleChunk<'_>, p: &KickParams<'_>) {
+    if p.gravity.is_some() {
+        crate::model::effects::probe::enter(crate::model::effects::probe::GRAVITY);
+    }
+    if p.drag_h.is_some() {
+        crate::model::effects::probe::enter(crate::model::effects::probe::DRAG);
+    }
     let hk = p.hk;
     let g = p.gravity.unwrap_or([0.0; 3]);
     let hc = p.drag_h.unwrap_or(0.0);

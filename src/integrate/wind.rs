@@ -18,7 +18,7 @@
 
 use rayon::prelude::*;
 
-use crate::model::effects::Wind;
+use crate::model::effects::{probe, Wind};
 
 /// Scratch for the wind force: per-triangle forces, adjacency, per-particle forces.
 #[derive(Clone, Debug, Default)]
@@ -71,6 +71,7 @@ impl WindState {
     /// Computes per-particle wind forces from positions and velocities at time `t`.
     #[allow(clippy::too_many_arguments)]
     pub fn compute(&mut self, wind: &Wind, t: f64, tris: &[[u32; 3]], x: [&[f32]; 3], v: [&[f32]; 3], parallel: bool) {
+        probe::enter(probe::WIND);
         let s = 1.0 + wind.gust * (2.0 * std::f64::consts::PI * wind.gust_frequency as f64 * t).sin() as f32;
         let air = [wind.velocity[0] * s, wind.velocity[1] * s, wind.velocity[2] * s];
         let k = 0.5 * wind.air_density * wind.drag_coefficient;

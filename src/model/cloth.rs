@@ -147,6 +147,30 @@ fn normalize(name: &str, v: [f32; 3]) -> Result<[f32; 3]> {
 pub const MAX_PARTICLES: u64 = 1 << 28;
 
 impl ClothDesc {
+    /// Upper bounds of what [`build`](Self::build) makes, from the grid size alone (nothing is
+    /// built): the counts of the memory estimate ([`crate::model::budget`]).
+    pub fn memory_counts(&self) -> crate::model::budget::MemoryCounts {
+        let (r, c) = (self.rows as u64, self.cols as u64);
+        // Sums of products of u32 values, each term below 2^64; two terms can overflow.
+        let pair = |a: u64, b: u64, x: u64, y: u64| (a * b).saturating_add(x * y);
+        let n = r * c;
+        let quads = r.saturating_sub(1) * c.saturating_sub(1);
+        let stretch = pair(r, c.saturating_sub(1), r.saturating_sub(1), c);
+        let shear = if self.shear { quads.saturating_mul(2) } else { 0 };
+        let bend = if self.bend {
+            pair(r, c.saturating_sub(2), r.saturating_sub(2), c)
+        } else {
+            0
+        };
+        crate::model::budget::MemoryCounts {
+            particles: n,
+            constraints: stretch.saturating_add(shear).saturating_add(bend),
+            tethers: if self.tethers.is_some() { n } else { 0 },
+            triangles: quads.saturating_mul(2),
+            ..Default::default()
+        }
+    }
+
     /// Validates the description and builds the grid.
     pub fn build(&self) -> Result<ClothBuild> {
         let (rows, cols) = (self.rows as usize, self.cols as usize);

@@ -102,6 +102,42 @@ impl Effects {
     }
 }
 
+/// Counts entries into each effect's kernel code on the current thread, in tests only (an
+/// empty inline function otherwise): the proof that an effect not named costs nothing is that
+/// its code is never entered ([`probe::GRAVITY`], [`probe::DRAG`], [`probe::WIND`]).
+pub(crate) mod probe {
+    /// Gravity's terms (predict, kick, implicit right-hand side).
+    pub(crate) const GRAVITY: usize = 0;
+    /// Drag's terms.
+    pub(crate) const DRAG: usize = 1;
+    /// The wind force pass.
+    pub(crate) const WIND: usize = 2;
+
+    #[cfg(test)]
+    thread_local! {
+        static COUNTS: std::cell::Cell<[u64; 3]> = const { std::cell::Cell::new([0; 3]) };
+    }
+
+    /// Records one entry into effect `e`'s code.
+    #[inline(always)]
+    pub(crate) fn enter(e: usize) {
+        #[cfg(test)]
+        COUNTS.with(|c| {
+            let mut v = c.get();
+            v[e] += 1;
+            c.set(v);
+        });
+        #[cfg(not(test))]
+        let _ = e;
+    }
+
+    /// The entries counted on this thread so far, and resets them.
+    #[cfg(test)]
+    pub(crate) fn take() -> [u64; 3] {
+        COUNTS.with(|c| c.replace([0; 3]))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -124,5 +160,69 @@ mod tests {
         .unwrap_err()
         .to_string();
         assert!(e.contains("effects.gravity"), "{e}");
+    }
+}
+
+#[cfg(test)]
+mod probe_tests {
+    use super::*;
+    use crate::model::params::{Backend, Method, SolverParams};
+    use crate::{ClothDesc, PinSpec, World};
+
+    /// Every method and backend, every subset of gravity, drag and wind: a named effect's code
+    /// is entered, an unnamed one's never (counted on this thread; the world runs on it).
+    #[test]
+    fn an_effect_not_named_is_never_entered() {
+        for method in Method::ALL {
+            for backend in [Backend::Simd, Backend::Scalar] {
+                for mask in 0..8u8 {
+                    let effects = Effects {
+                        gravity: (mask & 1 != 0).then_some([0.0, -9.81, 0.0]),
+                        drag: (mask & 2 != 0).then_some(0.0),
+                        wind: (mask & 4 != 0).then(|| Wind {
+                            velocity: [0.0; 3],
+                            ..Wind::default()
+                        }),
+                    };
+                    let params = SolverParams {
+                        method,
+                        backend,
+                        substeps: 4,
+                        stiffness: 20.0,
+                        ..SolverParams::default()
+                    };
+                    let mut w = World::new(params, effects).unwrap();
+                    w.set_caller_thread_only(true);
+                    w.add_cloth(&ClothDesc {
+                        rows: 6,
+                        cols: 6,
+                        pins: vec![PinSpec::FirstRowCorners],
+                        // Soft springs (zero compliance reads as `stiffness`): explicit methods stay stable.
+                        fabric: crate::Fabric {
+                            stretch_compliance: 0.0,
+                            shear_compliance: 0.0,
+                            bend_compliance: 0.0,
+                            ..crate::Fabric::preset("basic").unwrap()
+                        },
+                        ..ClothDesc::default()
+                    })
+                    .unwrap();
+                    probe::take();
+                    for _ in 0..2 {
+                        w.step(1.0 / 60.0).unwrap();
+                    }
+                    let counts = probe::take();
+                    for (k, name) in ["gravity", "drag", "wind"].iter().enumerate() {
+                        let named = mask & (1 << k) != 0;
+                        assert_eq!(
+                            counts[k] > 0,
+                            named,
+                            "{method:?} {backend:?}: {name} named {named}, entered {} times",
+                            counts[k]
+                        );
+                    }
+                }
+            }
+        }
     }
 }

@@ -255,15 +255,16 @@ impl ObstacleSet {
     /// response; [`k::resolve_along_path`]).
     pub(crate) fn resolve(&self, particles: &mut Particles, h: f32, exec: Exec) {
         let (parallel, simd) = (exec.parallel(), exec.simd());
-        let shifts: Vec<[f32; 3]> = self.list.iter().map(|o| o.velocity.map(|c| c * h)).collect();
         let (slots, th, mesh) = (&self.slots, &self.th, &self.mesh);
-        particles.for_chunks(parallel, |c| {
-            let (x, p) = ([&*c.x, &*c.y, &*c.z], [c.px, c.py, c.pz]);
-            if simd {
-                k::resolve_simd(slots, &shifts, mesh, th, c.start, x, p)
-            } else {
-                k::resolve_along_path(slots, &shifts, mesh, th, c.start, x, p)
-            }
+        on_stack(self.list.iter().map(|o| o.velocity.map(|c| c * h)), |shifts| {
+            particles.for_chunks(parallel, |c| {
+                let (x, p) = ([&*c.x, &*c.y, &*c.z], [c.px, c.py, c.pz]);
+                if simd {
+                    k::resolve_simd(slots, shifts, mesh, th, c.start, x, p)
+                } else {
+                    k::resolve_along_path(slots, shifts, mesh, th, c.start, x, p)
+                }
+            })
         });
     }
 
@@ -287,12 +288,22 @@ impl ObstacleSet {
         particles.for_chunks(parallel, |mut c| self.velocity_pass_chunk(&motion, &mut c, simd));
     }
 
+    fn motion_iter(&self) -> impl ExactSizeIterator<Item = ([f32; 3], f32)> + '_ {
+        self.list.iter().map(|o| (o.velocity, o.friction.unwrap_or(self.friction)))
+    }
+
     /// Each obstacle's velocity and friction coefficient, for [`velocity_pass_chunk`](Self::velocity_pass_chunk).
-    pub(crate) fn motion(&self) -> Vec<([f32; 3], f32)> {
-        self.list
-            .iter()
-            .map(|o| (o.velocity, o.friction.unwrap_or(self.friction)))
-            .collect()
+    pub(crate) fn motion(&self) -> Motion {
+        let mut m = Motion::default();
+        if self.list.len() <= m.stack.len() {
+            for (s, v) in m.stack.iter_mut().zip(self.motion_iter()) {
+                *s = v;
+            }
+            m.len = self.list.len();
+        } else {
+            m.heap = self.motion_iter().collect();
+        }
+        m
     }
 
     /// Stage 4 on one chunk (element-wise: the step runs it right after the chunk's update,
@@ -328,29 +339,88 @@ where
             *flag = f(t * BLOCKS_PER_TASK + j, out, *flag, m, c, scratch);
         }
     };
-    fn split<T>(v: &mut [T], per_task: usize, tasks: usize) -> Vec<&mut [T]> {
+    // `memory` and `cache` cut into one piece per task, or one empty piece per task when empty,
+    // without collecting the pieces (a step allocates nothing).
+    fn pieces<T: Send>(v: &mut [T], per_task: usize, tasks: usize) -> impl IndexedParallelIterator<Item = &mut [T]> + '_ {
         if v.is_empty() {
-            (0..tasks).map(|_| &mut [][..]).collect()
+            rayon::iter::Either::Left((0..tasks).into_par_iter().map(|_| <&mut [T]>::default()))
         } else {
-            v.chunks_mut(per_task).collect()
+            rayon::iter::Either::Right(v.par_chunks_mut(per_task))
         }
     }
-    let mut mems = split(memory, per_task, tasks);
-    let mut caches = split(cache, BLOCKS_PER_TASK, tasks);
+    fn pieces_serial<T>(v: &mut [T], per_task: usize, tasks: usize) -> impl Iterator<Item = &mut [T]> + '_ {
+        if v.is_empty() {
+            rayon::iter::Either::Left((0..tasks).map(|_| <&mut [T]>::default()))
+        } else {
+            rayon::iter::Either::Right(v.chunks_mut(per_task))
+        }
+    }
     let Slots { data, touched } = slots;
     if parallel {
+        let mems = pieces(memory, per_task, tasks);
+        let caches = pieces(cache, BLOCKS_PER_TASK, tasks);
         data.par_chunks_mut(task)
             .zip(touched.par_chunks_mut(BLOCKS_PER_TASK))
-            .zip(mems.par_iter_mut().zip(caches.par_iter_mut()))
+            .zip(mems.zip(caches))
             .enumerate()
-            .for_each_init(Vec::new, |s, (t, ((chunk, flags), (mem, c)))| run(t, chunk, flags, mem, c, s));
+            .for_each(|(t, ((chunk, flags), (mem, c)))| with_scratch(|s| run(t, chunk, flags, mem, c, s)));
     } else {
-        let mut s = Vec::new();
         let blocks = data.chunks_mut(task).zip(touched.chunks_mut(BLOCKS_PER_TASK));
-        for (t, ((chunk, flags), (mem, c))) in blocks.zip(mems.iter_mut().zip(caches.iter_mut())).enumerate() {
-            run(t, chunk, flags, mem, c, &mut s);
+        let mems = pieces_serial(memory, per_task, tasks);
+        let caches = pieces_serial(cache, BLOCKS_PER_TASK, tasks);
+        for (t, ((chunk, flags), (mem, c))) in blocks.zip(mems.zip(caches)).enumerate() {
+            with_scratch(|s| run(t, chunk, flags, mem, c, s));
         }
     }
+}
+
+/// Each obstacle's velocity and friction ([`ObstacleSet::motion`]): on the stack for up to 8
+/// obstacles, so a substep allocates nothing, in a `Vec` beyond.
+#[derive(Debug, Default)]
+pub(crate) struct Motion {
+    stack: [([f32; 3], f32); 8],
+    len: usize,
+    heap: Vec<([f32; 3], f32)>,
+}
+
+impl std::ops::Deref for Motion {
+    type Target = [([f32; 3], f32)];
+    fn deref(&self) -> &Self::Target {
+        if self.heap.is_empty() {
+            &self.stack[..self.len]
+        } else {
+            &self.heap
+        }
+    }
+}
+
+/// Runs `f` on the items, held in a stack array when there are at most 8 (so a substep with
+/// a few obstacles allocates nothing), else in a `Vec`.
+fn on_stack<T: Copy + Default, R>(items: impl ExactSizeIterator<Item = T>, f: impl FnOnce(&[T]) -> R) -> R {
+    let n = items.len();
+    if n <= 8 {
+        let mut buf = [T::default(); 8];
+        for (b, v) in buf.iter_mut().zip(items) {
+            *b = v;
+        }
+        f(&buf[..n])
+    } else {
+        f(&items.collect::<Vec<T>>())
+    }
+}
+
+thread_local! {
+    /// Each thread's candidate-face scratch for [`for_blocks`], kept across steps so that a
+    /// step allocates nothing once it has grown.
+    static SCRATCH: std::cell::Cell<Vec<u32>> = const { std::cell::Cell::new(Vec::new()) };
+}
+
+/// Runs `f` with this thread's scratch (taken out, so a nested call gets a fresh one).
+fn with_scratch<R>(f: impl FnOnce(&mut Vec<u32>) -> R) -> R {
+    let mut s = SCRATCH.with(|c| c.take());
+    let r = f(&mut s);
+    SCRATCH.with(|c| c.set(s));
+    r
 }
 
 #[cfg(test)]

@@ -94,14 +94,40 @@ impl Scene {
 
     /// Reads and parses a scene file.
     pub fn load(path: &std::path::Path) -> Result<(Scene, String)> {
-        let text = std::fs::read_to_string(path).map_err(|e| WeftError::io(path, e))?;
+        let text = crate::files::read_text_limited(path, crate::files::SCENE_LIMIT, "scene")?;
         let scene = Scene::parse(&text, &path.display().to_string())?;
         Ok((scene, text))
     }
 
-    /// Builds the world once to surface cross-field errors with the cloth's location.
+    /// Refuses a scene whose estimated memory exceeds the limit ([`crate::model::budget`]),
+    /// then builds the world once to surface cross-field errors with the cloth's location.
     fn check(&self, text: &str, name: &str) -> Result<()> {
+        self.memory_counts().check().map_err(|e| WeftError::Scene(format!("{name}: {e}")))?;
         self.build_world(Some((text, name))).map(|_| ())
+    }
+
+    /// The counts of the memory estimate, from the scene's sizes alone (no world is built,
+    /// no mesh read; pieces whose description is invalid count as empty).
+    pub fn memory_counts(&self) -> crate::model::budget::MemoryCounts {
+        let mut c = crate::model::budget::MemoryCounts {
+            obstacles: self.obstacle.len() as u64,
+            wind: self.effects.wind.is_some(),
+            self_collision: self.effects.self_collision.is_some(),
+            force_method: self.solver.params().method != crate::model::params::Method::Xpbd,
+            implicit: self.solver.params().method == crate::model::params::Method::ImplicitEuler,
+            ..Default::default()
+        };
+        for cloth in &self.cloth {
+            if let Ok(d) = cloth.get_ref().desc() {
+                c = c.plus(&d.memory_counts());
+            }
+        }
+        for s in &self.strands {
+            if let Ok(d) = s.get_ref().desc() {
+                c = c.plus(&d.memory_counts());
+            }
+        }
+        c
     }
 
     /// The world this scene describes.

@@ -77,6 +77,17 @@ pub struct StrandsBuild {
 }
 
 impl StrandsDesc {
+    /// Upper bounds of what [`build`](Self::build) makes (nothing is built): the counts of the
+    /// memory estimate ([`crate::model::budget`]).
+    pub fn memory_counts(&self) -> crate::model::budget::MemoryCounts {
+        let (n, m) = (self.count as u64, self.points as u64);
+        crate::model::budget::MemoryCounts {
+            particles: n * m,
+            constraints: n.saturating_mul((2 * m).saturating_sub(3)),
+            ..Default::default()
+        }
+    }
+
     /// Checks every field.
     pub fn validate(&self) -> Result<()> {
         self.scalp.validate()?;

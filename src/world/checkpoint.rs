@@ -27,7 +27,8 @@ pub struct Checkpoint {
     pub state: [Vec<f32>; 6],
 }
 
-fn fnv1a(bytes: &[u8]) -> u64 {
+/// The FNV-1a hash a checkpoint ends with.
+pub fn fnv1a(bytes: &[u8]) -> u64 {
     let mut h = 0xcbf29ce484222325u64;
     for &b in bytes {
         h ^= b as u64;
@@ -165,9 +166,9 @@ impl Checkpoint {
         write_atomic(path, &self.to_bytes())
     }
 
-    /// Reads a checkpoint file.
+    /// Reads a checkpoint file (a regular file of at most [`crate::files::CHECKPOINT_LIMIT`] bytes).
     pub fn load(path: &Path) -> Result<Checkpoint> {
-        let b = std::fs::read(path).map_err(|e| WeftError::io(path, e))?;
+        let b = crate::files::read_limited(path, crate::files::CHECKPOINT_LIMIT, "checkpoint")?;
         Checkpoint::from_bytes(&b)
     }
 }

@@ -108,7 +108,10 @@ impl World {
     }
 
     /// Builds a cloth and adds it; returns its index in [`cloths`](Self::cloths).
+    ///
+    /// Refuses a cloth whose world would exceed the memory limit ([`budget`]) before building it.
     pub fn add_cloth(&mut self, desc: &ClothDesc) -> Result<usize> {
+        self.memory_counts().plus(&desc.memory_counts()).check()?;
         let b = desc.build()?;
         self.check_room_for(b.positions.len())?;
         let first = self.particles.extend(&b.positions, &b.inv_mass);
@@ -138,6 +141,21 @@ impl World {
         });
         self.rebuild_topology();
         Ok(self.cloths.len() - 1)
+    }
+
+    /// The counts the memory estimate ([`budget::MemoryCounts::bytes`]) is computed from.
+    pub fn memory_counts(&self) -> crate::model::budget::MemoryCounts {
+        crate::model::budget::MemoryCounts {
+            particles: self.particles.count() as u64,
+            constraints: self.distance_inputs.len() as u64,
+            tethers: self.tether_inputs.len() as u64,
+            triangles: self.triangles.len() as u64,
+            obstacles: self.obstacles.list().len() as u64,
+            wind: self.effects.wind.is_some(),
+            self_collision: self.selfcol.config.is_some(),
+            force_method: self.params.method != crate::model::params::Method::Xpbd,
+            implicit: self.params.method == crate::model::params::Method::ImplicitEuler,
+        }
     }
 
     /// Refuses a piece that would overflow the `u32` particle indices (before anything changes).

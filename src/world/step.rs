@@ -311,7 +311,11 @@ impl World {
                     drag: self.effects.drag,
                     force: None,
                 };
-                let motion = if has_obstacles { self.obstacles.motion() } else { Vec::new() };
+                let motion = if has_obstacles {
+                    self.obstacles.motion()
+                } else {
+                    Default::default()
+                };
                 let (obstacles, finite) = (&self.obstacles, &all_finite);
                 let velocity_ns = std::sync::atomic::AtomicU64::new(0);
                 self.particles.for_chunks(parallel, |mut c| {

@@ -16,6 +16,7 @@ impl World {
     /// Grows a group of strands (AHS) and adds it; returns its index in
     /// [`strands`](Self::strands).
     pub fn add_strands(&mut self, desc: &StrandsDesc) -> Result<usize> {
+        self.memory_counts().plus(&desc.memory_counts()).check()?;
         let b = desc.build()?;
         self.check_room_for(b.positions.len())?;
         let first = self.particles.extend(&b.positions, &b.inv_mass);

@@ -26,6 +26,17 @@ struct DrapeFigure {
     step_stages: Vec<perf::StepStageFigure>,
 }
 
+/// One effect's cost when named at zero strength against not named (same world, same steps).
+#[derive(Serialize)]
+struct EffectCost {
+    effect: &'static str,
+    particles: usize,
+    ms_not_named: f64,
+    ms_named_zero: f64,
+    /// `ms_named_zero / ms_not_named`: what naming the effect costs even when it does nothing.
+    ratio: f64,
+}
+
 #[derive(Serialize)]
 struct Report {
     integrate_simd_speedup: f64,
@@ -40,6 +51,62 @@ struct Report {
     step_ms_2_threads: f64,
     drape_1m_sphere: DrapeFigure,
     ms_per_step: Vec<SceneFigure>,
+    /// Per effect, the step not named against named at zero strength.
+    effect_cost: Vec<EffectCost>,
+}
+
+/// Steps a 100k-particle cloth (one thread) with `effects` and with nothing named, alternating
+/// three times and keeping each one's fastest median, per effect named at zero strength.
+fn effect_costs() -> weft::Result<Vec<EffectCost>> {
+    use weft::{Effects, Wind};
+    let zero_wind = Wind {
+        velocity: [0.0; 3],
+        gust: 0.0,
+        ..Wind::default()
+    };
+    let cases: [(&str, Effects); 3] = [
+        (
+            "gravity",
+            Effects {
+                gravity: Some([0.0; 3]),
+                ..Effects::default()
+            },
+        ),
+        (
+            "drag",
+            Effects {
+                drag: Some(0.0),
+                ..Effects::default()
+            },
+        ),
+        (
+            "wind",
+            Effects {
+                wind: Some(zero_wind),
+                ..Effects::default()
+            },
+        ),
+    ];
+    let mut out = Vec::new();
+    for (effect, named) in cases {
+        let mut off = perf::cloth_world(100_000, 1)?;
+        off.set_effects(Effects::default())?;
+        let mut on = perf::cloth_world(100_000, 1)?;
+        on.set_effects(named)?;
+        let (mut a, mut b) = (f64::INFINITY, f64::INFINITY);
+        for _ in 0..3 {
+            a = a.min(perf::step_ms(&mut off, 7)?);
+            b = b.min(perf::step_ms(&mut on, 7)?);
+        }
+        out.push(EffectCost {
+            effect,
+            particles: off.particle_count(),
+            ms_not_named: a,
+            ms_named_zero: b,
+            ratio: b / a,
+        });
+    }
+    Ok(out)
 }
 
 pub fn bench(json: bool, scenes_dir: &Path) -> weft::Result<ExitCode> {
@@ -92,6 +159,7 @@ pub fn bench(json: bool, scenes_dir: &Path) -> weft::Result<ExitCode> {
             ms_per_step: perf::step_ms(&mut w, 15)?,
         });
     }
+    let effect_cost = effect_costs()?;
     let report = Report {
         integrate_simd_speedup: i100.simd_speedup,
         solve_simd_speedup: s100.simd_speedup,
@@ -104,6 +172,7 @@ pub fn bench(json: bool, scenes_dir: &Path) -> weft::Result<ExitCode> {
         step_ms_2_threads: t2,
         drape_1m_sphere: drape,
         ms_per_step: scenes,
+        effect_cost,
     };
     if json {
         println!(
@@ -148,6 +217,13 @@ pub fn bench(json: bool, scenes_dir: &Path) -> weft::Result<ExitCode> {
     }
     for s in &report.ms_per_step {
         println!("scene {:<28} {:>8} particles {:>9.3} ms/step", s.scene, s.particles, s.ms_per_step);
+    }
+    println!("effect cost (1 thread): step with the effect not named against named at zero strength");
+    for e in &report.effect_cost {
+        println!(
+            "  {:<8} {:>8} particles {:>9.3} ms not named {:>9.3} ms named at zero  {:.2}x",
+            e.effect, e.particles, e.ms_not_named, e.ms_named_zero, e.ratio
+        );
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -3,6 +3,7 @@
 use std::path::Path;
 use std::process::ExitCode;
 
+use weft::model::budget::human_bytes;
 use weft::scene::Scene;
 
 pub fn check(path: &Path) -> weft::Result<ExitCode> {
@@ -97,31 +98,14 @@ pub fn describe(scene: &Scene, world: &weft::World) -> String {
         scene.output.steps.0 as f64 * p.dt as f64,
         scene.output.frames.0
     );
-    s += &format!("  memory        ~{} (estimated)\n", human_bytes(estimate_memory(world)));
-    s
-}
-
-/// Bytes the world holds: particle arrays, constraints, tethers, triangles, guard copy, wind.
-pub fn estimate_memory(world: &weft::World) -> u64 {
-    let pad = world.particles().padded_len() as u64;
-    let particles = pad * 10 * 4;
-    let guard = if world.params().guard { pad * 6 * 4 } else { 0 };
-    let constraints = world.constraint_count() as u64 * (5 * 4 + 16);
-    let tethers = world.tether_count() as u64 * 12 * 2;
-    let tris = world.triangles().len() as u64 * 12;
-    let wind = if world.effects().wind.is_some() {
-        tris + pad * 3 * 4 + world.triangles().len() as u64 * 3 * 4
-    } else {
-        0
+    let limit = match weft::model::budget::MemoryLimit::current() {
+        Ok(Some(l)) => format!(", limit {} ({})", human_bytes(l.bytes), l.source),
+        Ok(None) => String::new(),
+        Err(e) => format!(", limit unreadable: {e}"),
     };
-    particles + guard + constraints + tethers + tris + wind
-}
-
-fn human_bytes(b: u64) -> String {
-    match b {
-        b if b >= 1 << 30 => format!("{:.1} GiB", b as f64 / (1u64 << 30) as f64),
-        b if b >= 1 << 20 => format!("{:.1} MiB", b as f64 / (1u64 << 20) as f64),
-        b if b >= 1 << 10 => format!("{:.1} KiB", b as f64 / 1024.0),
-        b => format!("{b} B"),
-    }
+    s += &format!(
+        "  memory        ~{} (estimated from the counts{limit})\n",
+        human_bytes(scene.memory_counts().bytes().max(world.memory_counts().bytes()))
+    );
+    s
 }

@@ -10,11 +10,12 @@ use crate::{Result, WeftError};
 use std::path::Path;
 
 impl TriMesh {
-    /// Loads every model of an OBJ file (polygons triangulated by `tobj`) into one mesh.
+    /// Loads every model of an OBJ file (polygons triangulated by `tobj`) into one mesh. The file
+    /// must be a regular file of at most [`crate::files::OBJ_LIMIT`] bytes.
     pub fn from_obj(path: impl AsRef<Path>) -> Result<(TriMesh, MeshReport)> {
         let path = path.as_ref();
-        let file = std::fs::File::open(path).map_err(|e| WeftError::io(path, e))?;
-        TriMesh::from_obj_reader(&mut std::io::BufReader::new(file), &path.display().to_string())
+        let bytes = crate::files::read_limited(path, crate::files::OBJ_LIMIT, "OBJ mesh")?;
+        TriMesh::from_obj_reader(&mut std::io::Cursor::new(bytes), &path.display().to_string())
     }
 
     /// Loads OBJ text from any reader; `name` labels errors. Material libraries are ignored.
