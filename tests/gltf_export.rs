@@ -205,7 +205,7 @@ fn bad_input_is_an_error() {
     assert!(glb_bytes(&[mesh(vec![&pos[0], &pos[1][..5]], tris)], &[0.0, 1.0]).is_err());
     assert!(glb_bytes(&[mesh(vec![], tris)], &[0.0]).is_err());
     assert!(glb_bytes(&[mesh(vec![&pos[0]], &[[0, 1, 9]])], &[0.0]).is_err());
-    let strips = [0..10];
+    let strips = [0..4, 4..10]; // the second runs past the 9 vertices
     let lines = GltfMesh {
         topology: Topology::LineStrips(&strips),
         ..mesh(vec![&pos[0]], tris)

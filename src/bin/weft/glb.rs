@@ -13,6 +13,9 @@ use weft::render::shapes;
 
 use crate::pictures::{Frame, CLOTH_COLORS, HAIR_COLORS, OBSTACLE_COLOR, SCALP_COLOR};
 
+/// A scalp ellipsoid: positions, triangles, normals.
+type Scalp = (Vec<[f32; 3]>, Vec<[u32; 3]>, Vec<[f32; 3]>);
+
 /// An sRGB colour as glTF's linear RGBA.
 fn linear(c: [u8; 3]) -> [f32; 4] {
     let l = |v: u8| {
@@ -86,7 +89,7 @@ pub fn write_run(world: &weft::World, frames: &[Frame], path: &Path) -> weft::Re
         .iter()
         .map(|g| (0..g.count).map(|s| s * g.points..(s + 1) * g.points).collect())
         .collect();
-    let scalps: Vec<(Vec<[f32; 3]>, Vec<[u32; 3]>, Vec<[f32; 3]>)> = groups
+    let scalps: Vec<Scalp> = groups
         .iter()
         .map(|g| {
             let (pos, tris) = shapes::uv_sphere([0.0; 3], 1.0, 48);
