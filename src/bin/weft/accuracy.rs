@@ -279,8 +279,14 @@ fn draw<DB: plotters::prelude::DrawingBackend>(
             .legend(move |(x, y)| Circle::new((x + 8, y), 5, colour.filled()));
     }
     // Each point labelled with its substeps x iterations (and self-collision response), placed
-    // beside the point where it overlaps no label placed before.
-    let mut placed: Vec<(i32, i32, i32, i32)> = Vec::new();
+    // beside the point where it covers no point and no label placed before.
+    let mut placed: Vec<(i32, i32, i32, i32)> = ok
+        .iter()
+        .map(|o| {
+            let (px, py) = chart.backend_coord(&(o.ms_per_step.max(1e-6), o.rms_error.unwrap_or(1.0).max(1e-12)));
+            (px - 5, py - 5, px + 6, py + 6)
+        })
+        .collect();
     let mut labels = Vec::new();
     for o in &ok {
         let p = (o.ms_per_step.max(1e-6), o.rms_error.unwrap_or(1.0).max(1e-12));
