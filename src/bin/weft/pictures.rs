@@ -3,7 +3,10 @@
 //! Cloth is drawn as its triangles, or (with `--nurbs-surface` / `[output] cloth_surface =
 //! "nurbs"`) as a NURBS surface whose control points are the cloth's particle grid. Strands are
 //! drawn as smooth NURBS curves through their simulated points (root and tip exact, the rest
-//! smoothed, as in the NURBS thesis), and each scalp as a shaded ellipsoid mesh.
+//! smoothed, as in the NURBS thesis), and each scalp as a shaded ellipsoid mesh. The default
+//! camera frames what moves ([`framed_box`]): the cloths, the strands with their scalps, and the
+//! bounded obstacles that come near them; an infinite plane is drawn as a quad under the cloth
+//! but never framed, so a small cloth on a ground plane fills the picture.
 
 use weft::model::shapes::Shape;
 use weft::obstacles::Geometry;
