@@ -65,7 +65,17 @@ fn accuracy_json_has_every_field_and_no_nan_and_the_cache_is_reused() {
     // Stiff cotton at 64 explicit substeps of 0.02 s diverges; the table says so.
     assert!(rows.iter().any(|r| r["method"] == "symplectic-euler" && r["status"] == "diverged"));
     assert!(rows.iter().any(|r| r["pareto"] == true));
-    assert!(std::fs::read_to_string(&svg).unwrap().starts_with("<svg"));
+    let plot = std::fs::read_to_string(&svg).unwrap();
+    assert!(plot.starts_with("<svg"));
+    // Every plotted point carries its label: substeps x iterations (method by colour).
+    for r in rows.iter().filter(|r| !r["rms_error"].is_null()) {
+        let label = format!(">\n{}x{}\n</text>", r["substeps"], r["iterations"]);
+        let want = rows
+            .iter()
+            .filter(|q| !q["rms_error"].is_null() && q["substeps"] == r["substeps"] && q["iterations"] == r["iterations"])
+            .count();
+        assert_eq!(plot.matches(&label).count(), want, "label {label}");
+    }
     let refs = || {
         std::fs::read_dir(&dir)
             .unwrap()

@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::non_background_fraction;
+use common::{colour_fraction, glb, non_background_fraction};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -185,4 +185,110 @@ fn check_lists_obstacles_and_refuses_unknown_keys() {
     let o = weft().arg("check").arg(&bad).output().unwrap();
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("height"));
+}
+
+/// `--gltf` writes `run.glb`: it parses, holds the kept frames (the same steps `--obj` keeps)
+/// as morph targets whose decoded positions are the OBJ files' vertices, and has normals.
+#[test]
+fn run_gltf_holds_the_kept_frames() {
+    let dir = tmp("gltf");
+    let out = dir.join("out");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/hanging.toml");
+    let st = weft()
+        .args([
+            "run",
+            "--quiet",
+            "--no-pictures",
+            "--gltf",
+            "--obj",
+            "--steps",
+            "12",
+            "--frames",
+            "3",
+        ])
+        .arg(&scene)
+        .arg("--out")
+        .arg(&out)
+        .status()
+        .unwrap();
+    assert!(st.success());
+    let g = glb::parse(&std::fs::read(out.join("run.glb")).unwrap());
+    let frames = g.frames("cloth_0");
+    let steps = [0, 4, 8, 12];
+    assert_eq!(frames.len(), steps.len());
+    for (f, step) in steps.iter().enumerate() {
+        let obj = std::fs::read_to_string(out.join(format!("frame_{step:06}.obj"))).unwrap();
+        let verts: Vec<[f32; 3]> = obj
+            .lines()
+            .filter_map(|l| l.strip_prefix("v "))
+            .map(|l| {
+                let v: Vec<f32> = l.split(' ').map(|x| x.parse().unwrap()).collect();
+                [v[0], v[1], v[2]]
+            })
+            .collect();
+        assert_eq!(verts.len(), 1600);
+        for (a, b) in frames[f].iter().zip(&verts) {
+            assert!(
+                (0..3).all(|k| (a[k] - b[k]).abs() <= 4.0 * f32::EPSILON),
+                "frame {f}: {a:?} vs {b:?}"
+            );
+        }
+    }
+    assert_ne!(frames[0], frames[3], "the cloth moves");
+    let normals = g.frames_of("cloth_0", "NORMAL");
+    for n in normals.iter().flatten() {
+        let l = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+        assert!((l - 1.0).abs() < 1e-3, "normal {n:?}");
+    }
+    let input = g.json["animations"][0]["samplers"][0]["input"].as_u64().unwrap() as usize;
+    let times = g.floats(input);
+    let dt = 0.016666667f32;
+    assert_eq!(times.len(), 4);
+    assert!(times.iter().zip(steps).all(|(t, s)| (t - s as f32 * dt).abs() < 1e-4), "{times:?}");
+}
+
+/// A 0.3 m x 2 m strip dropped on a ground plane: the default camera frames the strip, not the
+/// plane, so the (red) cloth covers a good part of the picture.
+#[test]
+fn the_default_camera_frames_the_cloth_not_the_plane() {
+    let dir = tmp("framing");
+    let scene = write_scene(
+        &dir,
+        r#"
+[solver]
+dt = 0.016666667
+substeps = 4
+
+[effects]
+gravity = [0.0, -9.81, 0.0]
+
+[[cloth]]
+rows = 7
+cols = 41
+spacing = 0.05
+origin = [-1.0, 0.2, -0.15]
+u = [1.0, 0.0, 0.0]
+v = [0.0, 0.0, 1.0]
+fabric = "cotton"
+
+[[obstacle]]
+kind = "plane"
+point = [0.0, 0.0, 0.0]
+normal = [0.0, 1.0, 0.0]
+
+[output]
+steps = 30
+frames = 2
+width = 400
+height = 300
+"#,
+    );
+    let out = dir.join("out");
+    let st = weft().args(["run", "--quiet"]).arg(&scene).arg("--out").arg(&out).status().unwrap();
+    assert!(st.success());
+    let red = colour_fraction(&out.join("final.png"), |r, g, b| {
+        r as i32 > g as i32 + 40 && r as i32 > b as i32 + 40
+    });
+    // Framing the plane too left the strip at 0.8% of the picture; framed alone it covers 6.5%.
+    assert!(red > 0.04, "the cloth covers only {:.1}% of the picture", red * 100.0);
 }

@@ -37,7 +37,7 @@ pub fn fnv1a(bytes: &[u8]) -> u64 {
     h
 }
 
-pub use crate::files::write_atomic;
+use crate::files::write_atomic;
 
 impl World {
     /// The checkpoint of the current state.

@@ -1,6 +1,8 @@
 //! Helpers shared by the integration tests.
 #![allow(dead_code)]
 
+pub mod glb;
+
 use weft::{ClothDesc, Effects, Fabric, PinSpec, SolverParams, World};
 
 /// A world with one cloth.
@@ -42,4 +44,15 @@ pub fn non_background_fraction(png_path: &std::path::Path) -> f32 {
         rgb: buf[..info.buffer_size()].to_vec(),
     };
     img.non_background_fraction(weft::render::DEFAULT_BACKGROUND)
+}
+
+/// Fraction of a PNG file's pixels for which `keep(r, g, b)` holds.
+pub fn colour_fraction(png_path: &std::path::Path, keep: impl Fn(u8, u8, u8) -> bool) -> f32 {
+    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(png_path).unwrap()));
+    let mut reader = decoder.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    let px = &buf[..info.buffer_size()];
+    let n = px.chunks(3).filter(|p| keep(p[0], p[1], p[2])).count();
+    n as f32 / (info.width * info.height) as f32
 }

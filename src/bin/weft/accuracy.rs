@@ -202,6 +202,11 @@ fn plot_kind(path: &Path) -> weft::Result<bool> {
 /// Plot size in pixels.
 const PLOT_SIZE: (u32, u32) = (900, 600);
 
+/// Size of the point labels, and an upper estimate of the width of one of their characters
+/// (6 pixels in the PNG backend's font), in pixels.
+const LABEL_FONT_PX: u32 = 12;
+const LABEL_CHAR_PX: i32 = 7;
+
 fn plot(outcomes: &[Outcome], path: &Path, title: &str) -> weft::Result<()> {
     use plotters::prelude::*;
     if plot_kind(path)? {
@@ -273,6 +278,38 @@ fn draw<DB: plotters::prelude::DrawingBackend>(
             .label(format!("{name} ({prec:?})").to_lowercase())
             .legend(move |(x, y)| Circle::new((x + 8, y), 5, colour.filled()));
     }
+    // Each point labelled with its substeps x iterations (and self-collision response), placed
+    // beside the point where it covers no point and no label placed before.
+    let mut placed: Vec<(i32, i32, i32, i32)> = ok
+        .iter()
+        .map(|o| {
+            let (px, py) = chart.backend_coord(&(o.ms_per_step.max(1e-6), o.rms_error.unwrap_or(1.0).max(1e-12)));
+            (px - 5, py - 5, px + 6, py + 6)
+        })
+        .collect();
+    let mut labels = Vec::new();
+    for o in &ok {
+        let p = (o.ms_per_step.max(1e-6), o.rms_error.unwrap_or(1.0).max(1e-12));
+        let text = match o.response {
+            Some(r) => format!("{}x{} {r}/{}", o.substeps, o.iterations, o.broadphase.unwrap_or("-")),
+            None => format!("{}x{}", o.substeps, o.iterations),
+        };
+        let (px, py) = chart.backend_coord(&p);
+        let (w, h) = (LABEL_CHAR_PX * text.chars().count() as i32, LABEL_FONT_PX as i32);
+        let candidates = [(7, -h - 2), (7, 2), (-w - 7, -h - 2), (-w - 7, 2), (-w / 2, -h - 8), (-w / 2, 8)];
+        let rect = |(dx, dy): (i32, i32)| (px + dx, py + dy, px + dx + w, py + dy + h);
+        let free = |r: &(i32, i32, i32, i32)| placed.iter().all(|q| r.2 <= q.0 || q.2 <= r.0 || r.3 <= q.1 || q.3 <= r.1);
+        let off = candidates.iter().copied().find(|&c| free(&rect(c))).unwrap_or(candidates[0]);
+        placed.push(rect(off));
+        labels.push((p, off, text));
+    }
+    chart
+        .draw_series(labels.into_iter().map(|(p, off, text)| {
+            EmptyElement::at(p) + Text::new(text, off, ("sans-serif", LABEL_FONT_PX).into_font().color(&BLACK.mix(0.8)))
+        }))
+        .map_err(|e| err(&e))?
+        .label("label: substeps x iterations")
+        .legend(|(x, y)| EmptyElement::at((x, y)));
     let mut front: Vec<(f64, f64)> = ok
         .iter()
         .filter(|o| o.pareto)
@@ -288,7 +325,8 @@ fn draw<DB: plotters::prelude::DrawingBackend>(
         .configure_series_labels()
         .background_style(WHITE.mix(0.8))
         .border_style(BLACK)
-        .position(SeriesLabelPosition::UpperRight)
+        // Lower left: no setting is both fast and accurate, so that corner is usually empty.
+        .position(SeriesLabelPosition::LowerLeft)
         .draw()
         .map_err(|e| err(&e))?;
     root.present().map_err(|e| err(&e))?;

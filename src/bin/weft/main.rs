@@ -14,6 +14,7 @@
 mod accuracy;
 mod bench;
 mod check;
+mod glb;
 mod pictures;
 mod reproduce;
 mod run;

@@ -9,8 +9,9 @@ use std::time::Instant;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
+use weft::files::write_atomic;
 use weft::scene::{ClothSurface, Scene};
-use weft::world::checkpoint::{write_atomic, Checkpoint};
+use weft::world::checkpoint::Checkpoint;
 use weft::{WeftError, World};
 
 use crate::pictures::{self, Frame};
@@ -34,6 +35,10 @@ pub struct RunArgs {
     /// Write an animated GIF of the kept frames.
     #[arg(long)]
     gif: bool,
+    /// Write the kept frames as one animated binary glTF 2.0 file, run.glb (cloth with
+    /// normals, strands as lines, obstacles as meshes; open it in Blender or three.js).
+    #[arg(long)]
+    gltf: bool,
     /// Write DIR/checkpoint.bin every K steps (and on Ctrl-C and at the end).
     #[arg(long, value_name = "K")]
     checkpoint_every: Option<u32>,
@@ -135,6 +140,7 @@ pub fn run(args: RunArgs) -> weft::Result<ExitCode> {
     let n_frames = args.frames.unwrap_or(scene.output.frames.0).max(1) as u64;
     let want_obj = args.obj || scene.output.obj;
     let want_gif = args.gif || scene.output.gif;
+    let want_gltf = args.gltf;
     let dt = world.params().dt;
     let start_step = world.steps();
     // Frames at evenly spaced steps, always including the start and the end.
@@ -160,6 +166,8 @@ pub fn run(args: RunArgs) -> weft::Result<ExitCode> {
     bar.set_position(start_step.min(total));
 
     let mut frames: Vec<Frame> = Vec::new();
+    // Planes are drawn (and exported) as one fixed quad around the cloth as it starts.
+    let span = pictures::plane_span(&world);
     let mut files = Vec::new();
     let mut warnings = Vec::new();
     let record = |world: &World, frames: &mut Vec<Frame>, files: &mut Vec<String>| -> weft::Result<()> {
@@ -170,9 +178,16 @@ pub fn run(args: RunArgs) -> weft::Result<ExitCode> {
             weft::export::write_obj(&p, &positions, world.triangles())?;
             files.push(p.display().to_string());
         }
+        let mut normals = Vec::new();
+        if want_gltf {
+            normals.resize(positions.len(), [0.0; 3]);
+            world.read_normals(&mut normals[..])?;
+        }
         frames.push(Frame {
             positions,
-            obstacles: pictures::obstacle_items(world),
+            normals,
+            time: world.time(),
+            obstacles: pictures::obstacle_items(world, span),
         });
         Ok(())
     };
@@ -236,6 +251,11 @@ pub fn run(args: RunArgs) -> weft::Result<ExitCode> {
             "max strain {:.1}% exceeds 10%: consider more substeps or tethers",
             m.max_strain * 100.0
         ));
+    }
+    if want_gltf && !frames.is_empty() {
+        let p = out.join("run.glb");
+        crate::glb::write_run(&world, &frames, &p)?;
+        files.push(p.display().to_string());
     }
     if !args.no_pictures && !frames.is_empty() {
         let (w, h) = (scene.output.width.0, scene.output.height.0);

@@ -241,7 +241,9 @@ fn write_png(dir: &std::path::Path, w: &World, pos: Vec<[f32; 3]>, faces: usize)
     std::fs::create_dir_all(dir).map_err(|e| weft::WeftError::Scene(format!("{}: {e}", dir.display())))?;
     let frame = crate::pictures::Frame {
         positions: pos,
-        obstacles: crate::pictures::obstacle_items(w),
+        normals: Vec::new(),
+        time: w.time(),
+        obstacles: crate::pictures::obstacle_items(w, crate::pictures::plane_span(w)),
     };
     let style = crate::pictures::Style::default();
     let (width, height) = (800, 800);

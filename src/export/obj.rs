@@ -1,4 +1,4 @@
-//! Writing results: OBJ meshes of cloth frames.
+//! Wavefront OBJ: one file per frame, positions and triangles.
 
 use std::fmt::Write as _;
 use std::path::Path;
