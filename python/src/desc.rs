@@ -18,7 +18,8 @@ use crate::{bad_param, OrRaise};
 /// `stretch_compliance`, `shear_compliance`, `bend_compliance`, `damping` and `thickness`
 /// override the preset's values. `pins` is a list of pin specs, spelled as in a scene file:
 /// `"first-row-corners"`, `{"row": r}`, `{"indices": [i, ...]}`, `{"cells": [(r, c), ...]}`,
-/// `{"region": {"min": (x, y, z), "max": (x, y, z)}}`. `tethers` is the slack of the long-range
+/// `{"region": {"min": (x, y, z), "max": (x, y, z)}}`; omitted, the first row's two corners
+/// are pinned, and `pins=[]` pins nothing. `tethers` is the slack of the long-range
 /// attachments to the nearest pin (a fraction of the rest distance), or `None` for none.
 #[pyclass(module = "weft", name = "ClothDesc", frozen)]
 #[derive(Clone)]
