@@ -6,7 +6,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyString};
 
 use weft::model::fabric::Fabric;
-use weft::self_collision::config::{Response, SelfBroadphase, SelfCollision};
+use weft::model::self_collision::{Response, SelfBroadphase, SelfCollision};
 use weft::{ClothDesc, PinSpec, Wind};
 
 use crate::{bad_param, OrRaise};
