@@ -7,6 +7,7 @@
 
 use crate::obstacles::mesh::{MeshReport, TriMesh};
 use crate::{Result, WeftError};
+use std::io::Read;
 use std::path::Path;
 
 impl TriMesh {
@@ -18,8 +19,27 @@ impl TriMesh {
         TriMesh::from_obj_reader(&mut std::io::Cursor::new(bytes), &path.display().to_string())
     }
 
-    /// Loads OBJ text from any reader; `name` labels errors. Material libraries are ignored.
+    /// Loads OBJ text from any reader (at most [`crate::input::OBJ_LIMIT`] bytes); `name`
+    /// labels errors. Material libraries are ignored, and texture coordinates and normals are
+    /// removed before parsing ([`positions_only`]): weft uses neither, and `tobj` overflows on
+    /// some out-of-range texture indices.
     pub fn from_obj_reader(reader: &mut impl std::io::BufRead, name: &str) -> Result<(TriMesh, MeshReport)> {
+        let mut raw = Vec::new();
+        reader
+            .take(crate::input::OBJ_LIMIT + 1)
+            .read_to_end(&mut raw)
+            .map_err(|e| WeftError::Io {
+                path: name.to_string(),
+                message: e.to_string(),
+            })?;
+        if raw.len() as u64 > crate::input::OBJ_LIMIT {
+            return Err(WeftError::Io {
+                path: name.to_string(),
+                message: format!("OBJ mesh is more than the limit of {} bytes", crate::input::OBJ_LIMIT),
+            });
+        }
+        let text = positions_only(&raw);
+        let reader = &mut std::io::Cursor::new(text);
         let opts = tobj::LoadOptions {
             triangulate: true,
             single_index: false,
@@ -55,6 +75,31 @@ impl TriMesh {
     }
 }
 
+/// OBJ text with `vt` and `vn` lines dropped and face elements `v/vt/vn` cut to `v`.
+pub fn positions_only(raw: &[u8]) -> Vec<u8> {
+    let ws = |b: &u8| *b == b' ' || *b == b'\t';
+    let mut out = Vec::with_capacity(raw.len());
+    for line in raw.split(|b| *b == b'\n') {
+        let start = line.iter().position(|b| !ws(b)).unwrap_or(line.len());
+        let t = &line[start..];
+        let keyword = |k: &[u8]| t.starts_with(k) && t.get(k.len()).is_none_or(|b| ws(b) || *b == b'\r');
+        if keyword(b"vt") || keyword(b"vn") {
+            continue;
+        }
+        if keyword(b"f") {
+            out.push(b'f');
+            for token in t[1..].split(|b| ws(b) || *b == b'\r').filter(|s| !s.is_empty()) {
+                out.push(b' ');
+                out.extend(token.split(|b| *b == b'/').next().unwrap_or(&[]));
+            }
+        } else {
+            out.extend_from_slice(line);
+        }
+        out.push(b'\n');
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -73,5 +118,14 @@ mod tests {
         std::fs::write(&p, "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 7\n").unwrap();
         assert!(TriMesh::from_obj(&p).is_err());
         std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn texture_and_normal_indices_are_ignored() {
+        // A negative relative texture index made `tobj` overflow (found by fuzzing).
+        let text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvn 0 0 1\nf 1/-3/1 2/-99999999999/1 3//1\n";
+        let (m, _) = TriMesh::from_obj_reader(&mut text.as_bytes(), "t.obj").unwrap();
+        assert_eq!(m.face_count(), 1);
+        assert_eq!(positions_only(b"  vt 1 2\nf 1/2/3\t4//5 6\r\nvn 0 0 1"), b"f 1 4 6\n".to_vec());
     }
 }
