@@ -99,8 +99,7 @@ fn arb_case() -> impl Strategy<Value = Case> {
         .prop_map(|(rows, cols, strands, obstacle, self_collision, wind, method)| Case {
             rows,
             cols,
-            // Strands beside self-collision fail to step (see the ignored test below).
-            strands: strands && self_collision.is_none(),
+            strands,
             obstacle,
             self_collision,
             wind,
@@ -156,11 +155,10 @@ proptest! {
     }
 }
 
-/// Known defect: a scene with self-collision and strands is accepted but its first step fails
-/// with `BufferLength { name: "rest x", got: 4, expected: 34 }` (the self-collision rest data
-/// covers the cloth particles only). Found by the property test above.
+/// A scene with self-collision and strands steps (found by the property test above: the
+/// self-collision rest data once covered the cloth particles only, and the first step failed
+/// with `BufferLength { name: "rest x", .. }`).
 #[test]
-#[ignore = "known defect: self-collision with strands fails to step"]
 fn self_collision_with_strands_steps() {
     let c = Case {
         rows: 2,

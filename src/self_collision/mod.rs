@@ -199,6 +199,18 @@ impl SelfCollisionData {
         self.state = None;
     }
 
+    /// Registers a piece that is not a cloth (a strand group) under its own group id: its rest
+    /// positions feed the rest-neighbour rule; the default distance stays the cloths'.
+    pub(crate) fn add_group(&mut self, rest: &[[f32; 3]], group: u32) {
+        for p in rest {
+            for (r, c) in self.rest.iter_mut().zip(p) {
+                r.push(*c);
+            }
+            self.cloth_of.push(group);
+        }
+        self.state = None;
+    }
+
     /// The collision distance in use: the configured one, or `min(thickness, spacing)`.
     pub fn distance(&self) -> f32 {
         self.config.as_ref().and_then(|c| c.distance).unwrap_or(self.default_distance)

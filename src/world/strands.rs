@@ -20,6 +20,8 @@ impl World {
         let b = desc.build()?;
         self.check_room_for(b.positions.len())?;
         let first = self.particles.extend(&b.positions, &b.inv_mass);
+        // Strand groups count down from the top of the group ids, clear of the cloths'.
+        self.selfcol.add_group(&b.positions, u32::MAX - self.strands.len() as u32);
         self.push_edges(first, &b.edges);
         let n = self.particles.count();
         self.damping_rate.resize(n, desc.damping);

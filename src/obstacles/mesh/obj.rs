@@ -19,23 +19,23 @@ impl TriMesh {
         TriMesh::from_obj_reader(&mut std::io::Cursor::new(bytes), &path.display().to_string())
     }
 
-    /// Loads OBJ text from any reader (at most [`crate::input::OBJ_LIMIT`] bytes); `name`
+    /// Loads OBJ text from any reader (at most [`crate::files::OBJ_LIMIT`] bytes); `name`
     /// labels errors. Material libraries are ignored, and texture coordinates and normals are
     /// removed before parsing ([`positions_only`]): weft uses neither, and `tobj` overflows on
     /// some out-of-range texture indices.
     pub fn from_obj_reader(reader: &mut impl std::io::BufRead, name: &str) -> Result<(TriMesh, MeshReport)> {
         let mut raw = Vec::new();
         reader
-            .take(crate::input::OBJ_LIMIT + 1)
+            .take(crate::files::OBJ_LIMIT + 1)
             .read_to_end(&mut raw)
             .map_err(|e| WeftError::Io {
                 path: name.to_string(),
                 message: e.to_string(),
             })?;
-        if raw.len() as u64 > crate::input::OBJ_LIMIT {
+        if raw.len() as u64 > crate::files::OBJ_LIMIT {
             return Err(WeftError::Io {
                 path: name.to_string(),
-                message: format!("OBJ mesh is more than the limit of {} bytes", crate::input::OBJ_LIMIT),
+                message: format!("OBJ mesh is more than the limit of {} bytes", crate::files::OBJ_LIMIT),
             });
         }
         let text = positions_only(&raw);
