@@ -127,6 +127,8 @@ const TREE_LEAF: u32 = 16;
 #[derive(Clone, Debug, Default)]
 pub struct SelfCollisionData {
     pub(crate) config: Option<SelfCollision>,
+    /// Chunk sums of the speed clamp's mean velocity, kept so a step allocates none.
+    pub(crate) mean_parts: crate::self_collision::response::MeanParts,
     rest: [Vec<f32>; 3],
     cloth_of: Vec<u32>,
     /// Smallest `min(thickness, spacing)` over the cloths (the default distance).

@@ -472,9 +472,17 @@ pub(crate) const MEAN_CHUNK: usize = 4096;
 ///
 /// Within a chunk the particles are summed in eight lanes, `f32` over blocks of 64 particles
 /// and `f64` across blocks ([`chunk_sums`]); every path uses this one summation.
+#[cfg(test)]
 pub(crate) fn mean_velocity(v: [&[f32]; 3], w: &[f32], n: usize, exec: Exec) -> [f32; 3] {
+    mean_velocity_in(&mut MeanParts::default(), v, w, n, exec)
+}
+
+/// [`mean_velocity`] with its chunk sums in `parts` (resized, reused: no allocation once it has
+/// held `n` particles).
+pub(crate) fn mean_velocity_in(parts: &mut MeanParts, v: [&[f32]; 3], w: &[f32], n: usize, exec: Exec) -> [f32; 3] {
     let (parallel, simd) = (exec.parallel(), exec.simd());
-    let parts = MeanParts::new(n);
+    parts.reset(n);
+    let parts = &*parts;
     let chunks = n.div_ceil(MEAN_CHUNK);
     let one = |k: usize| {
         let (lo, hi) = (k * MEAN_CHUNK, ((k + 1) * MEAN_CHUNK).min(n));
@@ -494,10 +502,28 @@ pub(crate) fn mean_velocity(v: [&[f32]; 3], w: &[f32], n: usize, exec: Exec) -> 
 #[derive(Debug, Default)]
 pub(crate) struct MeanParts(Vec<[AtomicU64; 4]>);
 
+/// A clone is empty scratch: the sums live only within one pass.
+impl Clone for MeanParts {
+    fn clone(&self) -> Self {
+        MeanParts::default()
+    }
+}
+
 impl MeanParts {
     /// Zero sums for `n` particles.
+    #[cfg(test)]
     pub(crate) fn new(n: usize) -> Self {
         MeanParts((0..n.div_ceil(MEAN_CHUNK)).map(|_| Default::default()).collect())
+    }
+
+    /// Zero sums for `n` particles, reusing the storage (it grows only past its largest `n`).
+    pub(crate) fn reset(&mut self, n: usize) {
+        self.0.resize_with(n.div_ceil(MEAN_CHUNK), Default::default);
+        for slot in &mut self.0 {
+            for a in slot.iter_mut() {
+                *a.get_mut() = 0;
+            }
+        }
     }
 
     /// Adds the particles of a range starting at particle `start` (a multiple of

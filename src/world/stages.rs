@@ -3,7 +3,7 @@
 //! call these, each in its own order (the force-based methods have no constraint sweeps).
 
 use crate::data::exec::Exec;
-use crate::self_collision::response::{clamp_speed, mean_velocity, ClampParams};
+use crate::self_collision::response::{clamp_speed, mean_velocity_in, ClampParams};
 use crate::self_collision::{Active, TRAVEL_FACTOR};
 use crate::world::World;
 
@@ -69,7 +69,8 @@ impl World {
         let (parallel, simd) = (exec.parallel(), exec.simd());
         let n = self.particles.count();
         let p = &self.particles;
-        let mean = mean.unwrap_or_else(|| mean_velocity([&p.vx, &p.vy, &p.vz], &p.w, n, exec));
+        let parts = &mut self.selfcol.mean_parts;
+        let mean = mean.unwrap_or_else(|| mean_velocity_in(parts, [&p.vx, &p.vy, &p.vz], &p.w, n, exec));
         let cp = ClampParams {
             mean,
             limit: TRAVEL_FACTOR * a.d / n_sub as f32,

@@ -210,8 +210,19 @@ impl World {
         // Its time is self-collision time: summed over the chunks, shared by the threads
         // (like the obstacles' velocity pass below), and added to the stage's.
         let mean_ns = AtomicU64::new(0);
-        let mean_parts = (sc.is_some() && self.fuse_predict && !check && !has_obstacles).then(|| MeanParts::new(n));
-        let mean_sink = mean_parts.as_ref().map(|m| (m, &mean_ns));
+        // Taken out of the world for the substeps (and put back after them) so that the predict
+        // passes can fill it while the stages borrow the world.
+        let fused_mean = sc.is_some() && self.fuse_predict && !check && !has_obstacles;
+        let mut parts = if fused_mean {
+            std::mem::take(&mut self.selfcol.mean_parts)
+        } else {
+            MeanParts::default()
+        };
+        if fused_mean {
+            parts.reset(n);
+        }
+        let mean_parts = fused_mean.then_some(&parts);
+        let mean_sink = mean_parts.map(|m| (m, &mean_ns));
         let mut predicted_ahead = false;
         for s in 0..n_sub {
             let t = self.time + (s as f64) * (h as f64);
@@ -259,7 +270,7 @@ impl World {
             }
             if let Some(a) = sc {
                 let t0 = std::time::Instant::now();
-                let mean = mean_parts.as_ref().map(MeanParts::mean);
+                let mean = mean_parts.map(MeanParts::mean);
                 self.self_collision_clamp(a, n_sub, h, exec, mean);
                 sc_time += t0.elapsed();
                 let p = &self.particles;
@@ -357,6 +368,9 @@ impl World {
                 checkpoint!("obstacles", p.vx, p.vy, p.vz);
                 self.clock.lap("obstacle velocity");
             }
+        }
+        if fused_mean {
+            self.selfcol.mean_parts = parts;
         }
         if sc.is_some() && !check {
             let threads = if parallel { rayon::current_num_threads() as u64 } else { 1 };
