@@ -284,26 +284,14 @@ impl ObstacleSet {
     /// Removes approaching normal velocity and applies friction (stage 4).
     pub(crate) fn velocity_pass(&self, particles: &mut Particles, exec: Exec) {
         let (parallel, simd) = (exec.parallel(), exec.simd());
-        let motion = self.motion();
-        particles.for_chunks(parallel, |mut c| self.velocity_pass_chunk(&motion, &mut c, simd));
+        self.with_motion(|motion| particles.for_chunks(parallel, |mut c| self.velocity_pass_chunk(motion, &mut c, simd)));
     }
 
-    fn motion_iter(&self) -> impl ExactSizeIterator<Item = ([f32; 3], f32)> + '_ {
-        self.list.iter().map(|o| (o.velocity, o.friction.unwrap_or(self.friction)))
-    }
-
-    /// Each obstacle's velocity and friction coefficient, for [`velocity_pass_chunk`](Self::velocity_pass_chunk).
-    pub(crate) fn motion(&self) -> Motion {
-        let mut m = Motion::default();
-        if self.list.len() <= m.stack.len() {
-            for (s, v) in m.stack.iter_mut().zip(self.motion_iter()) {
-                *s = v;
-            }
-            m.len = self.list.len();
-        } else {
-            m.heap = self.motion_iter().collect();
-        }
-        m
+    /// Runs `f` with each obstacle's velocity and friction coefficient, for
+    /// [`velocity_pass_chunk`](Self::velocity_pass_chunk) (held on the stack for up to 8
+    /// obstacles, so a substep allocates nothing).
+    pub(crate) fn with_motion<R>(&self, f: impl FnOnce(&[([f32; 3], f32)]) -> R) -> R {
+        on_stack(self.list.iter().map(|o| (o.velocity, o.friction.unwrap_or(self.friction))), f)
     }
 
     /// Stage 4 on one chunk (element-wise: the step runs it right after the chunk's update,
@@ -370,26 +358,6 @@ where
         let caches = pieces_serial(cache, BLOCKS_PER_TASK, tasks);
         for (t, ((chunk, flags), (mem, c))) in blocks.zip(mems.zip(caches)).enumerate() {
             with_scratch(|s| run(t, chunk, flags, mem, c, s));
-        }
-    }
-}
-
-/// Each obstacle's velocity and friction ([`ObstacleSet::motion`]): on the stack for up to 8
-/// obstacles, so a substep allocates nothing, in a `Vec` beyond.
-#[derive(Debug, Default)]
-pub(crate) struct Motion {
-    stack: [([f32; 3], f32); 8],
-    len: usize,
-    heap: Vec<([f32; 3], f32)>,
-}
-
-impl std::ops::Deref for Motion {
-    type Target = [([f32; 3], f32)];
-    fn deref(&self) -> &Self::Target {
-        if self.heap.is_empty() {
-            &self.stack[..self.len]
-        } else {
-            &self.heap
         }
     }
 }

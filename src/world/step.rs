@@ -322,31 +322,29 @@ impl World {
                     drag: self.effects.drag,
                     force: None,
                 };
-                let motion = if has_obstacles {
-                    self.obstacles.motion()
-                } else {
-                    Default::default()
-                };
                 let (obstacles, finite) = (&self.obstacles, &all_finite);
                 let velocity_ns = std::sync::atomic::AtomicU64::new(0);
-                self.particles.for_chunks(parallel, |mut c| {
-                    update(c.reborrow(), h, damp, simd);
-                    if has_obstacles {
-                        let t0 = std::time::Instant::now();
-                        obstacles.velocity_pass_chunk(&motion, &mut c, simd);
-                        let ns = t0.elapsed().as_nanos() as u64;
-                        velocity_ns.fetch_add(ns, std::sync::atomic::Ordering::Relaxed);
-                    }
-                    if last {
-                        let real = n.saturating_sub(c.start).min(c.x.len());
-                        if !chunk_finite_simd(&c.state(), real) {
-                            finite.store(false, std::sync::atomic::Ordering::Relaxed);
+                let particles = &mut self.particles;
+                obstacles.with_motion(|motion| {
+                    particles.for_chunks(parallel, |mut c| {
+                        update(c.reborrow(), h, damp, simd);
+                        if has_obstacles {
+                            let t0 = std::time::Instant::now();
+                            obstacles.velocity_pass_chunk(motion, &mut c, simd);
+                            let ns = t0.elapsed().as_nanos() as u64;
+                            velocity_ns.fetch_add(ns, std::sync::atomic::Ordering::Relaxed);
                         }
-                    }
-                    if ahead {
-                        predict(c.reborrow(), &pp_next, simd);
-                        add_mean(mean_sink, &c, n, simd);
-                    }
+                        if last {
+                            let real = n.saturating_sub(c.start).min(c.x.len());
+                            if !chunk_finite_simd(&c.state(), real) {
+                                finite.store(false, std::sync::atomic::Ordering::Relaxed);
+                            }
+                        }
+                        if ahead {
+                            predict(c.reborrow(), &pp_next, simd);
+                            add_mean(mean_sink, &c, n, simd);
+                        }
+                    })
                 });
                 predicted_ahead = ahead;
                 if has_obstacles {
