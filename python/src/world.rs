@@ -10,7 +10,6 @@
 //! cheap next to a step (12 bytes a particle); `out=` reuses the caller's array so that a
 //! simulation loop allocates nothing.
 
-use std::io::Read;
 use std::path::PathBuf;
 
 use numpy::{AllowTypeChange, PyArray2, PyArrayLike2, PyArrayMethods, PyUntypedArrayMethods};
@@ -26,10 +25,6 @@ use weft::{Backend, Effects, Method, SolverParams, World};
 
 use crate::desc::{PyClothDesc, PySelfCollision, PyWind};
 use crate::{bad_param, OrRaise};
-
-/// Largest scene file `World.from_scene` reads, bytes (scenes are a few kilobytes; meshes are
-/// separate OBJ files).
-pub const MAX_SCENE_BYTES: u64 = 16 << 20;
 
 /// A simulated world: particles (cloths), obstacles and effects.
 ///
@@ -184,17 +179,11 @@ impl PyWorld {
     /// repository). Errors name the key, line and column.
     #[staticmethod]
     fn from_scene(path: PathBuf) -> PyResult<Self> {
-        let file = std::fs::File::open(&path).map_err(|e| weft::WeftError::io(&path, e)).or_raise()?;
-        let mut text = String::new();
-        file.take(MAX_SCENE_BYTES + 1)
-            .read_to_string(&mut text)
-            .map_err(|e| weft::WeftError::io(&path, e))
-            .or_raise()?;
-        if text.len() as u64 > MAX_SCENE_BYTES {
-            let msg = format!("{}: larger than {MAX_SCENE_BYTES} bytes; not a scene file", path.display());
-            return Err(crate::to_py(weft::WeftError::Scene(msg)));
-        }
-        Self::from_scene_text(&text, &path.display().to_string())
+        // The library's reader: a regular file within the scene size limit, UTF-8.
+        let (scene, _) = Scene::load(&path).or_raise()?;
+        Ok(PyWorld {
+            world: scene.world().or_raise()?,
+        })
     }
 
     /// The world described by scene text (the format of `World.from_scene`); `name` labels
