@@ -190,15 +190,9 @@ impl Active {
 impl SelfCollisionData {
     /// Records the rest (grid) positions of a new cloth with index `cloth`.
     pub(crate) fn add_cloth(&mut self, rest: &[[f32; 3]], cloth: u32, spacing: f32, thickness: f32) {
-        for p in rest {
-            for (r, c) in self.rest.iter_mut().zip(p) {
-                r.push(*c);
-            }
-            self.cloth_of.push(cloth);
-        }
+        self.add_group(rest, cloth);
         let d = thickness.min(spacing);
         self.default_distance = if cloth == 0 { d } else { self.default_distance.min(d) };
-        self.state = None;
     }
 
     /// Registers a piece that is not a cloth (a strand group) under its own group id: its rest
