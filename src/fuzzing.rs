@@ -5,7 +5,10 @@
 use crate::model::cloth::{ClothDesc, PinSpec};
 use crate::model::effects::{Effects, Wind};
 use crate::model::fabric::Fabric;
-use crate::model::params::{Backend, SolverParams};
+use crate::model::params::{Backend, Method, SolverParams};
+use crate::model::self_collision::{Response, SelfBroadphase, SelfCollision};
+use crate::model::shapes::Shape;
+use crate::obstacles::obstacle::Obstacle;
 use crate::scene::Scene;
 use crate::World;
 
@@ -106,7 +109,8 @@ impl Bytes<'_> {
 }
 
 /// Builds a small world from arbitrary bytes (any float, including NaN, infinities and
-/// subnormals, in every parameter and initial state) and steps it. Bad parameters must be
+/// subnormals, in every parameter and initial state), with any of the four methods, an optional
+/// sphere obstacle and optional self-collision (each response and broadphase), and steps it. Bad parameters must be
 /// errors; accepted worlds must step without panicking and never expose non-finite state.
 pub fn step_bytes(data: &[u8]) {
     let mut b = Bytes { data, at: 0 };
@@ -116,6 +120,12 @@ pub fn step_bytes(data: &[u8]) {
         iterations: b.small(4),
         threads: b.small(3) as usize,
         backend: if b.one_in(2) { Backend::Simd } else { Backend::Scalar },
+        method: match b.u8() % 4 {
+            0 => Method::Xpbd,
+            1 => Method::SymplecticEuler,
+            2 => Method::Leapfrog,
+            _ => Method::ImplicitEuler,
+        },
         guard: true,
         ..SolverParams::default()
     };
@@ -160,6 +170,33 @@ pub fn step_bytes(data: &[u8]) {
     };
     if world.add_cloth(&desc).is_err() {
         return;
+    }
+    if b.one_in(2) {
+        let shape = Shape::Sphere {
+            center: [b.f32(), b.f32(), b.f32()],
+            radius: b.f32(),
+        };
+        if let Ok(o) = Obstacle::shape(shape) {
+            let _ = world.add_obstacle(o);
+        }
+    }
+    if b.one_in(2) {
+        let config = SelfCollision {
+            distance: b.one_in(2).then(|| b.f32()),
+            friction: b.f32(),
+            response: match b.u8() % 3 {
+                0 => Response::Pbd,
+                1 => Response::MovementSpeed,
+                _ => Response::Vccpbd,
+            },
+            broadphase: if b.one_in(2) {
+                SelfBroadphase::Hash
+            } else {
+                SelfBroadphase::AabbTree
+            },
+            measure: b.one_in(2),
+        };
+        let _ = world.set_self_collision(Some(config));
     }
     let n = world.particle_count();
     let v: [Vec<f32>; 3] = std::array::from_fn(|_| (0..n).map(|_| b.f32()).collect());
