@@ -74,7 +74,7 @@ fn shipped_scenes_give_the_recorded_bits() {
         ("hanging", "", "", 30, 0x60e816ec85d0611a),
         ("hanging", "backend = \"scalar\"", "", 10, 0x68b930bb2563d7b1),
         ("drape-sphere", "", "", 30, 0x31812e5c22bf5bbd),
-        ("drape-form", "", "", 20, 0xd8c429bd170975ba),
+        ("drape-form", "", "", 20, 0x83f5b86657ed6e36),
         ("fold", "", "", 90, 0x2438608dd2dcd8e9),
         ("fold", "", "response = \"pbd\"\nbroadphase = \"aabb-tree\"", 90, 0x187551ee73b85985),
         ("fold", "", "response = \"movement-speed\"", 90, 0x04a01863f1da50f8),

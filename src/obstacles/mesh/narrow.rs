@@ -21,7 +21,12 @@
 //!    exactly on an edge or vertex count for every face sharing it (no tunnelling through
 //!    seams) and no step divides by a quantity that can vanish, so no NaN arises.
 //! 3. **Proximity.** Otherwise, if the closest point `c` of the triangle to `p` is closer than
-//!    `Th`, the particle ends inside the fabric's thickness layer: a contact at `t = 1`.
+//!    `Th`, the particle ends inside the fabric's thickness layer: a contact at `t = 1`. When
+//!    `p` is in front of the plane but its projection falls outside the triangle, `c` lies on
+//!    an edge or a corner, where the layer is rounded: the contact normal is then
+//!    `(p - c) / |p - c|` and the depth `Th - |p - c|`. With the face normal instead, a
+//!    particle resting a thickness above a flat top beside a convex rim was pushed almost
+//!    `Th` sideways by the rim's side face, in one substep.
 //!
 //! The plane data of step 1 (corner, normal, unit normal) is computed once per mesh state
 //! ([`FacePlane`]), with the same operations, and a face is rejected right after the two
@@ -31,8 +36,9 @@
 //! the full computation).
 //!
 //! A contact carries the face, the point (`q` or `c`), the face normal turned to the
-//! particle's side (`s n`), the time of impact `t`, and `depth = Th - s*hp`, how far `p` must
-//! move along that normal to stand `Th` off the face's plane.
+//! particle's side (`s n`, or the edge normal of step 3), the time of impact `t`, and
+//! `depth = Th - s*hp` (`Th - |p - c|` at an edge), how far `p` must move along that normal to
+//! stand `Th` off the contact plane.
 //!
 //! [`mesh_contact`] asks a broadphase for candidates, keeps exactly the faces whose box
 //! overlaps the step's box grown by `Th` (plus a tiny relative pad), and returns the contact
@@ -191,8 +197,17 @@ pub fn face_contact(mesh: &TriMesh, f: u32, x: [f32; 3], p: [f32; 3], th: f32) -
     if th > 0.0 && s * hp < th as f64 {
         let cp = closest_point_on_triangle(pd, a, b, c);
         let r = sub(pd, cp);
-        if dot(r, r) < th2 {
-            return Some(make(cp, 1.0, ContactKind::Proximity));
+        let r2 = dot(r, r);
+        if r2 < th2 {
+            let mut contact = make(cp, 1.0, ContactKind::Proximity);
+            if s * hp > 0.0 && !inside(axpy(pd, -hp, u), a, b, c, n, nn, EDGE_TOLERANCE) {
+                // In front of the face but beside it: the nearest point is on an edge or a
+                // corner, and the layer around them is round. Stand off along `p - c`.
+                let len = r2.sqrt();
+                contact.normal = r.map(|k| (k / len) as f32);
+                contact.depth = (th as f64 - len) as f32;
+            }
+            return Some(contact);
         }
     }
     None

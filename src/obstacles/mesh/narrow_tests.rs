@@ -121,7 +121,13 @@ fn full(mesh: &TriMesh, f: u32, x: [f32; 3], p: [f32; 3], th: f32) -> Option<Con
         let cp = closest_point_on_triangle(pd, a, b, c);
         let r = sub(pd, cp);
         if dot(r, r) < th as f64 * th as f64 {
-            return Some(make(cp, 1.0, ContactKind::Proximity));
+            let mut contact = make(cp, 1.0, ContactKind::Proximity);
+            if s * hp > 0.0 && !inside(axpy(pd, -hp, u), a, b, c, n, nn, EDGE_TOLERANCE) {
+                let len = dot(r, r).sqrt();
+                contact.normal = r.map(|k| (k / len) as f32);
+                contact.depth = (th as f64 - len) as f32;
+            }
+            return Some(contact);
         }
     }
     None
@@ -161,4 +167,42 @@ fn precomputed_planes_and_the_cheap_reject_change_no_answer() {
         }
     }
     assert!(hits > 1000, "{hits}");
+}
+
+/// A particle a thickness above a flat top, just beyond its convex rim, is within the
+/// thickness of the rim's edge only: the contact stands it off the (round) edge, not off the
+/// side face's plane, so the response moves it by the tiny depth, not sideways by almost `Th`.
+#[test]
+fn beside_a_convex_rim_the_contact_normal_points_from_the_edge() {
+    let v = vec![
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [1.0, 1.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [1.0, 0.0, -1.0],
+        [1.0, 1.0, -1.0],
+    ];
+    let (m, _) = TriMesh::new(v, vec![[0, 1, 2], [0, 2, 3], [1, 4, 5], [1, 5, 2]]).unwrap();
+    let th = 0.1;
+    let (x, p) = ([1.001, 0.5, 0.2], [1.001, 0.5, 0.0999]);
+    let mut contacts = 0;
+    for f in 0..m.face_count() as u32 {
+        let Some(c) = face_contact(&m, f, x, p, th) else { continue };
+        contacts += 1;
+        assert_eq!(c.kind, ContactKind::Proximity);
+        let len = (0.001f64.powi(2) + 0.0999f64.powi(2)).sqrt();
+        assert!(
+            (c.normal[0] as f64 - 0.001 / len).abs() < 1e-5 && (c.normal[2] as f64 - 0.0999 / len).abs() < 1e-5,
+            "face {f}: {c:?}"
+        );
+        assert!((c.depth as f64 - (th as f64 - len)).abs() < 1e-6, "face {f}: {c:?}");
+        let q = crate::obstacles::mesh::response::resolve_position(x, p, &c, th);
+        let moved = (0..3).map(|k| (q[k] - p[k]).powi(2)).sum::<f32>().sqrt();
+        assert!(moved < 1e-4, "face {f} moved the particle {moved} m: {c:?}");
+    }
+    // the rim's edge belongs to a top face and to a side face
+    assert!(contacts >= 2, "{contacts}");
+    // straight above the top, the face normal as before
+    let c = face_contact(&m, 1, [0.2, 0.5, 0.2], [0.2, 0.5, 0.05], th).unwrap();
+    assert_eq!((c.normal, c.depth), ([0.0, 0.0, 1.0], 0.05));
 }
