@@ -73,6 +73,8 @@ pub struct WorldDescription {
     pub substeps: u32,
     /// Solver sweeps per substep.
     pub iterations: u32,
+    /// The integration method.
+    pub method: crate::model::params::Method,
     /// Simulated time, s.
     pub time: f64,
 }

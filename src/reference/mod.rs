@@ -18,8 +18,9 @@
 //!     obstacle velocity pass: normal part, Coulomb friction          [obstacles]
 //! ```
 //!
-//! Triangle-mesh obstacles are not represented: [`ReferenceWorld::missing_feature`] says so,
-//! and the accuracy report keeps the f32 world as the reference for such scenes.
+//! Triangle-mesh obstacles and the force-based methods are not represented:
+//! [`ReferenceWorld::missing_feature`] says so, and the accuracy report keeps the f32 world as
+//! the reference for such scenes.
 
 // Plain index loops are the point of this module: it is the naive reading of the method.
 #![allow(clippy::needless_range_loop)]
@@ -66,6 +67,9 @@ pub struct ReferenceWorld {
     substeps: u32,
     iterations: u32,
     time: f64,
+    /// Multipliers of the last substep's solve (per colour) and its length, for the energy.
+    lambda: Vec<Vec<f64>>,
+    last_h: f64,
 }
 
 impl ReferenceWorld {
@@ -78,6 +82,9 @@ impl ReferenceWorld {
         let n = d.positions.len();
         let obstacles: Vec<Option<Obstacle64>> = d.obstacles.iter().map(|o| Obstacle64::from_desc(o, d.friction)).collect();
         let mut missing = obstacles.iter().any(Option::is_none).then_some("triangle-mesh obstacles");
+        if d.method != crate::model::params::Method::Xpbd {
+            missing = Some("force-based methods");
+        }
         let selfcol = SelfCollision64::from_desc(d).unwrap_or_else(|e| {
             missing = missing.or(Some(e));
             None
@@ -131,11 +138,14 @@ impl ReferenceWorld {
             substeps: d.substeps,
             iterations: d.iterations,
             time: d.time,
+            lambda: Vec::new(),
+            last_h: 0.0,
         }
     }
 
     /// What of the world this copy lacks (`None`: everything is represented): triangle-mesh
-    /// obstacles, or self-collision of particles outside cloths.
+    /// obstacles, a force-based method (the copy steps XPBD), or self-collision of particles
+    /// outside cloths.
     pub fn missing_feature(&self) -> Option<&'static str> {
         self.missing
     }
@@ -169,7 +179,8 @@ impl ReferenceWorld {
             if let Some(sc) = &mut self.selfcol {
                 sc.clamp(&self.x, &mut self.v, &mut p, &self.w, self.substeps, h);
             }
-            self.sweeps(&mut p, &contacts, h);
+            self.lambda = self.sweeps(&mut p, &contacts, h);
+            self.last_h = h;
             if let Some(sc) = &self.selfcol {
                 sc.respond(&self.x, &mut p, &self.w, &self.damping, h);
             }
@@ -223,7 +234,7 @@ impl ReferenceWorld {
     }
 
     /// The solver iterations: constraints by colour, tethers, obstacle projection, scalps.
-    fn sweeps(&self, p: &mut [[f64; 3]], contacts: &[Vec<Contact>], h: f64) {
+    fn sweeps(&self, p: &mut [[f64; 3]], contacts: &[Vec<Contact>], h: f64) -> Vec<Vec<f64>> {
         let mut lambda: Vec<Vec<f64>> = self.colours.iter().map(|c| vec![0.0; c.len()]).collect();
         for _ in 0..self.iterations {
             for (col, lam) in self.colours.iter().zip(lambda.iter_mut()) {
@@ -274,6 +285,35 @@ impl ReferenceWorld {
                 }
             }
         }
+        lambda
+    }
+
+    /// Total energy now, J: kinetic energy of the free particles, gravitational potential
+    /// relative to the origin, and the elastic energy `Σ ½ α f²` of the constraints with the
+    /// force `f = λ / h²` of the last substep's solve (the measure
+    /// [`World::metrics`](crate::World::metrics) reports for XPBD, computed independently).
+    pub fn energy(&self) -> f64 {
+        let mut e = 0.0;
+        for (i, (x, v)) in self.x.iter().zip(&self.v).enumerate() {
+            if self.w[i] <= 0.0 {
+                continue;
+            }
+            let m = 1.0 / self.w[i];
+            e += 0.5 * m * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+            if let Some(g) = self.effects.gravity {
+                e -= m * (g[0] as f64 * x[0] + g[1] as f64 * x[1] + g[2] as f64 * x[2]);
+            }
+        }
+        if self.last_h > 0.0 {
+            let inv_h2 = 1.0 / (self.last_h * self.last_h);
+            for (col, lam) in self.colours.iter().zip(&self.lambda) {
+                for (c, l) in col.iter().zip(lam) {
+                    let f = l * inv_h2;
+                    e += 0.5 * c.compliance * f * f;
+                }
+            }
+        }
+        e
     }
 
     /// Deepest penetration into the analytic obstacles now, m (0 when none), and how many

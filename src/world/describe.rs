@@ -56,6 +56,7 @@ impl World {
             self_collision_distance: self.self_collision_distance(),
             substeps: self.params.substeps,
             iterations: self.params.iterations,
+            method: self.params.method,
             time: self.time,
         }
     }
