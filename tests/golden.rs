@@ -101,7 +101,7 @@ fn force_based_methods_give_the_recorded_bits() {
             "method = \"implicit-euler\"\nsubsteps = 2",
             "",
             3,
-            0x0cf1950a371bdb63,
+            0x99b9875f35e4f2ad,
         ),
         ("fold", "method = \"implicit-euler\"\nsubsteps = 2", "", 3, 0xaf71cf2d13c216c1),
     ]);

@@ -23,18 +23,20 @@
 //! **Why sparse Cholesky, not preconditioned CG.** `A` is SPD with a sparsity pattern that only
 //! changes with the topology or the set of pinned particles, so faer's symbolic analysis
 //! (fill-reducing ordering, elimination tree, supernodes) is done once and only the numeric
-//! factorisation runs per substep. A direct solve is exact to rounding, so the measured error is
+//! factorisation runs per substep, into buffers kept with the layout (no allocation per
+//! substep). A direct solve is exact to rounding, so the measured error is
 //! the integrator's and not a tolerance's; it is deterministic (faer is built without its rayon
-//! feature, hence sequential, and the summation order is fixed by the symbolic structure), so
+//! feature, hence sequential; duplicate entries are summed in assembly order and the rest of the
+//! summation order is fixed by the symbolic structure), so
 //! results do not depend on the thread count; and for the stiff cloth this method exists for,
 //! `h² k / m` is large, `A` is badly conditioned and CG would need many iterations. For a cloth
 //! grid of `n` particles the factor stays near-linear in size under the ordering, which is
 //! cheap up to the sizes the accuracy reports use. The assembly is scalar and in f64.
 
-use faer::linalg::solvers::Solve;
-use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
-use faer::sparse::{Argsort, Pair, SparseColMat, SymbolicSparseColMat};
-use faer::Side;
+use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, SymbolicCholesky};
+use faer::sparse::{Pair, SparseColMatRef, SymbolicSparseColMat};
+use faer::{Conj, Par, Side};
 
 use crate::constraints::DistanceSet;
 use crate::data::particles::Particles;
@@ -48,8 +50,85 @@ const NOT_FREE: u32 = u32::MAX;
 /// of pinned particles or the stiffness changes.
 pub struct ImplicitState {
     layout: Layout,
-    /// Pattern, value order and symbolic factorisation (`None` when nothing is free).
-    solver: Option<(SymbolicSparseColMat<usize>, Argsort<usize>, SymbolicLlt<usize>)>,
+    /// Pattern, symbolic factorisation and numeric buffers (`None` when nothing is free).
+    solver: Option<Solver>,
+}
+
+/// The sparse Cholesky solver of one layout, with every buffer a substep needs, so a substep
+/// allocates nothing: the matrix values in pattern order, the factor's values and the
+/// workspace of the numeric factorisation and the solve (sequential).
+struct Solver {
+    pattern: SymbolicSparseColMat<usize>,
+    /// Where each assembled entry (in [`Layout::assemble`]'s order) adds into `values`.
+    slot: Vec<usize>,
+    symbolic: SymbolicCholesky<usize>,
+    values: Vec<f64>,
+    factor: Vec<f64>,
+    stack: MemBuffer,
+}
+
+impl Solver {
+    fn new(n_dof: usize, idx: &[Pair<usize, usize>]) -> Result<Solver> {
+        let (pattern, _) = SymbolicSparseColMat::try_new_from_indices(n_dof, n_dof, idx).map_err(faer_err)?;
+        // The pattern's rows are sorted within each column: find each entry's place once.
+        let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
+        let slot = idx
+            .iter()
+            .map(|e| {
+                let rows = &row_idx[col_ptr[e.col]..col_ptr[e.col + 1]];
+                rows.binary_search(&e.row)
+                    .map(|k| col_ptr[e.col] + k)
+                    .map_err(|_| faer_err("entry not in its pattern"))
+            })
+            .collect::<Result<Vec<usize>>>()?;
+        let symbolic =
+            factorize_symbolic_cholesky(pattern.as_ref(), Side::Lower, Default::default(), Default::default()).map_err(faer_err)?;
+        let scratch = StackReq::any_of(&[
+            symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
+            symbolic.solve_in_place_scratch::<f64>(1, Par::Seq),
+        ]);
+        Ok(Solver {
+            values: vec![0.0; row_idx.len()],
+            factor: vec![0.0; symbolic.len_val()],
+            stack: MemBuffer::try_new(scratch).map_err(faer_err)?,
+            pattern,
+            slot,
+            symbolic,
+        })
+    }
+
+    /// Solves `A x = rhs` in place for the assembled entries `vals` of `A`'s lower triangle
+    /// (duplicates summed in assembly order).
+    fn solve(&mut self, vals: &[f64], rhs: &mut [f64]) -> Result<()> {
+        self.values.fill(0.0);
+        for (&k, &v) in self.slot.iter().zip(vals) {
+            self.values[k] += v;
+        }
+        let a = SparseColMatRef::new(self.pattern.as_ref(), &self.values);
+        let llt = self
+            .symbolic
+            .factorize_numeric_llt::<f64>(
+                &mut self.factor,
+                a,
+                Side::Lower,
+                Default::default(),
+                Par::Seq,
+                MemStack::new(&mut self.stack),
+                Default::default(),
+            )
+            .map_err(|_| WeftError::Diverged {
+                particle: 0,
+                stage: "implicit-euler (matrix not positive definite)",
+            })?;
+        let n = rhs.len();
+        llt.solve_in_place_with_conj(
+            Conj::No,
+            faer::MatMut::from_column_major_slice_mut(rhs, n, 1),
+            Par::Seq,
+            MemStack::new(&mut self.stack),
+        );
+        Ok(())
+    }
 }
 
 /// Unknowns, springs and the assembly buffers.
@@ -115,9 +194,7 @@ impl ImplicitState {
         let mut idx = Vec::new();
         layout.assemble(p, 0.0, |r, c| idx.push(Pair { row: r, col: c }));
         let solver = if layout.n_dof > 0 {
-            let (pattern, argsort) = SymbolicSparseColMat::try_new_from_indices(layout.n_dof, layout.n_dof, &idx).map_err(faer_err)?;
-            let symbolic = SymbolicLlt::try_new(pattern.as_ref(), Side::Lower).map_err(faer_err)?;
-            Some((pattern, argsort, symbolic))
+            Some(Solver::new(layout.n_dof, &idx)?)
         } else {
             None
         };
@@ -246,13 +323,8 @@ impl ImplicitState {
                 st.rhs[o + k] += hd * f;
             }
         }
-        if let Some((pattern, argsort, symbolic)) = &state.solver {
-            let a = SparseColMat::new_from_argsort(pattern.clone(), argsort, &st.vals).map_err(faer_err)?;
-            let llt = Llt::try_new_with_symbolic(symbolic.clone(), a.as_ref(), Side::Lower).map_err(|_| WeftError::Diverged {
-                particle: 0,
-                stage: "implicit-euler (matrix not positive definite)",
-            })?;
-            llt.solve_in_place(faer::MatMut::from_column_major_slice_mut(&mut st.rhs, st.n_dof, 1));
+        if let Some(solver) = &mut state.solver {
+            solver.solve(&st.vals, &mut st.rhs)?;
         }
         let n = p.count();
         let drag = sub.drag.map(|c| c * h);
@@ -283,5 +355,57 @@ impl ImplicitState {
         }
         *slot = Some(state);
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use faer::linalg::solvers::Solve;
+    use faer::sparse::linalg::solvers::Llt;
+    use faer::sparse::{SparseColMat, Triplet};
+
+    /// The reusable solver (its own value placement, factor and workspace) gives faer's
+    /// one-shot sparse Cholesky solution to rounding, with duplicate entries summed.
+    #[test]
+    fn reused_solver_matches_a_fresh_factorisation() {
+        let n = 40;
+        let mut idx = Vec::new();
+        let mut vals = Vec::new();
+        let mut r = crate::test_rng::unit(3);
+        for i in 0..n {
+            idx.push(Pair { row: i, col: i });
+            vals.push(1.0 + r() as f64);
+        }
+        // Chain and skip couplings, each written twice (as the spring loop writes them).
+        for (a, b) in (0..n - 1).map(|i| (i + 1, i)).chain((0..n - 3).map(|i| (i + 3, i))) {
+            for _ in 0..2 {
+                let k = 0.1 + 0.2 * r() as f64;
+                for (row, col, v) in [(a, a, k), (b, b, k), (a, b, -k)] {
+                    idx.push(Pair { row, col });
+                    vals.push(v);
+                }
+            }
+        }
+        let rhs: Vec<f64> = (0..n).map(|_| r() as f64 - 0.5).collect();
+        let mut solver = Solver::new(n, &idx).unwrap();
+        for round in 0..2 {
+            let scaled: Vec<f64> = vals.iter().map(|v| v * (1.0 + round as f64)).collect();
+            let mut got = rhs.clone();
+            solver.solve(&scaled, &mut got).unwrap();
+            let t: Vec<_> = idx.iter().zip(&scaled).map(|(e, &v)| Triplet::new(e.row, e.col, v)).collect();
+            let a = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &t).unwrap();
+            let llt = Llt::try_new_with_symbolic(
+                faer::sparse::linalg::solvers::SymbolicLlt::try_new(a.symbolic(), Side::Lower).unwrap(),
+                a.as_ref(),
+                Side::Lower,
+            )
+            .unwrap();
+            let mut want = rhs.clone();
+            llt.solve_in_place(faer::MatMut::from_column_major_slice_mut(&mut want, n, 1));
+            for (g, w) in got.iter().zip(&want) {
+                assert!((g - w).abs() <= 1e-12 * (1.0 + w.abs()), "round {round}: {g} vs {w}");
+            }
+        }
     }
 }

@@ -53,7 +53,7 @@ fn compact(
 ) -> ([Vec<f32>; 3], Vec<[f32; 11]>) {
     let damping = vec![0.8f32; n];
     let xs = [&x[0][..], &x[1][..], &x[2][..]];
-    assert!(data.begin_step(xs, n, &damping).unwrap());
+    assert!(data.begin_step(xs, n, &damping, crate::data::exec::Exec::Parallel).unwrap());
     let mut out = p.clone();
     data.keep_predictions([&out[0][..], &out[1][..], &out[2][..]]);
     data.pair_pass(xs, [&p[0][..], &p[1][..], &p[2][..]], w, n, exec);
@@ -176,7 +176,7 @@ fn rest_neighbours_are_never_listed() {
     data.config = Some(SelfCollision::default());
     let n = rows * cols;
     let x = [&x0[0][..], &x0[1][..], &x0[2][..]];
-    assert!(data.begin_step(x, n, &vec![0.0; n]).unwrap());
+    assert!(data.begin_step(x, n, &vec![0.0; n], crate::data::exec::Exec::Parallel).unwrap());
     let lists = data.lists().unwrap();
     let d = data.distance();
     // Fold rows r and rows - 1 - r lie `gap` apart; only rows 3 or more apart at rest are kept.
@@ -194,7 +194,9 @@ fn rest_neighbours_are_never_listed() {
     let flat: Vec<f32> = (0..n).map(|i| (i / cols) as f32 * s).collect();
     let zero = vec![0.0; n];
     let xs: Vec<f32> = (0..n).map(|i| (i % cols) as f32 * s).collect();
-    assert!(data.begin_step([&xs, &zero, &flat], n, &zero).unwrap());
+    assert!(data
+        .begin_step([&xs, &zero, &flat], n, &zero, crate::data::exec::Exec::Parallel)
+        .unwrap());
     assert_eq!(data.lists().unwrap().total(), 0);
     assert_eq!(data.active_blocks(), 0);
 }

@@ -7,6 +7,7 @@
 //! own with cells of the probe radius made the step slower (more look-ups than the candidates
 //! they save).
 
+use crate::data::exec::Exec;
 use rayon::prelude::*;
 
 use crate::error::Result;
@@ -33,7 +34,7 @@ impl SelfCollisionData {
         if self.last_measured == Some(steps) {
             return Ok(self.stats.last_pct);
         }
-        if !self.build_lists(x, n)? {
+        if !self.build_lists(x, n, Exec::new(true, parallel))? {
             return Ok(0.0);
         }
         let pct = self.penetration_pct(x, n, parallel);
@@ -44,7 +45,7 @@ impl SelfCollisionData {
 
     /// Fills the metric lists (non-neighbours within the penetration limit) from the
     /// broadphase of the same positions `x` (built here if the step reused its candidates).
-    fn probe_lists(&mut self, x: [&[f32]; 3], n: usize) -> Result<()> {
+    fn probe_lists(&mut self, x: [&[f32]; 3], n: usize, parallel: bool) -> Result<()> {
         let d = self.distance();
         let lim = d * (1.0 - PENETRATION_TOLERANCE);
         let far2 = (1.5 * d) * (1.5 * d);
@@ -53,14 +54,15 @@ impl SelfCollisionData {
         let built = if st.structure_fresh {
             Ok(())
         } else {
-            self.build_structure(&mut st, x, n, QUERY_FACTOR * d, broadphase)
+            self.build_structure(&mut st, x, n, QUERY_FACTOR * d, broadphase, Exec::new(true, parallel))
         };
         let keep = |i: usize, j: u32| self.cloth_of[i] != self.cloth_of[j as usize] || dist2(&self.rest, i, j as usize) > far2;
         let r = built.and_then(|_| match &st.tree {
-            Some(t) if broadphase == SelfBroadphase::AabbTree => {
-                t.query_all(x[0], x[1], x[2], n, lim, &mut st.probe).map(|_| st.probe.retain(keep))
-            }
-            _ => st.hash.query_filtered(x[0], x[1], x[2], n, lim, &keep, &mut st.probe),
+            Some(t) if broadphase == SelfBroadphase::AabbTree => t
+                .query_all_exec(x[0], x[1], x[2], n, lim, &mut st.probe, Exec::new(true, parallel))
+                .map(|_| st.probe.retain(keep)),
+            _ if parallel => st.hash.query_filtered(x[0], x[1], x[2], n, lim, &keep, &mut st.probe),
+            _ => st.hash.query_filtered_serial(x[0], x[1], x[2], n, lim, &keep, &mut st.probe),
         });
         self.state = Some(st);
         r
@@ -68,7 +70,7 @@ impl SelfCollisionData {
 
     /// Percentage of particles in penetration in the state the lists were built from.
     fn penetration_pct(&mut self, x: [&[f32]; 3], n: usize, parallel: bool) -> f64 {
-        if self.probe_lists(x, n).is_err() {
+        if self.probe_lists(x, n, parallel).is_err() {
             return 0.0;
         }
         let Some(st) = self.state.as_ref().filter(|s| s.ready) else {

@@ -226,10 +226,10 @@ impl SelfCollisionData {
     /// Makes the pair lists and the active blocks hold for the positions at the start of a
     /// step (reusing the candidate lists when they still hold, see [`crate::self_collision::verlet`]).
     /// Returns `false` (nothing to do this step) when off.
-    pub(crate) fn begin_step(&mut self, x: [&[f32]; 3], n: usize, damping: &[f32]) -> Result<bool> {
+    pub(crate) fn begin_step(&mut self, x: [&[f32]; 3], n: usize, damping: &[f32], exec: Exec) -> Result<bool> {
         let t0 = Instant::now();
         let before = self.stats.phases.build_s + self.stats.phases.query_s;
-        if !self.build_lists(x, n)? {
+        if !self.build_lists(x, n, exec)? {
             return Ok(false);
         }
         if let Some(st) = &mut self.state {
@@ -262,7 +262,8 @@ impl SelfCollisionData {
     /// Copies the step's start positions and runs the broadphase on `x` with the reach
     /// `q + skin` (`q = 3 d`) unless the candidate lists still hold, keeping each pair once
     /// (`(i, j)` in the list of `i`, `j > i`) and dropping rest neighbours; `false` when off.
-    fn build_lists(&mut self, x: [&[f32]; 3], n: usize) -> Result<bool> {
+    /// The broadphase runs on rayon only when `exec` is parallel (the same lists either way).
+    fn build_lists(&mut self, x: [&[f32]; 3], n: usize, exec: Exec) -> Result<bool> {
         let Some(a) = self.active() else { return Ok(false) };
         let broadphase = self.config.as_ref().map(|c| c.broadphase).unwrap_or_default();
         let mut st = self.state.take().unwrap_or_else(|| State {
@@ -306,15 +307,15 @@ impl SelfCollisionData {
                 // Each pair once (`j > i`), rest neighbours dropped.
                 let keep = |i: usize, j: u32| j as usize > i && !self.rest_skipped(i, j as usize, a.d);
                 let t0 = Instant::now();
-                let built = self.build_structure(&mut st, x, n, reach, broadphase);
+                let built = self.build_structure(&mut st, x, n, reach, broadphase, exec);
                 let t1 = Instant::now();
                 let r = built.and_then(|_| match (&st.tree, broadphase) {
                     (Some(t), SelfBroadphase::AabbTree) => t
-                        .query_all(x[0], x[1], x[2], n, reach, &mut st.verlet.cand)
+                        .query_all_exec(x[0], x[1], x[2], n, reach, &mut st.verlet.cand, exec)
                         .map(|_| st.verlet.cand.retain(keep)),
                     _ => st
                         .hash
-                        .query_upper_unskipped_cells(reach, REST_SKIP_FACTOR * a.d, &mut st.verlet.cand),
+                        .query_upper_unskipped_cells_exec(reach, REST_SKIP_FACTOR * a.d, &mut st.verlet.cand, exec),
                 });
                 let ph = &mut self.stats.phases;
                 ph.build_s += t1.duration_since(t0).as_secs_f64();
@@ -341,16 +342,17 @@ impl SelfCollisionData {
         [&self.rest[0], &self.rest[1], &self.rest[2]]
     }
 
-    /// Builds the hash (cell `reach`) or refits the tree on `x`.
-    fn build_structure(&self, st: &mut State, x: [&[f32]; 3], n: usize, reach: f32, broadphase: SelfBroadphase) -> Result<()> {
+    /// Builds the hash (cell `reach`) or refits the tree on `x`, in parallel when `exec` is.
+    fn build_structure(&self, st: &mut State, x: [&[f32]; 3], n: usize, reach: f32, broadphase: SelfBroadphase, exec: Exec) -> Result<()> {
         st.structure_fresh = false;
         match broadphase {
             SelfBroadphase::Hash => {
-                build_hash(&mut st.hash, x, n, reach, self.rest(), &self.cloth_of, true)?;
+                build_hash(&mut st.hash, x, n, reach, self.rest(), &self.cloth_of, exec.parallel())?;
             }
             SelfBroadphase::AabbTree => {
                 let t = match st.tree.take() {
-                    Some(mut t) if t.len() == n => t.refit(x[0], x[1], x[2], n).map(|_| t),
+                    Some(mut t) if t.len() == n && exec.parallel() => t.refit(x[0], x[1], x[2], n).map(|_| t),
+                    Some(mut t) if t.len() == n => t.refit_serial(x[0], x[1], x[2], n).map(|_| t),
                     _ => ParticleTree::build(x[0], x[1], x[2], n, TreeShape::LeafSize(TREE_LEAF)),
                 }?;
                 st.tree = Some(t);

@@ -26,6 +26,7 @@
 //! 100x100 cloth); [`TreeShape::LeafSize`] picks the smallest `D` whose leaves hold at most that
 //! many particles (8 to 16 is fast). `D` is at most [`MAX_DEPTH`].
 
+use crate::data::exec::Exec;
 use crate::data::lanes::LANES;
 use crate::self_collision::neighbours::{check_max_dist, check_positions, search_radius, sort_dedup_tail, Candidates, Neighbours, CHUNK};
 use crate::{Result, WeftError};
@@ -285,6 +286,32 @@ impl ParticleTree {
         Self::check_unchanged((0..n).into_par_iter().all(|i| self.unchanged(x, y, z, i)))?;
         let r = search_radius(max_dist);
         out.fill_parallel(n, |i, buf| self.scan::<true>(x, y, z, i, md2, r, buf))
+    }
+
+    /// [`ParticleTree::query_all`] when `exec` is parallel, else a serial walk with the
+    /// lanes of `exec` (never entering rayon); identical lists.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn query_all_exec(
+        &self,
+        x: &[f32],
+        y: &[f32],
+        z: &[f32],
+        n: usize,
+        max_dist: f32,
+        out: &mut Neighbours,
+        exec: Exec,
+    ) -> Result<()> {
+        if exec.parallel() {
+            return self.query_all(x, y, z, n, max_dist, out);
+        }
+        if !exec.simd() {
+            return self.query_all_serial(x, y, z, n, max_dist, out);
+        }
+        self.check_n(x, y, z, n)?;
+        let md2 = check_max_dist(max_dist)?;
+        Self::check_unchanged((0..n).all(|i| self.unchanged(x, y, z, i)))?;
+        let r = search_radius(max_dist);
+        out.fill_serial(n, |i, buf| self.scan::<true>(x, y, z, i, md2, r, buf))
     }
 
     /// Serial, scalar twin of [`ParticleTree::query_all`] (no threads, no lanes); produces

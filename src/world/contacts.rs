@@ -61,7 +61,7 @@ impl World {
         }
         let selfcol = {
             let p = &self.particles;
-            let on = self.selfcol.begin_step([&p.x, &p.y, &p.z], n, &self.damping_rate);
+            let on = self.selfcol.begin_step([&p.x, &p.y, &p.z], n, &self.damping_rate, self.exec());
             on.unwrap_or(false).then(|| self.selfcol.active()).flatten()
         };
         if selfcol.is_some() {

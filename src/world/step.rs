@@ -189,7 +189,7 @@ impl World {
         let sc_start = std::time::Instant::now();
         let sc = {
             let p = &self.particles;
-            let on = self.selfcol.begin_step([&p.x, &p.y, &p.z], n, &self.damping_rate);
+            let on = self.selfcol.begin_step([&p.x, &p.y, &p.z], n, &self.damping_rate, exec);
             on.unwrap_or(false).then(|| self.selfcol.active()).flatten()
         };
         let mut sc_time = sc_start.elapsed();

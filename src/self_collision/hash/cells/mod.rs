@@ -37,6 +37,7 @@
 //! checked once. The members are tested one at a time against lane groups of candidates;
 //! putting a cell's members in the lanes instead made every candidate run the rest test.
 
+use crate::data::exec::Exec;
 use crate::data::lanes::{load, load_idx, load_idx_unchecked, load_unchecked, F32s, Vec3x8, LANES};
 use crate::self_collision::hash::SpatialHash;
 use crate::self_collision::neighbours::{search_radius, within, Neighbours};
@@ -90,6 +91,29 @@ impl SpatialHash {
         out.fill_pairs_parallel(self.n, ts.div_ceil(BUCKETS_PER_TASK), |t, buf| {
             let end = ((t + 1) * BUCKETS_PER_TASK).min(ts);
             for b in t * BUCKETS_PER_TASK..end {
+                self.bucket_pairs::<true>(b, k, buf);
+            }
+        })
+    }
+
+    /// [`SpatialHash::query_upper_unskipped_cells`] when `exec` is parallel, else a serial walk
+    /// with the lanes of `exec` (never entering rayon); identical lists.
+    pub(crate) fn query_upper_unskipped_cells_exec(&self, max_dist: f32, skip: f32, out: &mut Neighbours, exec: Exec) -> Result<()> {
+        if exec.parallel() {
+            return self.query_upper_unskipped_cells(max_dist, skip, out);
+        }
+        if !exec.simd() {
+            return self.query_upper_unskipped_cells_serial(max_dist, skip, out);
+        }
+        let (md2, s2) = self.check_rest_query(max_dist, skip)?;
+        let k = Reach {
+            md2,
+            r: search_radius(max_dist),
+            s2,
+            len: self.scan_len(),
+        };
+        out.fill_pairs_serial(self.n, |buf| {
+            for b in 0..self.table_size {
                 self.bucket_pairs::<true>(b, k, buf);
             }
         })
