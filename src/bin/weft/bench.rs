@@ -53,6 +53,10 @@ struct Report {
     ms_per_step: Vec<SceneFigure>,
     /// Per effect, the step not named against named at zero strength.
     effect_cost: Vec<EffectCost>,
+    /// Peak single-precision vector GFLOP/s on the machine's threads, measured in this run.
+    peak_gflops: f64,
+    /// The headline cases against the machine's limits (`weft::perf::roofline`).
+    roofline: Vec<perf::roofline::RooflineCase>,
 }
 
 /// Steps a 100k-particle cloth (one thread) with `effects` and with nothing named, alternating
@@ -160,6 +164,7 @@ pub fn bench(json: bool, scenes_dir: &Path) -> weft::Result<ExitCode> {
         });
     }
     let effect_cost = effect_costs()?;
+    let (peak_gflops, roofline) = perf::roofline::headline_cases()?;
     let report = Report {
         integrate_simd_speedup: i100.simd_speedup,
         solve_simd_speedup: s100.simd_speedup,
@@ -173,6 +178,8 @@ pub fn bench(json: bool, scenes_dir: &Path) -> weft::Result<ExitCode> {
         drape_1m_sphere: drape,
         ms_per_step: scenes,
         effect_cost,
+        peak_gflops,
+        roofline,
     };
     if json {
         println!(
@@ -202,8 +209,10 @@ pub fn bench(json: bool, scenes_dir: &Path) -> weft::Result<ExitCode> {
         );
     }
     println!(
-        "full step, {} particles, 5 substeps: {t1:.2} ms on 1 thread, {t2:.2} ms on 2 ({:.2}x)",
+        "full step, {} particles, {} substeps x {} iterations: {t1:.2} ms on 1 thread, {t2:.2} ms on 2 ({:.2}x)",
         report.step_particles,
+        w1.params().substeps,
+        w1.params().iterations,
         t1 / t2
     );
     let d = &report.drape_1m_sphere;
@@ -217,6 +226,17 @@ pub fn bench(json: bool, scenes_dir: &Path) -> weft::Result<ExitCode> {
     }
     for s in &report.ms_per_step {
         println!("scene {:<28} {:>8} particles {:>9.3} ms/step", s.scene, s.particles, s.ms_per_step);
+    }
+    println!(
+        "roofline: compulsory bytes and flops per step against the stream bandwidth and the FMA peak ({:.0} GFLOP/s) measured now",
+        report.peak_gflops
+    );
+    println!("  case                  particles      ms/step   memory ms   arith ms   limit ms  fraction");
+    for r in &report.roofline {
+        println!(
+            "  {:<20} {:>10} {:>12.3} {:>11.3} {:>10.3} {:>10.3} {:>8.2}",
+            r.case, r.particles, r.ms, r.memory_ms, r.arithmetic_ms, r.limit_ms, r.fraction
+        );
     }
     println!("effect cost (1 thread): step with the effect not named against named at zero strength");
     for e in &report.effect_cost {

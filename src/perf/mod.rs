@@ -10,6 +10,8 @@
 //! (a triad `a = b + s c` has a different read/write mix and overstates or understates it). Medians over repeated runs, measured in one process so the ratios are comparable;
 //! criterion benches (`cargo bench`) are the careful version of the same figures.
 
+pub mod roofline;
+
 use crate::data::exec::Exec;
 use std::time::Instant;
 
