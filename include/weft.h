@@ -7,8 +7,9 @@
 #include <stddef.h>
 #include <stdint.h>
 
-// Longest scene text [`weft_world_create_from_scene`] accepts, bytes (16 MiB).
-#define WEFT_MAX_SCENE_BYTES (16 << 20)
+// Longest scene text [`weft_world_create_from_scene`] accepts, bytes (4 MiB: the limit of a
+// scene file, `files::SCENE_LIMIT`, for the same format).
+#define WEFT_MAX_SCENE_BYTES (4 << 20)
 
 // Result of every C call.
 typedef enum WeftStatus {

@@ -50,8 +50,9 @@ use crate::scene::Scene;
 use crate::self_collision::{Response, SelfBroadphase, SelfCollision};
 use crate::{ClothDesc, Effects, Fabric, PinSpec, Snapshot, SolverParams, WeftError, World};
 
-/// Longest scene text [`weft_world_create_from_scene`] accepts, bytes (16 MiB).
-pub const WEFT_MAX_SCENE_BYTES: usize = 16 << 20;
+/// Longest scene text [`weft_world_create_from_scene`] accepts, bytes (4 MiB: the limit of a
+/// scene file, `files::SCENE_LIMIT`, for the same format).
+pub const WEFT_MAX_SCENE_BYTES: usize = 4 << 20;
 
 /// Result of every C call.
 #[repr(C)]
