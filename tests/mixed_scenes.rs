@@ -125,7 +125,7 @@ fn state_bits(w: &World) -> Vec<u32> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(48))]
+    #![proptest_config(ProptestConfig::with_cases(cases(48)))]
 
     #[test]
     fn mixed_scenes_hold_their_invariants(c in arb_case()) {
@@ -197,4 +197,9 @@ fn self_collision_with_strands_steps() {
     let mut w = world(&c, "simd", 1);
     let dt = w.params().dt;
     w.step(dt).unwrap();
+}
+
+/// Cases per property: `default`, or `PROPTEST_CASES` when set (for long local runs).
+fn cases(default: u32) -> u32 {
+    std::env::var("PROPTEST_CASES").ok().and_then(|s| s.parse().ok()).unwrap_or(default)
 }
