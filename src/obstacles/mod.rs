@@ -31,7 +31,8 @@
 //! Checkpoints (`src/world/checkpoint.rs`) rebuild obstacles from the scene, and moving obstacles'
 //! places are functions of time, so a resumed run is bitwise the uninterrupted one, except
 //! that face memories are not saved: with `face_memory` on, a resumed run starts with empty
-//! memories and may differ slightly.
+//! memories and may differ slightly. `World::restore` empties them too (and the face caches),
+//! so restoring in place and resuming from a file step alike.
 
 pub mod kernels;
 pub mod mesh;
@@ -145,6 +146,19 @@ impl ObstacleSet {
         self.th.clear();
     }
 
+    /// Forgets what mesh obstacles kept from earlier steps: the face caches' lists (their
+    /// storage stays) and the face memories. [`World::restore`](crate::World::restore) calls
+    /// it, so a restored world steps exactly as a resumed run does (which builds its obstacles
+    /// afresh), whatever it stepped before.
+    pub(crate) fn forget_history(&mut self) {
+        for o in &mut self.list {
+            if let Geometry::Mesh(m) = &mut o.geometry {
+                m.memory.fill(NO_FACE);
+                m.cache.blocks_mut().iter_mut().for_each(CacheBlock::clear_all);
+            }
+        }
+    }
+
     /// Sizes the per-particle arrays (thickness per cloth, contact slots, face memory).
     pub(crate) fn prepare(
         &mut self,
@@ -198,7 +212,7 @@ impl ObstacleSet {
             match &mut o.geometry {
                 Geometry::Shape(s) => {
                     let shape = s.translated(displacement(u, t));
-                    for_blocks(slots, &mut [], &mut [], parallel, |b, out, was, _, _, _| {
+                    for_blocks(slots, &mut [], &mut [], parallel, 0, |b, out, was, _, _, _| {
                         let may = if simd {
                             k::shape_may_touch_simd(&shape, &g, b)
                         } else {
@@ -239,6 +253,7 @@ impl ObstacleSet {
                         &mut m.memory,
                         m.cache.blocks_mut(),
                         parallel,
+                        m.mesh.face_count(),
                         |b, out, was, mem, cache, scratch| match cache.first_mut() {
                             Some(cache) => pass.block(b, out, was, mem, cache, scratch),
                             // the cache is synced to every block above; were one missing, a
@@ -311,8 +326,10 @@ impl ObstacleSet {
 /// [`BLOCKS_PER_TASK`] blocks or serially, and sets the block's flag to what `f` returns (`f`
 /// returns [`k::block_nonzero`] of the block, or `false` for a block it leaves or makes empty).
 /// `memory` is empty or one entry per particle, `cache` empty or one [`CacheBlock`] per block
-/// (handed to `f` as a slice of one).
-fn for_blocks<F>(slots: &mut Slots, memory: &mut [u32], cache: &mut [CacheBlock], parallel: bool, f: F)
+/// (handed to `f` as a slice of one). Each thread's scratch holds at least `faces` entries
+/// (the mesh's face count, the most candidates a query can give but for a broadphase's
+/// duplicates), reserved once, so its size does not depend on which thread ran which block.
+fn for_blocks<F>(slots: &mut Slots, memory: &mut [u32], cache: &mut [CacheBlock], parallel: bool, faces: usize, f: F)
 where
     F: Fn(usize, &mut [f32], bool, &mut [u32], &mut [CacheBlock], &mut Vec<u32>) -> bool + Sync + Send,
 {
@@ -351,13 +368,13 @@ where
             .zip(touched.par_chunks_mut(BLOCKS_PER_TASK))
             .zip(mems.zip(caches))
             .enumerate()
-            .for_each(|(t, ((chunk, flags), (mem, c)))| with_scratch(|s| run(t, chunk, flags, mem, c, s)));
+            .for_each(|(t, ((chunk, flags), (mem, c)))| with_scratch(faces, |s| run(t, chunk, flags, mem, c, s)));
     } else {
         let blocks = data.chunks_mut(task).zip(touched.chunks_mut(BLOCKS_PER_TASK));
         let mems = pieces_serial(memory, per_task, tasks);
         let caches = pieces_serial(cache, BLOCKS_PER_TASK, tasks);
         for (t, ((chunk, flags), (mem, c))) in blocks.zip(mems.zip(caches)).enumerate() {
-            with_scratch(|s| run(t, chunk, flags, mem, c, s));
+            with_scratch(faces, |s| run(t, chunk, flags, mem, c, s));
         }
     }
 }
@@ -383,9 +400,13 @@ thread_local! {
     static SCRATCH: std::cell::Cell<Vec<u32>> = const { std::cell::Cell::new(Vec::new()) };
 }
 
-/// Runs `f` with this thread's scratch (taken out, so a nested call gets a fresh one).
-fn with_scratch<R>(f: impl FnOnce(&mut Vec<u32>) -> R) -> R {
+/// Runs `f` with this thread's scratch (taken out, so a nested call gets a fresh one), holding
+/// at least `reserve` entries.
+fn with_scratch<R>(reserve: usize, f: impl FnOnce(&mut Vec<u32>) -> R) -> R {
     let mut s = SCRATCH.with(|c| c.take());
+    if s.capacity() < reserve {
+        s.reserve(reserve - s.len());
+    }
     let r = f(&mut s);
     SCRATCH.with(|c| c.set(s));
     r

@@ -53,7 +53,8 @@ impl World {
     }
 
     /// Restores positions, velocities, time and step count from a checkpoint of a world with
-    /// the same topology.
+    /// the same topology. What mesh obstacles kept from earlier steps (face memories, face
+    /// caches) is forgotten, as in a run resumed from the file.
     pub fn restore(&mut self, c: &Checkpoint) -> Result<()> {
         let n = self.particle_count();
         for (k, a) in c.state.iter().enumerate() {
@@ -80,6 +81,7 @@ impl World {
         p.pz.copy_from_slice(&p.z);
         self.steps = c.steps;
         self.time = c.time;
+        self.obstacles.forget_history();
         Ok(())
     }
 }
