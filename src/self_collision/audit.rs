@@ -240,18 +240,16 @@ fn side_inside(a: [f32; 3], b: [f32; 3], c: [f32; 3], p: [f32; 3]) -> Option<f32
 /// particle–triangle pairs of non-neighbours where the particle stays within `reach` of the
 /// triangle's plane and inside its prism and changes side. `triangles` index the particles
 /// of `rule`. Errors on non-finite positions, a bad reach or a triangle index out of range.
-pub fn count_crossings(
-    before: [&[f32]; 3],
-    after: [&[f32]; 3],
-    triangles: &[[u32; 3]],
-    rule: &RestRule<'_>,
-    reach: f32,
-) -> Result<usize> {
+pub fn count_crossings(before: [&[f32]; 3], after: [&[f32]; 3], triangles: &[[u32; 3]], rule: &RestRule<'_>, reach: f32) -> Result<usize> {
     let n = rule.len();
     let grid = Grid::new(after, n, reach)?;
     for a in before {
         if a.len() < n || a[..n].iter().any(|v| !v.is_finite()) {
-            return Err(WeftError::param("positions before", "non-finite or short", "must be finite, one per particle"));
+            return Err(WeftError::param(
+                "positions before",
+                "non-finite or short",
+                "must be finite, one per particle",
+            ));
         }
     }
     let mut count = 0usize;
@@ -328,7 +326,10 @@ mod tests {
         tris.extend(t2);
         let group: Vec<u32> = (0..72).map(|i| (i >= 36) as u32).collect();
         let at = |y: f32| -> Vec<[f32; 3]> {
-            rest.iter().enumerate().map(|(i, p)| if i >= 36 { [p[0], y, p[2]] } else { *p }).collect()
+            rest.iter()
+                .enumerate()
+                .map(|(i, p)| if i >= 36 { [p[0], y, p[2]] } else { *p })
+                .collect()
         };
         let (r, b, a) = (cols(&rest), cols(&at(y0)), cols(&at(y1)));
         let rule = RestRule::new(refs(&r), &group, 3.0).unwrap();
