@@ -203,8 +203,14 @@ impl SuiteRun {
     /// The pipeline's rest-distance rule: neighbours are particles of one cloth at most
     /// `REST_SKIP_FACTOR d` apart at rest.
     pub fn rest_rule(&self) -> Result<RestRule<'_>> {
+        self.rest_rule_with(REST_SKIP_FACTOR * self.distance())
+    }
+
+    /// A rest-distance rule with another skip distance (the average-collision measure uses
+    /// `1.5 d`).
+    pub fn rest_rule_with(&self, skip: f32) -> Result<RestRule<'_>> {
         let r = &self.rest;
-        RestRule::new([&r[0], &r[1], &r[2]], &self.group, REST_SKIP_FACTOR * self.distance())
+        RestRule::new([&r[0], &r[1], &r[2]], &self.group, skip)
     }
 
     /// The deepest violation of the collision distance between non-neighbours now, m.

@@ -253,6 +253,19 @@ struct SelfCollisionFigure {
     max_violation_m: f64,
     /// Layer crossings summed over the steps (`self_collision::audit::count_crossings`).
     crossings: u64,
+    /// Mean wall ms per step of each stage of the stage clock, with self-collision.
+    stages_ms: Vec<(&'static str, f64)>,
+    /// The same without self-collision.
+    stages_ms_without: Vec<(&'static str, f64)>,
+}
+
+fn stages_ms(w: &weft::World) -> Vec<(&'static str, f64)> {
+    let steps = w.stage_clock().steps().max(1) as f64;
+    w.stage_clock()
+        .stages()
+        .iter()
+        .map(|(s, t)| (*s, t.as_secs_f64() * 1e3 / steps))
+        .collect()
 }
 
 /// Stages of the step that belong to self-collision (the clamp's mean velocity, summed
@@ -278,12 +291,35 @@ fn median_p95(mut ms: Vec<f64>) -> (f64, f64) {
     (at(0.5), at(0.95))
 }
 
+/// States kept between two audits: the audits run between steps, and a pause between steps
+/// lets the pool's workers sleep (waking them costs the next step), so they run once every
+/// `AUDIT_CHUNK` steps, on the kept states, rather than after every step.
+const AUDIT_CHUNK: usize = 30;
+
+/// Deepest violation and crossings over consecutive `states` (positions of one run).
+fn audit_states(run: &weft::suite::SuiteRun, states: &[[Vec<f32>; 3]]) -> weft::Result<(f64, u64)> {
+    use weft::self_collision::audit;
+    let rule = run.rest_rule()?;
+    let d = run.distance();
+    let (mut deepest, mut crossings) = (0.0f64, 0u64);
+    fn s(x: &[Vec<f32>; 3]) -> [&[f32]; 3] {
+        [&x[0][..], &x[1][..], &x[2][..]]
+    }
+    for w in states.windows(2) {
+        deepest = deepest.max(audit::deepest_violation(s(&w[1]), &rule, d)? as f64);
+        crossings += audit::count_crossings(s(&w[0]), s(&w[1]), run.world.triangles(), &rule, 2.0 * d)? as u64;
+    }
+    Ok((deepest, crossings))
+}
+
 /// Step times (ms, the measure's stage subtracted) of `steps` steps; with `audit`, also the
 /// deepest violation and the crossings of every step (outside the timed steps).
 fn timed_run(run: &mut weft::suite::SuiteRun, steps: u32, audit: bool) -> weft::Result<(Vec<f64>, f64, u64)> {
     let mut ms = Vec::with_capacity(steps as usize);
     let (mut deepest, mut crossings) = (0.0f64, 0u64);
-    for _ in 0..steps {
+    let copy = |run: &weft::suite::SuiteRun| run.world.positions().map(|a| a.to_vec());
+    let mut states = if audit { vec![copy(run)] } else { Vec::new() };
+    for k in 0..steps {
         run.prepare_step()?;
         let m0 = stage_s(&run.world, MEASURE_STAGE);
         let t0 = std::time::Instant::now();
@@ -291,8 +327,13 @@ fn timed_run(run: &mut weft::suite::SuiteRun, steps: u32, audit: bool) -> weft::
         let wall = t0.elapsed().as_secs_f64();
         ms.push((wall - (stage_s(&run.world, MEASURE_STAGE) - m0)) * 1e3);
         if audit {
-            deepest = deepest.max(run.deepest_violation()? as f64);
-            crossings += run.crossings()? as u64;
+            states.push(copy(run));
+            if states.len() > AUDIT_CHUNK || k + 1 == steps {
+                let (dv, c) = audit_states(run, &states)?;
+                deepest = deepest.max(dv);
+                crossings += c;
+                states.drain(..states.len() - 1);
+            }
         }
     }
     Ok((ms, deepest, crossings))
@@ -300,8 +341,8 @@ fn timed_run(run: &mut weft::suite::SuiteRun, steps: u32, audit: bool) -> weft::
 
 /// `weft bench --self-collision`: each suite scene on 1 and 2 threads, with and without
 /// self-collision, `steps` steps each; with `pictures`, the last state of each scene as
-/// `DIR/NAME.png`.
-pub fn bench_self_collision(json: bool, dir: &Path, steps: u32, pictures: Option<&Path>) -> weft::Result<ExitCode> {
+/// `DIR/NAME.png`; `only` (if not empty) names the scenes to run.
+pub fn bench_self_collision(json: bool, dir: &Path, steps: u32, pictures: Option<&Path>, only: &[String]) -> weft::Result<ExitCode> {
     use weft::suite::{SuiteRun, SCENES};
     if steps == 0 {
         return Err(weft::WeftError::param("steps", 0, "must be at least 1"));
@@ -309,8 +350,15 @@ pub fn bench_self_collision(json: bool, dir: &Path, steps: u32, pictures: Option
     if let Some(p) = pictures {
         std::fs::create_dir_all(p).map_err(|e| weft::WeftError::io(p, e))?;
     }
+    if let Some(bad) = only.iter().find(|o| !SCENES.contains(&o.as_str())) {
+        return Err(weft::WeftError::param(
+            "only",
+            bad,
+            format!("expected scenes among {}", SCENES.join(", ")),
+        ));
+    }
     let mut rows = Vec::new();
-    for name in SCENES {
+    for name in SCENES.into_iter().filter(|s| only.is_empty() || only.iter().any(|o| o == s)) {
         let mut audit = (0.0, 0);
         for threads in [1usize, 2] {
             let mut run = SuiteRun::load(dir, name, threads, true)?;
@@ -330,6 +378,7 @@ pub fn bench_self_collision(json: bool, dir: &Path, steps: u32, pictures: Option
             let (n, substeps) = (w.particle_count(), w.params().substeps);
             let (median, p95) = median_p95(ms);
             let mut off = SuiteRun::load(dir, name, threads, false)?;
+            off.world.set_stage_clock(true);
             let (ms_off, _, _) = timed_run(&mut off, steps, false)?;
             let (median_off, p95_off) = median_p95(ms_off);
             rows.push(SelfCollisionFigure {
@@ -346,6 +395,8 @@ pub fn bench_self_collision(json: bool, dir: &Path, steps: u32, pictures: Option
                 avg_collision_pct: w.self_collision_stats().average_pct,
                 max_violation_m: audit.0,
                 crossings: audit.1,
+                stages_ms: stages_ms(w),
+                stages_ms_without: stages_ms(&off.world),
             });
             if let (Some(dir), 1) = (pictures, threads) {
                 let mut positions = Vec::new();
@@ -396,6 +447,12 @@ pub fn bench_self_collision(json: bool, dir: &Path, steps: u32, pictures: Option
             r.max_violation_m,
             r.crossings
         );
+    }
+    println!("mean ms per step by stage (with / without self-collision):");
+    for r in &rows {
+        let without = |s: &str| r.stages_ms_without.iter().find(|(n, _)| *n == s).map_or(0.0, |(_, t)| *t);
+        let line: Vec<String> = r.stages_ms.iter().map(|(s, t)| format!("{s} {t:.3}/{:.3}", without(s))).collect();
+        println!("  {} {}t: {}", r.scene, r.threads, line.join(", "));
     }
     Ok(ExitCode::SUCCESS)
 }

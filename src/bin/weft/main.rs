@@ -70,6 +70,9 @@ enum Command {
         /// With --self-collision: write the last state of each scene as DIR/NAME.png.
         #[arg(long, value_name = "DIR")]
         pictures: Option<PathBuf>,
+        /// With --self-collision: run only these scenes (comma-separated names).
+        #[arg(long, value_delimiter = ',')]
+        only: Vec<String>,
     },
     /// Time against error for a grid of integrators and settings, against a cached reference.
     Accuracy(accuracy::AccuracyArgs),
@@ -90,8 +93,9 @@ fn main() -> ExitCode {
             steps,
             suite,
             pictures,
+            only,
             ..
-        } => bench::bench_self_collision(json, &suite, steps, pictures.as_deref()),
+        } => bench::bench_self_collision(json, &suite, steps, pictures.as_deref(), &only),
         Command::Bench { json, scenes, .. } => bench::bench(json, &scenes),
         Command::Accuracy(args) => accuracy::accuracy(args),
         Command::Reproduce(what) => reproduce::reproduce(what),
