@@ -21,6 +21,7 @@ pub mod render;
 pub mod scene;
 pub mod self_collision;
 pub mod strands;
+pub mod suite;
 #[cfg(test)]
 mod test_rng;
 pub mod world;

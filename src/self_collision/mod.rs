@@ -89,6 +89,7 @@
 //! and averaged over the steps ([`SelfCollisionStats`]).
 
 pub(crate) mod active;
+pub mod audit;
 pub mod config;
 pub mod hash;
 pub(crate) mod near;

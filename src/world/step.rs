@@ -186,6 +186,7 @@ impl World {
         if has_obstacles {
             self.obstacles.prepare(&self.particles, &self.cloths, &self.strands);
         }
+        self.clock.lap("step setup");
         let sc_start = std::time::Instant::now();
         let sc = {
             let p = &self.particles;
@@ -194,11 +195,12 @@ impl World {
         };
         let mut sc_time = sc_start.elapsed();
         if sc.is_some() {
+            self.clock.lap("self-collision lists");
             let p = &self.particles;
             let steps = self.steps;
             self.selfcol.record_start_state([&p.x, &p.y, &p.z], n, steps, parallel);
+            self.clock.lap("self-collision measure");
         }
-        self.clock.lap("step setup");
         // Without wind nothing runs between a substep's update and the next substep's predict,
         // and both are element-wise, so the update pass runs the next predict on each chunk
         // while it is in cache: the same bits as two passes, one sweep over 1M particles fewer

@@ -247,3 +247,232 @@ pub fn bench(json: bool, scenes_dir: &Path) -> weft::Result<ExitCode> {
     }
     Ok(ExitCode::SUCCESS)
 }
+
+/// One row of `weft bench --self-collision`: one suite scene on one thread count.
+#[derive(Serialize)]
+struct SelfCollisionFigure {
+    scene: String,
+    particles: usize,
+    substeps: u32,
+    threads: usize,
+    /// Self-collision stages of the stage clock (lists, clamp, pairs and correction) per
+    /// particle per substep, ns.
+    collision_ns_per_particle_substep: f64,
+    /// Those stages' share of the step's wall time (the measure's stage left out).
+    collision_share: f64,
+    step_ms_median: f64,
+    step_ms_p95: f64,
+    /// The same scene, same threads, self-collision off, in the same run of the command.
+    step_ms_median_without: f64,
+    step_ms_p95_without: f64,
+    /// The paper's average collision: mean over the steps of the share of particles with a
+    /// non-neighbour (rest distance above 1.5 d) closer than 0.9 d, %.
+    avg_collision_pct: f64,
+    /// Deepest `d - |x_i - x_j|` over the steps between non-neighbours (the pipeline's rule:
+    /// another cloth or more than `REST_SKIP_FACTOR d` apart at rest), m.
+    max_violation_m: f64,
+    /// Layer crossings summed over the steps (`self_collision::audit::count_crossings`).
+    crossings: u64,
+    /// Mean wall ms per step of each stage of the stage clock, with self-collision.
+    stages_ms: Vec<(&'static str, f64)>,
+    /// The same without self-collision.
+    stages_ms_without: Vec<(&'static str, f64)>,
+}
+
+fn stages_ms(w: &weft::World) -> Vec<(&'static str, f64)> {
+    let steps = w.stage_clock().steps().max(1) as f64;
+    w.stage_clock()
+        .stages()
+        .iter()
+        .map(|(s, t)| (*s, t.as_secs_f64() * 1e3 / steps))
+        .collect()
+}
+
+/// Stages of the step that belong to self-collision (the clamp's mean velocity, summed
+/// inside predict, is not among them).
+const COLLISION_STAGES: [&str; 3] = ["self-collision lists", "self-collision clamp", "self-collision pairs"];
+const MEASURE_STAGE: &str = "self-collision measure";
+
+fn stage_s(w: &weft::World, name: &str) -> f64 {
+    w.stage_clock()
+        .stages()
+        .iter()
+        .filter(|(s, _)| *s == name)
+        .map(|(_, t)| t.as_secs_f64())
+        .sum()
+}
+
+fn median_p95(mut ms: Vec<f64>) -> (f64, f64) {
+    if ms.is_empty() {
+        return (0.0, 0.0);
+    }
+    ms.sort_by(f64::total_cmp);
+    let at = |q: f64| ms[((ms.len() - 1) as f64 * q).round() as usize];
+    (at(0.5), at(0.95))
+}
+
+/// States kept between two audits: the audits run between steps, and a pause between steps
+/// lets the pool's workers sleep (waking them costs the next step), so they run once every
+/// `AUDIT_CHUNK` steps, on the kept states, rather than after every step.
+const AUDIT_CHUNK: usize = 30;
+
+/// Deepest violation and crossings over consecutive `states` (positions of one run).
+fn audit_states(run: &weft::suite::SuiteRun, states: &[[Vec<f32>; 3]]) -> weft::Result<(f64, u64)> {
+    use weft::self_collision::audit;
+    let rule = run.rest_rule()?;
+    let d = run.distance();
+    let (mut deepest, mut crossings) = (0.0f64, 0u64);
+    fn s(x: &[Vec<f32>; 3]) -> [&[f32]; 3] {
+        [&x[0][..], &x[1][..], &x[2][..]]
+    }
+    for w in states.windows(2) {
+        deepest = deepest.max(audit::deepest_violation(s(&w[1]), &rule, d)? as f64);
+        crossings += audit::count_crossings(s(&w[0]), s(&w[1]), run.world.triangles(), &rule, 2.0 * d)? as u64;
+    }
+    Ok((deepest, crossings))
+}
+
+/// Step times (ms, the measure's stage subtracted) of `steps` steps; with `audit`, also the
+/// deepest violation and the crossings of every step (outside the timed steps).
+fn timed_run(run: &mut weft::suite::SuiteRun, steps: u32, audit: bool) -> weft::Result<(Vec<f64>, f64, u64)> {
+    let mut ms = Vec::with_capacity(steps as usize);
+    let (mut deepest, mut crossings) = (0.0f64, 0u64);
+    let copy = |run: &weft::suite::SuiteRun| run.world.positions().map(|a| a.to_vec());
+    let mut states = if audit { vec![copy(run)] } else { Vec::new() };
+    for k in 0..steps {
+        run.prepare_step()?;
+        let m0 = stage_s(&run.world, MEASURE_STAGE);
+        let t0 = std::time::Instant::now();
+        run.world_step()?;
+        let wall = t0.elapsed().as_secs_f64();
+        ms.push((wall - (stage_s(&run.world, MEASURE_STAGE) - m0)) * 1e3);
+        if audit {
+            states.push(copy(run));
+            if states.len() > AUDIT_CHUNK || k + 1 == steps {
+                let (dv, c) = audit_states(run, &states)?;
+                deepest = deepest.max(dv);
+                crossings += c;
+                states.drain(..states.len() - 1);
+            }
+        }
+    }
+    Ok((ms, deepest, crossings))
+}
+
+/// `weft bench --self-collision`: each suite scene on 1 and 2 threads, with and without
+/// self-collision, `steps` steps each; with `pictures`, the last state of each scene as
+/// `DIR/NAME.png`; `only` (if not empty) names the scenes to run.
+pub fn bench_self_collision(json: bool, dir: &Path, steps: u32, pictures: Option<&Path>, only: &[String]) -> weft::Result<ExitCode> {
+    use weft::suite::{SuiteRun, SCENES};
+    if steps == 0 {
+        return Err(weft::WeftError::param("steps", 0, "must be at least 1"));
+    }
+    if let Some(p) = pictures {
+        std::fs::create_dir_all(p).map_err(|e| weft::WeftError::io(p, e))?;
+    }
+    if let Some(bad) = only.iter().find(|o| !SCENES.contains(&o.as_str())) {
+        return Err(weft::WeftError::param(
+            "only",
+            bad,
+            format!("expected scenes among {}", SCENES.join(", ")),
+        ));
+    }
+    let mut rows = Vec::new();
+    for name in SCENES.into_iter().filter(|s| only.is_empty() || only.iter().any(|o| o == s)) {
+        let mut audit = (0.0, 0);
+        for threads in [1usize, 2] {
+            let mut run = SuiteRun::load(dir, name, threads, true)?;
+            if let Some(mut sc) = run.world.self_collision().cloned() {
+                sc.measure = true;
+                run.world.set_self_collision(Some(sc))?;
+            }
+            let span = crate::pictures::plane_span(&run.world);
+            run.world.set_stage_clock(true);
+            let (ms, deepest, crossings) = timed_run(&mut run, steps, threads == 1)?;
+            if threads == 1 {
+                audit = (deepest, crossings);
+            }
+            let w = &run.world;
+            let collision_s: f64 = COLLISION_STAGES.iter().map(|s| stage_s(w, s)).sum();
+            let clock_s = w.stage_clock().total().as_secs_f64() - stage_s(w, MEASURE_STAGE);
+            let (n, substeps) = (w.particle_count(), w.params().substeps);
+            let (median, p95) = median_p95(ms);
+            let mut off = SuiteRun::load(dir, name, threads, false)?;
+            off.world.set_stage_clock(true);
+            let (ms_off, _, _) = timed_run(&mut off, steps, false)?;
+            let (median_off, p95_off) = median_p95(ms_off);
+            rows.push(SelfCollisionFigure {
+                scene: name.to_string(),
+                particles: n,
+                substeps,
+                threads,
+                collision_ns_per_particle_substep: collision_s * 1e9 / (steps as f64 * n as f64 * substeps as f64),
+                collision_share: if clock_s > 0.0 { collision_s / clock_s } else { 0.0 },
+                step_ms_median: median,
+                step_ms_p95: p95,
+                step_ms_median_without: median_off,
+                step_ms_p95_without: p95_off,
+                avg_collision_pct: w.self_collision_stats().average_pct,
+                max_violation_m: audit.0,
+                crossings: audit.1,
+                stages_ms: stages_ms(w),
+                stages_ms_without: stages_ms(&off.world),
+            });
+            if let (Some(dir), 1) = (pictures, threads) {
+                let mut positions = Vec::new();
+                w.positions_interleaved(&mut positions);
+                let frame = crate::pictures::Frame {
+                    positions,
+                    normals: Vec::new(),
+                    time: w.time(),
+                    obstacles: crate::pictures::obstacle_items(w, span),
+                };
+                let style = crate::pictures::Style::default();
+                let (width, height) = (480, 360);
+                let frames = std::slice::from_ref(&frame);
+                let cam =
+                    crate::pictures::shared_camera(w, frames, width as f32 / height as f32, run.camera_eye, run.camera_target, style)?;
+                crate::pictures::render_frame(w, &frame, width, height, cam, style)?.write_png(&dir.join(format!("{name}.png")))?;
+            }
+            if json {
+                println!(
+                    "{}",
+                    serde_json::to_string(rows.last().expect("pushed")).map_err(|e| weft::WeftError::Scene(e.to_string()))?
+                );
+            }
+        }
+    }
+    if json {
+        return Ok(ExitCode::SUCCESS);
+    }
+    println!("self-collision suite, {steps} steps a run; step ms with self-collision (median, p95) and without (median)");
+    println!(
+        "{:<8} {:>7} {:>3} {:>3} {:>9} {:>6} {:>8} {:>8} {:>8} {:>6} {:>9} {:>10} {:>9}",
+        "scene", "parts", "sub", "thr", "coll ns", "share", "median", "p95", "without", "ratio", "avg coll%", "violation", "crossings"
+    );
+    for r in &rows {
+        println!(
+            "{:<8} {:>7} {:>3} {:>3} {:>9.1} {:>5.0}% {:>8.3} {:>8.3} {:>8.3} {:>5.2}x {:>9.4} {:>10.2e} {:>9}",
+            r.scene,
+            r.particles,
+            r.substeps,
+            r.threads,
+            r.collision_ns_per_particle_substep,
+            r.collision_share * 100.0,
+            r.step_ms_median,
+            r.step_ms_p95,
+            r.step_ms_median_without,
+            r.step_ms_median / r.step_ms_median_without,
+            r.avg_collision_pct,
+            r.max_violation_m,
+            r.crossings
+        );
+    }
+    println!("mean ms per step by stage (with / without self-collision):");
+    for r in &rows {
+        let without = |s: &str| r.stages_ms_without.iter().find(|(n, _)| *n == s).map_or(0.0, |(_, t)| *t);
+        let line: Vec<String> = r.stages_ms.iter().map(|(s, t)| format!("{s} {t:.3}/{:.3}", without(s))).collect();
+        println!("  {} {}t: {}", r.scene, r.threads, line.join(", "));
+    }
+    Ok(ExitCode::SUCCESS)
+}

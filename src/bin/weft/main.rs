@@ -4,6 +4,7 @@
 //! weft run scenes/hanging.toml            # simulate, write out/hanging/{final.png,frames.png,summary.json}
 //! weft check scenes/flag.toml             # what the scene will simulate, and its memory
 //! weft run --resume out/big/checkpoint.bin
+//! weft bench --self-collision [--json]    # the self-collision suite on 1 and 2 threads
 //! weft reproduce nurbs [--json]           # the NURBS thesis' cost claim
 //! weft reproduce landovsky --quick        # our seconds beside Landovskaya et al.'s
 //! weft reproduce vccpbd --quick           # the VcCPBD paper's table, ours beside theirs
@@ -56,6 +57,22 @@ enum Command {
         /// write DIR/scaling.md (table) and DIR/scaling.svg (plot).
         #[arg(long, value_name = "DIR")]
         scaling: Option<PathBuf>,
+        /// Instead of the report, run the self-collision suite (`scenes/self-collision/` and
+        /// the twist) on 1 and 2 threads, with and without self-collision.
+        #[arg(long)]
+        self_collision: bool,
+        /// Steps of each suite run.
+        #[arg(long, default_value_t = 240)]
+        steps: u32,
+        /// Directory of the suite's scene files.
+        #[arg(long, default_value = "scenes/self-collision")]
+        suite: PathBuf,
+        /// With --self-collision: write the last state of each scene as DIR/NAME.png.
+        #[arg(long, value_name = "DIR")]
+        pictures: Option<PathBuf>,
+        /// With --self-collision: run only these scenes (comma-separated names).
+        #[arg(long, value_delimiter = ',')]
+        only: Vec<String>,
     },
     /// Time against error for a grid of integrators and settings, against a cached reference.
     Accuracy(accuracy::AccuracyArgs),
@@ -70,6 +87,15 @@ fn main() -> ExitCode {
         Command::Run(args) => run::run(args),
         Command::Check { scene } => check::check(&scene),
         Command::Bench { scaling: Some(dir), .. } => scaling::scaling(&dir).map(|()| ExitCode::SUCCESS),
+        Command::Bench {
+            self_collision: true,
+            json,
+            steps,
+            suite,
+            pictures,
+            only,
+            ..
+        } => bench::bench_self_collision(json, &suite, steps, pictures.as_deref(), &only),
         Command::Bench { json, scenes, .. } => bench::bench(json, &scenes),
         Command::Accuracy(args) => accuracy::accuracy(args),
         Command::Reproduce(what) => reproduce::reproduce(what),

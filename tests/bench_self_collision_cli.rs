@@ -1,0 +1,49 @@
+//! `weft bench --self-collision --json`: one JSON object a scene and thread count, with the
+//! field names the suite's issue fixes, and figures that can be checked without timing.
+
+use std::process::Command;
+
+#[test]
+fn bench_self_collision_json_has_the_fields_and_plausible_figures() {
+    let out = Command::new(env!("CARGO_BIN_EXE_weft"))
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .args(["bench", "--self-collision", "--json", "--only", "flag,twist", "--steps", "4"])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8(out.stdout).unwrap();
+    let rows: Vec<serde_json::Value> = text.lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+    assert_eq!(rows.len(), 4, "two scenes on 1 and 2 threads: {text}");
+    for r in &rows {
+        for key in [
+            "scene",
+            "particles",
+            "substeps",
+            "threads",
+            "collision_ns_per_particle_substep",
+            "step_ms_median",
+            "step_ms_p95",
+            "step_ms_median_without",
+            "avg_collision_pct",
+            "max_violation_m",
+        ] {
+            assert!(r.get(key).is_some(), "{key} missing in {r}");
+        }
+        assert_eq!(r["substeps"], 10);
+        assert!(r["collision_ns_per_particle_substep"].as_f64().unwrap() > 0.0);
+        assert!(r["step_ms_p95"].as_f64().unwrap() >= r["step_ms_median"].as_f64().unwrap());
+    }
+    assert_eq!(rows[0]["scene"], "twist");
+    assert_eq!(rows[0]["particles"], 4000);
+    assert_eq!(rows[2]["scene"], "flag");
+    assert_eq!(rows[2]["particles"], 2400);
+    assert_eq!(rows[3]["threads"], 2);
+    // A scene name that is not in the suite is refused.
+    let bad = Command::new(env!("CARGO_BIN_EXE_weft"))
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .args(["bench", "--self-collision", "--only", "nope", "--steps", "1"])
+        .output()
+        .unwrap();
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("nope"));
+}
