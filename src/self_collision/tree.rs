@@ -301,27 +301,26 @@ impl ParticleTree {
         out: &mut Neighbours,
         exec: Exec,
     ) -> Result<()> {
-        if exec.parallel() {
-            return self.query_all(x, y, z, n, max_dist, out);
+        match (exec.parallel(), exec.simd()) {
+            (true, _) => self.query_all(x, y, z, n, max_dist, out),
+            (false, true) => self.query_serial::<true>(x, y, z, n, max_dist, out),
+            (false, false) => self.query_serial::<false>(x, y, z, n, max_dist, out),
         }
-        if !exec.simd() {
-            return self.query_all_serial(x, y, z, n, max_dist, out);
-        }
-        self.check_n(x, y, z, n)?;
-        let md2 = check_max_dist(max_dist)?;
-        Self::check_unchanged((0..n).all(|i| self.unchanged(x, y, z, i)))?;
-        let r = search_radius(max_dist);
-        out.fill_serial(n, |i, buf| self.scan::<true>(x, y, z, i, md2, r, buf))
     }
 
     /// Serial, scalar twin of [`ParticleTree::query_all`] (no threads, no lanes); produces
     /// identical lists.
     pub fn query_all_serial(&self, x: &[f32], y: &[f32], z: &[f32], n: usize, max_dist: f32, out: &mut Neighbours) -> Result<()> {
+        self.query_serial::<false>(x, y, z, n, max_dist, out)
+    }
+
+    /// The serial query of every particle, with or without lanes.
+    fn query_serial<const SIMD: bool>(&self, x: &[f32], y: &[f32], z: &[f32], n: usize, max_dist: f32, out: &mut Neighbours) -> Result<()> {
         self.check_n(x, y, z, n)?;
         let md2 = check_max_dist(max_dist)?;
         Self::check_unchanged((0..n).all(|i| self.unchanged(x, y, z, i)))?;
         let r = search_radius(max_dist);
-        out.fill_serial(n, |i, buf| self.scan::<false>(x, y, z, i, md2, r, buf))
+        out.fill_serial(n, |i, buf| self.scan::<SIMD>(x, y, z, i, md2, r, buf))
     }
 
     /// Appends the sorted neighbours of particle `i` to `buf`.
@@ -395,4 +394,29 @@ fn split(ids: &mut [u32], level: u32, x: &[f32], y: &[f32], z: &[f32], depth: u3
     let (left, right) = ids.split_at_mut(mid);
     split(left, level + 1, x, y, z, depth, leaf_start);
     split(right, level + 1, x, y, z, depth, leaf_start);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::data::exec::Exec;
+
+    /// The query with each `Exec` (parallel, serial with and without lanes) gives the brute
+    /// force's lists.
+    #[test]
+    fn every_exec_gives_the_brute_force_lists() {
+        let mut r = crate::test_rng::unit(5);
+        let n = 700;
+        let p: [Vec<f32>; 3] = std::array::from_fn(|_| (0..n).map(|_| 0.3 * r()).collect());
+        let d = 0.02;
+        let mut want = Neighbours::new();
+        want.fill_brute_force(&p[0], &p[1], &p[2], n, d).unwrap();
+        let tree = ParticleTree::build(&p[0], &p[1], &p[2], n, TreeShape::LeafSize(8)).unwrap();
+        let mut got = Neighbours::new();
+        for exec in [Exec::Scalar, Exec::Simd, Exec::Parallel, Exec::ScalarParallel] {
+            tree.query_all_exec(&p[0], &p[1], &p[2], n, d, &mut got, exec).unwrap();
+            assert_eq!(got, want, "{exec:?}");
+        }
+        assert!(want.total() > 100, "{}", want.total());
+    }
 }

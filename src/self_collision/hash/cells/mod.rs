@@ -99,28 +99,20 @@ impl SpatialHash {
     /// [`SpatialHash::query_upper_unskipped_cells`] when `exec` is parallel, else a serial walk
     /// with the lanes of `exec` (never entering rayon); identical lists.
     pub(crate) fn query_upper_unskipped_cells_exec(&self, max_dist: f32, skip: f32, out: &mut Neighbours, exec: Exec) -> Result<()> {
-        if exec.parallel() {
-            return self.query_upper_unskipped_cells(max_dist, skip, out);
+        match (exec.parallel(), exec.simd()) {
+            (true, _) => self.query_upper_unskipped_cells(max_dist, skip, out),
+            (false, true) => self.cells_serial::<true>(max_dist, skip, out),
+            (false, false) => self.cells_serial::<false>(max_dist, skip, out),
         }
-        if !exec.simd() {
-            return self.query_upper_unskipped_cells_serial(max_dist, skip, out);
-        }
-        let (md2, s2) = self.check_rest_query(max_dist, skip)?;
-        let k = Reach {
-            md2,
-            r: search_radius(max_dist),
-            s2,
-            len: self.scan_len(),
-        };
-        out.fill_pairs_serial(self.n, |buf| {
-            for b in 0..self.table_size {
-                self.bucket_pairs::<true>(b, k, buf);
-            }
-        })
     }
 
     /// Serial, scalar twin of [`SpatialHash::query_upper_unskipped_cells`]; identical lists.
     pub fn query_upper_unskipped_cells_serial(&self, max_dist: f32, skip: f32, out: &mut Neighbours) -> Result<()> {
+        self.cells_serial::<false>(max_dist, skip, out)
+    }
+
+    /// The serial walk over every bucket, with or without lanes.
+    fn cells_serial<const SIMD: bool>(&self, max_dist: f32, skip: f32, out: &mut Neighbours) -> Result<()> {
         let (md2, s2) = self.check_rest_query(max_dist, skip)?;
         let k = Reach {
             md2,
@@ -130,7 +122,7 @@ impl SpatialHash {
         };
         out.fill_pairs_serial(self.n, |buf| {
             for b in 0..self.table_size {
-                self.bucket_pairs::<false>(b, k, buf);
+                self.bucket_pairs::<SIMD>(b, k, buf);
             }
         })
     }

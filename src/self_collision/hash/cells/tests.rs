@@ -1,6 +1,7 @@
 //! Tests of the half-shell cell query: equal to the particle query and to the brute force.
 
 use super::*;
+use crate::data::exec::Exec;
 use crate::test_rng::signed;
 
 use super::super::rest::tests::{lattices, Scene};
@@ -22,8 +23,8 @@ fn brute(p: &[Vec<f32>; 3], rest: &[Vec<f32>; 3], cloth: &[u32], reach: f32, ski
     nb
 }
 
-/// Every query of the scene (cells parallel on 1 and 2 threads, cells serial, the particle
-/// query) equals the brute force; returns the number of kept pairs.
+/// Every query of the scene (cells parallel on 1 and 2 threads, cells serial, cells with each
+/// `Exec`, the particle query) equals the brute force; returns the number of kept pairs.
 fn check(s: &Scene, spacing: f32, reach: f32, skip: f32) -> usize {
     let (p, rest, cloth) = s;
     let n = cloth.len();
@@ -41,6 +42,10 @@ fn check(s: &Scene, spacing: f32, reach: f32, skip: f32) -> usize {
     }
     h.query_upper_unskipped_cells_serial(reach, skip, &mut got).unwrap();
     assert_eq!(got, want, "cells serial");
+    for exec in [Exec::Scalar, Exec::Simd, Exec::Parallel, Exec::ScalarParallel] {
+        h.query_upper_unskipped_cells_exec(reach, skip, &mut got, exec).unwrap();
+        assert_eq!(got, want, "cells, {exec:?}");
+    }
     want.total()
 }
 
