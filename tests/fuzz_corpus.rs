@@ -10,7 +10,9 @@ fn replay(target: &str, f: fn(&[u8])) {
     entries.sort();
     for p in entries {
         let data = std::fs::read(&p).unwrap();
-        f(&data);
+        if std::panic::catch_unwind(|| f(&data)).is_err() {
+            panic!("{} panicked (above)", p.display());
+        }
         count += 1;
     }
     assert!(count > 0, "no corpus in {}", dir.display());

@@ -75,25 +75,29 @@ impl TriMesh {
     }
 }
 
-/// OBJ text with `vt` and `vn` lines dropped and face elements `v/vt/vn` cut to `v`.
+/// OBJ text with `vt` and `vn` lines dropped and face elements `v/vt/vn` cut to `v`. Lines
+/// are split into words as `tobj` splits them (Unicode whitespace, so a line that starts with
+/// a vertical tab or carriage returns is a keyword line for both); a line that is not UTF-8 is
+/// kept as it is (`tobj` refuses it).
 pub fn positions_only(raw: &[u8]) -> Vec<u8> {
-    let ws = |b: &u8| *b == b' ' || *b == b'\t';
     let mut out = Vec::with_capacity(raw.len());
     for line in raw.split(|b| *b == b'\n') {
-        let start = line.iter().position(|b| !ws(b)).unwrap_or(line.len());
-        let t = &line[start..];
-        let keyword = |k: &[u8]| t.starts_with(k) && t.get(k.len()).is_none_or(|b| ws(b) || *b == b'\r');
-        if keyword(b"vt") || keyword(b"vn") {
-            continue;
-        }
-        if keyword(b"f") {
-            out.push(b'f');
-            for token in t[1..].split(|b| ws(b) || *b == b'\r').filter(|s| !s.is_empty()) {
-                out.push(b' ');
-                out.extend(token.split(|b| *b == b'/').next().unwrap_or(&[]));
-            }
-        } else {
+        let Ok(text) = std::str::from_utf8(line) else {
             out.extend_from_slice(line);
+            out.push(b'\n');
+            continue;
+        };
+        let mut words = text.split_whitespace();
+        match words.next() {
+            Some("vt" | "vn") => continue,
+            Some("f") => {
+                out.push(b'f');
+                for w in words {
+                    out.push(b' ');
+                    out.extend_from_slice(w.split('/').next().unwrap_or("").as_bytes());
+                }
+            }
+            _ => out.extend_from_slice(line),
         }
         out.push(b'\n');
     }
@@ -127,5 +131,10 @@ mod tests {
         let (m, _) = TriMesh::from_obj_reader(&mut text.as_bytes(), "t.obj").unwrap();
         assert_eq!(m.face_count(), 1);
         assert_eq!(positions_only(b"  vt 1 2\nf 1/2/3\t4//5 6\r\nvn 0 0 1"), b"f 1 4 6\n".to_vec());
+        // Words split as tobj splits them: a vertical tab or carriage returns before the
+        // keyword (found by fuzzing: tobj overflowed on the texture index it still saw).
+        let text = "\x0bf 1/-3 2\nv 4 0 0\n\r\r\rvt 0 0";
+        assert_eq!(positions_only(text.as_bytes()), b"f 1 2\nv 4 0 0\n".to_vec());
+        assert!(TriMesh::from_obj_reader(&mut text.as_bytes(), "t.obj").is_err());
     }
 }
