@@ -84,13 +84,14 @@ fn fma_loop(iters: usize, seed: f32) -> f32 {
 /// Peak single-precision GFLOP/s of vector FMAs on `threads` threads (median of `reps`): two
 /// flops per lane per FMA, registers only.
 pub fn peak_gflops(threads: usize, reps: usize) -> Result<f64> {
-    use rayon::prelude::*;
     const ITERS: usize = 200_000;
     let t = threads.max(1);
     let pool = super::pool(t)?;
     let mut sink = 0.0f32;
+    // `broadcast` runs the loop once on every thread of the pool (a parallel iterator of `t`
+    // items may run them all on one thread).
     let secs = super::median_secs(reps, || {
-        sink += pool.install(|| (0..t).into_par_iter().map(|k| fma_loop(ITERS, k as f32)).sum::<f32>());
+        sink += pool.broadcast(|ctx| fma_loop(ITERS, ctx.index() as f32)).iter().sum::<f32>();
     });
     std::hint::black_box(sink);
     Ok((t * ITERS * CHAINS * LANES * 2) as f64 / secs / 1e9)
