@@ -56,7 +56,8 @@ struct Report {
     ms_per_step: Vec<SceneFigure>,
     /// Per effect, the step not named against named at zero strength.
     effect_cost: Vec<EffectCost>,
-    /// Peak single-precision vector GFLOP/s on the machine's threads, measured in this run.
+    /// Arithmetic peak of the roofline, single-precision vector GFLOP/s: one thread's FMA peak
+    /// measured in this run, times the machine's threads.
     peak_gflops: f64,
     /// The headline cases against the machine's limits (`weft::perf::roofline`).
     roofline: Vec<perf::roofline::RooflineCase>,
