@@ -1,4 +1,4 @@
-//! `weft bench`: a quick (< 60 s) report of the kernel figures for people without criterion
+//! `weft bench`: a quick (about 10 s) report of the kernel figures and the roofline for people without criterion
 //! patience.
 
 use std::path::Path;
