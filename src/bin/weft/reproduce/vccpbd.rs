@@ -381,14 +381,16 @@ pub fn run(args: VccpbdArgs) -> weft::Result<ExitCode> {
         );
     }
     println!();
-    println!("goal: 100x100 hash rows at least 50x faster than the paper; average collision below the paper's best 1.018%");
+    println!(
+        "100x100 hash rows against the paper (a ratio to times measured on a 1.5 GHz Core 2 Duo: it moves with the machine and its load; compare rows of one run, not runs of different days)"
+    );
     for resp in RESPONSES {
         let big: Vec<&Row> = rows
             .iter()
             .filter(|r| r.particles == 10_000 && r.broadphase == "hash" && r.response == resp.name())
             .collect();
         if big.is_empty() {
-            println!("  {:>14}: no 100x100 row was run (see --size), nothing to check", resp.name());
+            println!("  {:>14}: no 100x100 row was run (see --size)", resp.name());
             continue;
         }
         let ratio = big
@@ -397,10 +399,8 @@ pub fn run(args: VccpbdArgs) -> weft::Result<ExitCode> {
             .fold(f64::INFINITY, f64::min);
         let worst = big.iter().map(|r| r.avg_collision_pct).fold(0.0, f64::max);
         println!(
-            "  {:>14}: slowest ratio {ratio:.2}x ({}), worst average collision {worst:.3}% ({})",
-            resp.name(),
-            if ratio >= 50.0 { "met" } else { "NOT met" },
-            if worst < 1.018 { "met" } else { "NOT met" }
+            "  {:>14}: slowest row {ratio:.2}x the paper's speed; worst average collision {worst:.3}% (the paper's best: 1.018%)",
+            resp.name()
         );
     }
     Ok(ExitCode::SUCCESS)
