@@ -48,19 +48,37 @@ pub fn read_limited(path: &Path, limit: u64, what: &str) -> Result<Vec<u8>> {
             "not a regular file (the {what} must be a regular file, not a directory, device or pipe)"
         )));
     }
-    let too_big = |size: String| refuse(format!("{what} file is {size} bytes, more than the limit of {limit} bytes"));
     if meta.len() > limit {
-        return Err(too_big(meta.len().to_string()));
+        return Err(too_big(what, &meta.len().to_string(), limit, &path.display().to_string()));
     }
-    // Capacity from the validated metadata; the read stops one byte past the limit.
-    let mut bytes = Vec::with_capacity(meta.len() as usize);
-    file.take(limit.saturating_add(1))
+    // Capacity from the validated metadata.
+    read_to_limit(file, limit, what, &path.display().to_string(), meta.len() as usize)
+}
+
+/// Reads `reader` to its end, refusing more than `limit` bytes: the read stops one byte past
+/// the limit. `what` names the format and `name` the source in errors; `capacity` is the
+/// expected size (0 when unknown).
+pub fn read_to_limit(reader: impl Read, limit: u64, what: &str, name: &str, capacity: usize) -> Result<Vec<u8>> {
+    let mut bytes = Vec::with_capacity(capacity.min(limit as usize));
+    reader
+        .take(limit.saturating_add(1))
         .read_to_end(&mut bytes)
-        .map_err(|e| WeftError::io(path, e))?;
+        .map_err(|e| WeftError::Io {
+            path: name.to_string(),
+            message: e.to_string(),
+        })?;
     if bytes.len() as u64 > limit {
-        return Err(too_big(format!("more than {limit}")));
+        return Err(too_big(what, &format!("more than {limit}"), limit, name));
     }
     Ok(bytes)
+}
+
+/// The error of a `what` of `size` bytes over `limit`.
+fn too_big(what: &str, size: &str, limit: u64, name: &str) -> WeftError {
+    WeftError::Io {
+        path: name.to_string(),
+        message: format!("{what} file is {size} bytes, more than the limit of {limit} bytes"),
+    }
 }
 
 /// [`read_limited`] for text: the bytes must be UTF-8.

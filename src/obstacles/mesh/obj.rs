@@ -7,7 +7,6 @@
 
 use crate::obstacles::mesh::{MeshReport, TriMesh};
 use crate::{Result, WeftError};
-use std::io::Read;
 use std::path::Path;
 
 impl TriMesh {
@@ -16,29 +15,21 @@ impl TriMesh {
     pub fn from_obj(path: impl AsRef<Path>) -> Result<(TriMesh, MeshReport)> {
         let path = path.as_ref();
         let bytes = crate::files::read_limited(path, crate::files::OBJ_LIMIT, "OBJ mesh")?;
-        TriMesh::from_obj_reader(&mut std::io::Cursor::new(bytes), &path.display().to_string())
+        TriMesh::from_obj_bytes(&bytes, &path.display().to_string())
     }
 
     /// Loads OBJ text from any reader (at most [`crate::files::OBJ_LIMIT`] bytes); `name`
-    /// labels errors. Material libraries are ignored, and texture coordinates and normals are
-    /// removed before parsing ([`positions_only`]): weft uses neither, and `tobj` overflows on
-    /// some out-of-range texture indices.
+    /// labels errors. As [`TriMesh::from_obj`].
     pub fn from_obj_reader(reader: &mut impl std::io::BufRead, name: &str) -> Result<(TriMesh, MeshReport)> {
-        let mut raw = Vec::new();
-        reader
-            .take(crate::files::OBJ_LIMIT + 1)
-            .read_to_end(&mut raw)
-            .map_err(|e| WeftError::Io {
-                path: name.to_string(),
-                message: e.to_string(),
-            })?;
-        if raw.len() as u64 > crate::files::OBJ_LIMIT {
-            return Err(WeftError::Io {
-                path: name.to_string(),
-                message: format!("OBJ mesh is more than the limit of {} bytes", crate::files::OBJ_LIMIT),
-            });
-        }
-        let text = positions_only(&raw);
+        let raw = crate::files::read_to_limit(reader, crate::files::OBJ_LIMIT, "OBJ mesh", name, 0)?;
+        TriMesh::from_obj_bytes(&raw, name)
+    }
+
+    /// Loads OBJ text held in memory; `name` labels errors. Material libraries are ignored,
+    /// and texture coordinates and normals are removed before parsing ([`positions_only`]):
+    /// weft uses neither, and `tobj` overflows on some out-of-range texture indices.
+    fn from_obj_bytes(raw: &[u8], name: &str) -> Result<(TriMesh, MeshReport)> {
+        let text = positions_only(raw);
         let reader = &mut std::io::Cursor::new(text);
         let opts = tobj::LoadOptions {
             triangulate: true,
