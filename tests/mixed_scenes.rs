@@ -12,6 +12,8 @@
 //!   (XPBD, no triangle mesh) the two energies agree within [`REFERENCE_ENERGY_TOL`] of that
 //!   scale after every step.
 
+mod common;
+
 use proptest::prelude::*;
 use weft::reference::ReferenceWorld;
 use weft::scene::Scene;
@@ -125,7 +127,7 @@ fn state_bits(w: &World) -> Vec<u32> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(cases(48)))]
+    #![proptest_config(ProptestConfig::with_cases(common::cases(48)))]
 
     #[test]
     fn mixed_scenes_hold_their_invariants(c in arb_case()) {
@@ -197,9 +199,4 @@ fn self_collision_with_strands_steps() {
     let mut w = world(&c, "simd", 1);
     let dt = w.params().dt;
     w.step(dt).unwrap();
-}
-
-/// Cases per property: `default`, or `PROPTEST_CASES` when set (for long local runs).
-fn cases(default: u32) -> u32 {
-    std::env::var("PROPTEST_CASES").ok().and_then(|s| s.parse().ok()).unwrap_or(default)
 }

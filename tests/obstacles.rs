@@ -63,7 +63,7 @@ fn loose_world(substeps: u32) -> World {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(cases(64)))]
+    #![proptest_config(ProptestConfig::with_cases(common::cases(64)))]
     #[test]
     fn no_particle_ends_a_step_inside_a_closed_obstacle(
         which in 0usize..5,
@@ -436,9 +436,4 @@ fn strands_rest_on_an_obstacle_without_passing_through() {
     // Some strands do reach the floor (the test is not vacuous).
     let on_floor = w.positions()[1].iter().filter(|&&v| v < 0.5 * thickness + 2e-3).count();
     assert!(on_floor > 0, "no strand reached the floor");
-}
-
-/// Cases per property: `default`, or `PROPTEST_CASES` when set (for long local runs).
-fn cases(default: u32) -> u32 {
-    std::env::var("PROPTEST_CASES").ok().and_then(|s| s.parse().ok()).unwrap_or(default)
 }

@@ -27,16 +27,21 @@ use crate::model::params::SolverParams;
 use crate::model::self_collision::SelfCollision;
 use crate::World;
 
-/// Median of `reps` timings of `f`, in seconds.
-pub fn median_secs(reps: usize, mut f: impl FnMut()) -> f64 {
+/// `reps` (at least one) timings of `f` after one untimed run, in seconds.
+pub fn timings(reps: usize, mut f: impl FnMut()) -> Vec<f64> {
     f();
-    let mut t: Vec<f64> = (0..reps.max(1))
+    (0..reps.max(1))
         .map(|_| {
             let s = Instant::now();
             f();
             s.elapsed().as_secs_f64()
         })
-        .collect();
+        .collect()
+}
+
+/// Median of `reps` timings of `f`, in seconds.
+pub fn median_secs(reps: usize, f: impl FnMut()) -> f64 {
+    let mut t = timings(reps, f);
     t.sort_by(|a, b| a.total_cmp(b));
     t[t.len() / 2]
 }

@@ -67,15 +67,8 @@ pub fn stream_bandwidth(n: usize, threads: usize, reps: usize) -> Result<f64> {
 }
 
 /// The shortest of `reps` timings of `f` (after one untimed run), in seconds.
-fn best_secs(reps: usize, mut f: impl FnMut()) -> f64 {
-    f();
-    (0..reps.max(1))
-        .map(|_| {
-            let s = std::time::Instant::now();
-            f();
-            s.elapsed().as_secs_f64()
-        })
-        .fold(f64::INFINITY, f64::min)
+fn best_secs(reps: usize, f: impl FnMut()) -> f64 {
+    super::timings(reps, f).into_iter().fold(f64::INFINITY, f64::min)
 }
 
 /// Independent accumulators of [`peak_gflops`]'s loop: enough to cover the FMA latency.

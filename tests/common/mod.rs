@@ -3,6 +3,12 @@
 
 pub mod glb;
 
+/// Cases per property: `default`, or `PROPTEST_CASES` when set (for long local runs;
+/// `ProptestConfig::with_cases` alone ignores it).
+pub fn cases(default: u32) -> u32 {
+    std::env::var("PROPTEST_CASES").ok().and_then(|s| s.parse().ok()).unwrap_or(default)
+}
+
 use weft::{ClothDesc, Effects, Fabric, PinSpec, SolverParams, World};
 
 /// A world with one cloth.
