@@ -67,7 +67,7 @@ fn main() -> weft::Result<()> {
         println!(
             " {:7} {:6} {:5} {:5}",
             p.rebuilds - q.rebuilds,
-            w.self_collision_active_blocks(),
+            w.self_collision_pair_count(),
             p.mid_queries - q.mid_queries,
             p.mid_refreshes - q.mid_refreshes
         );

@@ -152,7 +152,7 @@ fn step_pairs_equal_brute_force() {
             let got = w.self_collision_pairs().expect("pairs after a step");
             assert!(got.total() > 0);
             assert_eq!(got, &brute, "{bp:?}");
-            assert!(w.self_collision_active_blocks() > 0);
+            assert!(w.self_collision_pair_count() > 0);
         }
     }
 }

@@ -3,18 +3,13 @@
 //! `(1 - PENETRATION_TOLERANCE) d`, measured outside the timed stage.
 //!
 //! After every step only when the settings ask for it ([`crate::self_collision::SelfCollision::measure`]): on
-//! a folded cloth it costs a large share of the step. It reuses the step's hash; a hash of its
-//! own with cells of the probe radius made the step slower (more look-ups than the candidates
-//! they save).
+//! a folded cloth it costs a large share of the step. It reuses the step's broadphase.
 
 use crate::data::exec::Exec;
 use rayon::prelude::*;
 
 use crate::error::Result;
-use crate::self_collision::neighbours::{within, Neighbours};
-use crate::self_collision::{
-    build_hash, dist2, SelfBroadphase, SelfCollisionData, SpatialHash, PENETRATION_TOLERANCE, QUERY_FACTOR, REST_SKIP_FACTOR,
-};
+use crate::self_collision::{dist2, SelfBroadphase, SelfCollisionData, PENETRATION_TOLERANCE, QUERY_FACTOR};
 
 impl SelfCollisionData {
     /// Measures the penetration of the state the lists were just built from (once per step
@@ -44,19 +39,23 @@ impl SelfCollisionData {
     }
 
     /// Fills the metric lists (non-neighbours within the penetration limit) from the
-    /// broadphase of the same positions `x` (built here if the step reused its candidates).
+    /// broadphase of the same positions `x` (built here if the step kept older candidates).
     fn probe_lists(&mut self, x: [&[f32]; 3], n: usize, parallel: bool) -> Result<()> {
         let d = self.distance();
         let lim = d * (1.0 - PENETRATION_TOLERANCE);
         let far2 = (1.5 * d) * (1.5 * d);
-        let Some(mut st) = self.state.take() else { return Ok(()) };
+        let Some(mut st) = self.state.take().filter(|s| s.ready) else {
+            return Ok(());
+        };
         let broadphase = self.config.as_ref().map(|c| c.broadphase).unwrap_or_default();
-        let built = if st.structure_fresh {
+        let keep = |i: usize, j: u32| self.cloth_of[i] != self.cloth_of[j as usize] || dist2(&self.rest, i, j as usize) > far2;
+        // The step's broadphase, unless it kept older candidates.
+        let built = if st.fresh {
             Ok(())
         } else {
             self.build_structure(&mut st, x, n, QUERY_FACTOR * d, broadphase, Exec::new(true, parallel))
         };
-        let keep = |i: usize, j: u32| self.cloth_of[i] != self.cloth_of[j as usize] || dist2(&self.rest, i, j as usize) > far2;
+        st.fresh = built.is_ok();
         let r = built.and_then(|_| match &st.tree {
             Some(t) if broadphase == SelfBroadphase::AabbTree => t
                 .query_all_exec(x[0], x[1], x[2], n, lim, &mut st.probe, Exec::new(true, parallel))
@@ -89,42 +88,5 @@ impl SelfCollisionData {
         } else {
             100.0 * count as f64 / n as f64
         }
-    }
-
-    /// The pair lists of the current step (empty before the first step with self-collision):
-    /// the candidate lists filtered with `|x_i - x_j| <= q` at the step's start, computed on
-    /// the first call of the step.
-    pub fn lists(&self) -> Option<&Neighbours> {
-        let st = self.state.as_ref().filter(|s| s.ready)?;
-        let q = QUERY_FACTOR * self.distance();
-        Some(st.lists.get_or_init(|| {
-            let (c, s) = (&st.verlet.cand, &st.start);
-            let mut out = Neighbours::new();
-            if st.verlet.is_direct() {
-                // No candidate lists this step: the query a fresh step start would run (on
-                // finite positions it cannot fail; on a failure the lists stay empty).
-                let n = s[0].len();
-                let mut hash = SpatialHash::new(n);
-                let skip = REST_SKIP_FACTOR * self.distance();
-                let _ = build_hash(&mut hash, [&s[0], &s[1], &s[2]], n, q, self.rest(), &self.cloth_of, true)
-                    .and_then(|_| hash.query_upper_unskipped_cells(q, skip, &mut out));
-                return out;
-            }
-            // Cannot fail: the candidates already fit in `u32` offsets.
-            let _ = out.fill_serial(c.len(), |i, buf| {
-                buf.extend(c.of(i).iter().filter(|&&j| {
-                    within(
-                        s[0][i],
-                        s[1][i],
-                        s[2][i],
-                        s[0][j as usize],
-                        s[1][j as usize],
-                        s[2][j as usize],
-                        q * q,
-                    )
-                }))
-            });
-            out
-        }))
     }
 }

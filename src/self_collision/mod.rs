@@ -1,55 +1,33 @@
 //! Cloth self-collision as particle–particle contacts (Müller's "Ten Minute Physics" self-collision and Shapri,
 //! Sulaiman & Bade 2016, VcCPBD).
 //!
-//! # The stage, once per step and once per substep
+//! # The pipeline
 //! Constants: `q = QUERY_FACTOR d` (3), hash cell `CELL_FACTOR q` (1), travel `T = TRAVEL_FACTOR d`
 //! (1), VcCPBD box radius `r = BOX_RADIUS d` (1: with `r = d/2` the box test put particles back
 //! into contact, 1.27% average collision on the 100x100 fold against 0.0007% with `r = d`).
 //!
-//! * **Before the substeps** ([`SelfCollisionData::begin_step`]), the paper's "generate
-//!   collision constraints" line of Algorithm 1, done once before the solver iterates: the
-//!   broadphase (spatial hash or AABB tree, refitted) finds, from the positions `x` at the start
-//!   of the step, every pair closer than the query radius `q = d + 2 T`, `d` the collision
-//!   distance and `T = d` the relative travel a particle is allowed in one step, and drops the
-//!   **rest neighbours** at once: pairs of one cloth whose rest distance is at most `q`
-//!   (`REST_SKIP_FACTOR`). These are held by the cloth's own stretch, shear and bend
-//!   constraints; in the flat cloth every pair the query finds is one, so before a fold the
-//!   compact lists are empty. Each pair is listed once, under its smaller id (the hash tests
-//!   `j > i` on the candidates before anything else). The substeps work only on the **active
-//!   blocks** (eight consecutive particles, one of them with a partner; see the `self_active`
-//!   module). Dropping rest neighbours is a rule, not an approximation: the same pairs would
-//!   be dropped by a recomputation in every substep (tests hold the compact pass equal, bit
-//!   for bit, to a brute force over all pairs with this rule).
-//! * **Reuse** (the `self_verlet` module): the broadphase actually runs with the reach
-//!   `q + skin` and its candidate lists are kept across steps while no particle has moved more
-//!   than `0.49 skin` since; each step's lists are the candidates within `q` of each other at
-//!   the step's start, exactly those of a fresh query (tests: lists equal and results bitwise
-//!   equal to a rebuild every step, 1 and 2 threads, the three responses and both
-//!   broadphases). The substeps test only a **near list** (candidates within `d + s₂` of where
-//!   it was built, kept while no particle moves more than `0.49 s₂`), and only the blocks that
-//!   received a contact are corrected; both exact too.
-//!
-//!   Why: on a folded cloth a fresh query every step dominated the stage, and the substeps
-//!   tested thousands of listed pairs of which few were in contact. After the fold settles
-//!   the lists last many steps and the near list holds a few hundred pairs; while the cloth
-//!   falls every step still runs the query. The skin is `3 d` only when the cloth moved at
-//!   most `d` a step since the last build (otherwise zero: a wider reach would cost more than
-//!   the reuse saves; see `self_verlet`). With the hash such slow steps build no candidate
-//!   lists at all: every block is active and the substeps query their mid list from a hash of
-//!   the predicted positions (`self_verlet`, `self_near`), refreshed afterwards for the few
-//!   particles that move past its bound (`self_mid`, per-particle references; the same
-//!   lists). The hash query tests the rest-neighbour rule in its eight-lane mask (the
-//!   `hash_rest` module), so only kept pairs leave the lanes, and walks the cells over a half
-//!   shell (the `hash_cells` module: each pair tested once, the rows looked up once a cell).
-//! * **After predict** (each substep): the speed clamp ([`crate::self_collision::response`]) limits a free
-//!   particle's velocity relative to the mean velocity of the free particles to `T / substeps`
-//!   a substep, so two particles close in by at most `2T` in a step: any pair that touches
-//!   during the step was in the lists. (The clamp is relative so a falling cloth still falls at
-//!   full speed; Müller's version clamps absolute speed to one cell a substep.) The clamp bounds the
-//!   predicted motion; the constraint sweeps move particles further, so the bound is the
-//!   model's, not a proof.
-//! * **After the constraint sweeps** (each substep): the pair pass below over the active
-//!   blocks, then the velocity-correction kernel [`crate::self_collision::response::apply`] on them.
+//! * **Once a step** ([`SelfCollisionData::begin_step`]), the paper's "generate collision
+//!   constraints" line of Algorithm 1: the broadphase (the spatial hash, a counting sort of the
+//!   particles over cells, or the AABB tree, refitted) lists, from the positions `x` at the
+//!   start of the step, every pair closer than the query radius `q = d + 2 T`, `d` the
+//!   collision distance and `T` the relative travel the speed clamp allows a particle in one
+//!   step. **Rest neighbours** are dropped as the list is written: pairs of one cloth whose
+//!   rest distance is at most `q` (`REST_SKIP_FACTOR`), held apart by the cloth's own
+//!   constraints (in a flat cloth every pair the query finds is one). Each pair is listed
+//!   once, `(i, j)` with `i < j`, ordered by `i` then `j`, and flattened into a
+//!   structure-of-arrays pair list (`pairs`). Both broadphases give the same list (tested
+//!   equal to each other and to a brute force).
+//! * **After predict** (each substep): the speed clamp ([`crate::self_collision::response`])
+//!   limits a free particle's velocity relative to the mean velocity of the free particles to
+//!   `T / substeps` a substep, so two particles close in by at most `2T` in a step: any pair
+//!   that touches during the step is in the list. (The clamp is relative so a falling cloth
+//!   still falls at full speed; Müller's version clamps absolute speed to one cell a substep.)
+//!   The clamp bounds the predicted motion; the constraint sweeps move particles further, so
+//!   the bound is the model's, not a proof.
+//! * **After the constraint sweeps** (each substep): the pair pass below over the whole list,
+//!   eight pairs at a time (`contacts`), then the velocity-correction kernel
+//!   [`crate::self_collision::response::apply`] on the blocks of eight particles that received
+//!   a contact.
 //!
 //! # Pair pass
 //! For each particle `i`, over its list (sorted ids, fixed order), with predicted positions `p`:
@@ -64,14 +42,13 @@
 //! movement speed: v_n = ((p_i - x_i) - (p_j - x_j)) · n;  if v_n < 0: c_i -= w_i / (w_i + w_j) v_n n
 //! ```
 //!
-//! Each unordered pair is tested once, on the upper half of the lists (`j > i`), eight
-//! candidates at a time (`f32x8` on gathered positions, with a 1e-4 margin so that the scalar
-//! test above makes every decision: the SIMD and scalar backends give the same bits); the
-//! contacts are then added to both particles' sums in `(i, j)` order, so every particle sums
-//! its contacts in ascending partner order, as a loop over its own sorted list would
-//! (the `self_active` module). The sums feed a Jacobi update (the kernel averages over the
-//! contact count, the movement-speed correction over the approaching contacts), and the
-//! result is the same on any number of threads; the serial loop is the twin.
+//! Each unordered pair is tested once, eight at a time (`f32x8` on gathered positions, with a
+//! 1e-4 margin so that the scalar test above makes every decision: the SIMD and scalar
+//! backends give the same bits); the contacts are then added to both particles' sums in list
+//! order, so every particle sums its contacts in ascending partner order, as a loop over its
+//! own sorted list would. The sums feed a Jacobi update (the kernel averages over the contact
+//! count, the movement-speed correction over the approaching contacts), and the result is the
+//! same on any number of threads; the serial loop is the twin.
 //!
 //! **Movement speed.** The VcCPBD paper names this response only as the velocity-based
 //! technique of current software it compares against and gives no algorithm for it. Our
@@ -88,32 +65,27 @@
 //! pairs between `1.5 d` and `q` at rest that the response leaves to the cloth's constraints),
 //! and averaged over the steps ([`SelfCollisionStats`]).
 
-pub(crate) mod active;
 pub mod audit;
 pub mod config;
+pub(crate) mod contacts;
 pub mod hash;
-pub(crate) mod near;
 pub mod neighbours;
 pub(crate) mod pairs;
 pub mod response;
+pub(crate) mod reuse;
 pub mod tree;
-pub(crate) mod verlet;
 
 use crate::data::exec::Exec;
-use std::sync::OnceLock;
 use std::time::Instant;
 
 use crate::error::{positive, Result, WeftError};
-use crate::self_collision::active::ActiveSet;
-pub(crate) use crate::self_collision::active::ApplyParams;
-use crate::self_collision::active::{PredictionSink, APPLY_PARALLEL_BLOCKS};
+pub(crate) use crate::self_collision::contacts::ApplyParams;
+use crate::self_collision::contacts::{ContactPass, PredictionSink};
 use crate::self_collision::hash::SpatialHash;
-use crate::self_collision::near::mid::RestRule;
-use crate::self_collision::near::{MidSource, MidUpdate, NearList};
 use crate::self_collision::neighbours::Neighbours;
-use crate::self_collision::pairs::PairCtx;
+use crate::self_collision::pairs::{PairCtx, PairList};
+use crate::self_collision::reuse::Reuse;
 use crate::self_collision::tree::{ParticleTree, TreeShape};
-use crate::self_collision::verlet::{Plan, VerletLists};
 
 pub use crate::model::self_collision::{
     Response, SelfBroadphase, SelfCollision, BOX_RADIUS, CELL_FACTOR, QUERY_FACTOR, REST_SKIP_FACTOR, TRAVEL_FACTOR,
@@ -137,35 +109,31 @@ pub struct SelfCollisionData {
     state: Option<State>,
     pub(crate) stats: SelfCollisionStats,
     last_measured: Option<u64>,
-    /// Rebuild the candidate lists every step (no reuse): the reference the tests hold the
-    /// reuse to.
-    pub(crate) fresh_every_step: bool,
     /// Copy the box centres in the clamp even when the correction could derive them (tests
     /// compare both).
     pub(crate) copy_centres: bool,
 }
 
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 struct State {
     hash: SpatialHash,
     tree: Option<ParticleTree>,
-    /// Whether the hash (or tree) was built from the positions of this step's start.
-    structure_fresh: bool,
-    /// Candidate lists (Verlet, reach `q + skin`), reused across steps.
-    verlet: VerletLists,
-    /// Near pairs of the candidates for the substeps.
-    near: NearList,
-    /// Candidate-list build the active blocks were made from.
-    active_of: u64,
-    /// Positions at the start of the step.
-    start: [Vec<f32>; 3],
-    /// Compact lists (partners within `q` at the step's start, rest neighbours left out),
-    /// filtered from the candidates on demand.
-    lists: OnceLock<Neighbours>,
+    /// Candidates within `q` plus the skin at their build, kept across steps while they hold.
+    cand: Neighbours,
+    reuse: Reuse,
+    /// The step's pair lists (CSR, each pair under its smaller id).
+    lists: Neighbours,
+    /// The same pairs, flat.
+    pairs: PairList,
+    /// The substep pass's buffers.
+    pass: ContactPass,
     /// Metric lists: non-neighbours within the penetration limit (not timed).
     probe: Neighbours,
+    /// Whether the lists hold for this step's start.
     ready: bool,
-    active: ActiveSet,
+    /// Whether the hash or tree was built from this step's start (not kept with the
+    /// candidates).
+    fresh: bool,
 }
 
 /// What the step needs each substep.
@@ -224,132 +192,85 @@ impl SelfCollisionData {
         })
     }
 
-    /// Makes the pair lists and the active blocks hold for the positions at the start of a
-    /// step (reusing the candidate lists when they still hold, see [`crate::self_collision::verlet`]).
-    /// Returns `false` (nothing to do this step) when off.
+    /// Lists the step's pairs from the positions `x` at its start (see the module docs) and
+    /// readies the substep pass for `n` particles with damping rates `damping`. Returns
+    /// `false` (nothing to do this step) when off. The broadphase runs on rayon only when
+    /// `exec` is parallel (the same lists either way).
     pub(crate) fn begin_step(&mut self, x: [&[f32]; 3], n: usize, damping: &[f32], exec: Exec) -> Result<bool> {
         let t0 = Instant::now();
-        let before = self.stats.phases.build_s + self.stats.phases.query_s;
         if !self.build_lists(x, n, exec)? {
             return Ok(false);
         }
         if let Some(st) = &mut self.state {
-            if st.active_of != st.verlet.rebuilds {
-                if st.verlet.is_direct() {
-                    st.active.rebuild_all(n, damping);
-                } else {
-                    st.active.rebuild(&st.verlet.cand, n, damping);
-                }
-                st.active_of = st.verlet.rebuilds;
-            } else {
-                st.active.refresh_damping(damping);
-            }
+            st.pass.prepare(n, damping);
         }
         let ph = &mut self.stats.phases;
-        let total = t0.elapsed().as_secs_f64();
-        ph.step_start_s += total;
-        ph.lists_s += total - (ph.build_s + ph.query_s - before);
+        ph.step_start_s += t0.elapsed().as_secs_f64();
         Ok(true)
     }
 
-    /// Whether `i` and `j` are rest neighbours: one cloth, rest distance at most
-    /// `REST_SKIP_FACTOR d`. Such pairs are never contacts (the cloth's own constraints keep
-    /// them apart), so the broadphase drops them once per step.
-    #[inline]
-    pub(crate) fn rest_skipped(&self, i: usize, j: usize, d: f32) -> bool {
-        RestRule::of(&self.rest, &self.cloth_of, d).skips(i, j)
-    }
-
-    /// Copies the step's start positions and runs the broadphase on `x` with the reach
-    /// `q + skin` (`q = 3 d`) unless the candidate lists still hold, keeping each pair once
-    /// (`(i, j)` in the list of `i`, `j > i`) and dropping rest neighbours; `false` when off.
-    /// The broadphase runs on rayon only when `exec` is parallel (the same lists either way).
+    /// Fills the step's lists from `x` (each pair once, rest neighbours dropped) and the flat
+    /// pair list: from the kept candidates when they still hold ([`reuse`]), else from the
+    /// broadphase built afresh; `false` when off.
     fn build_lists(&mut self, x: [&[f32]; 3], n: usize, exec: Exec) -> Result<bool> {
         let Some(a) = self.active() else { return Ok(false) };
         let broadphase = self.config.as_ref().map(|c| c.broadphase).unwrap_or_default();
         let mut st = self.state.take().unwrap_or_else(|| State {
             hash: SpatialHash::new(n),
-            tree: None,
-            structure_fresh: false,
-            verlet: VerletLists::default(),
-            near: NearList::default(),
-            active_of: u64::MAX,
-            start: Default::default(),
-            lists: OnceLock::new(),
-            probe: Neighbours::new(),
-            ready: false,
-            active: ActiveSet::default(),
+            ..State::default()
         });
         let q = QUERY_FACTOR * a.d;
-        st.ready = false;
-        st.lists = OnceLock::new();
-        // Planned against the previous start positions (the motion of a step without lists),
-        // then replaced by this step's.
-        let prev = [&st.start[0][..], &st.start[1][..], &st.start[2][..]];
-        let plan = st.verlet.plan(x, prev, n, a.d, broadphase, self.fresh_every_step);
-        for (s, src) in st.start.iter_mut().zip(x) {
-            s.clear();
-            s.extend_from_slice(&src[..n.min(src.len())]);
+        let t0 = Instant::now();
+        let mut r = Ok(());
+        let mut t1 = t0;
+        st.fresh = false;
+        if !st.reuse.holds(x, n, a.d, broadphase) {
+            let skin = st.reuse.next_skin(a.d);
+            let reach = q + skin;
+            r = self.build_structure(&mut st, x, n, reach, broadphase, exec);
+            t1 = Instant::now();
+            // With a skin the query fills the candidates, else the lists themselves.
+            let out = if skin > 0.0 { &mut st.cand } else { &mut st.lists };
+            r = r.and_then(|_| match (&st.tree, broadphase) {
+                (Some(t), SelfBroadphase::AabbTree) => {
+                    let (rest, cloth_of, d) = (&self.rest, &self.cloth_of, a.d);
+                    let keep = |i: usize, j: u32| j as usize > i && !rest_skipped(rest, cloth_of, i, j as usize, d);
+                    t.query_all_exec(x[0], x[1], x[2], n, reach, out, exec).map(|_| out.retain(keep))
+                }
+                _ => st.hash.query_upper_unskipped_cells_exec(reach, REST_SKIP_FACTOR * a.d, out, exec),
+            });
+            if r.is_ok() {
+                st.reuse.built(x, n, a.d, broadphase, skin);
+                st.fresh = true;
+            }
         }
-        let done = match plan {
-            Plan::Keep => {
-                st.structure_fresh = false;
-                Ok(())
-            }
-            Plan::Direct => {
-                st.structure_fresh = false;
-                if st.verlet.went_direct() {
-                    st.near.invalidate();
-                }
-                Ok(())
-            }
-            Plan::Build(skin) => {
-                let reach = q + skin;
-                // Each pair once (`j > i`), rest neighbours dropped.
-                let keep = |i: usize, j: u32| j as usize > i && !self.rest_skipped(i, j as usize, a.d);
-                let t0 = Instant::now();
-                let built = self.build_structure(&mut st, x, n, reach, broadphase, exec);
-                let t1 = Instant::now();
-                let r = built.and_then(|_| match (&st.tree, broadphase) {
-                    (Some(t), SelfBroadphase::AabbTree) => t
-                        .query_all_exec(x[0], x[1], x[2], n, reach, &mut st.verlet.cand, exec)
-                        .map(|_| st.verlet.cand.retain(keep)),
-                    _ => st
-                        .hash
-                        .query_upper_unskipped_cells_exec(reach, REST_SKIP_FACTOR * a.d, &mut st.verlet.cand, exec),
-                });
-                let ph = &mut self.stats.phases;
-                ph.build_s += t1.duration_since(t0).as_secs_f64();
-                ph.query_s += t1.elapsed().as_secs_f64();
-                match r {
-                    Ok(()) => {
-                        st.verlet.built(x, n, a.d, broadphase, skin);
-                        st.near.invalidate();
-                        self.stats.phases.rebuilds += 1;
-                    }
-                    Err(_) => st.verlet.invalidate(),
-                }
-                r
-            }
-        };
-        st.ready = done.is_ok();
+        if r.is_ok() && st.reuse.skin() > 0.0 {
+            r = reuse::within_reach(&st.cand, x, q, &mut st.lists, exec);
+        }
+        let ph = &mut self.stats.phases;
+        ph.build_s += t1.duration_since(t0).as_secs_f64();
+        ph.query_s += t1.elapsed().as_secs_f64();
+        ph.rebuilds = st.reuse.builds;
+        st.ready = r.is_ok();
+        if r.is_ok() {
+            st.pairs.fill(&st.lists.first, &st.lists.ids);
+        } else {
+            st.lists.clear();
+            st.pairs.fill(&[0], &[]);
+        }
         self.state = Some(st);
-        done.map(|_| true)
+        r.map(|_| true)
     }
 
-    /// The cloths' rest positions (the pair pass spells the fields out: it also holds the
-    /// state mutably).
+    /// The cloths' rest positions.
     fn rest(&self) -> [&[f32]; 3] {
         [&self.rest[0], &self.rest[1], &self.rest[2]]
     }
 
     /// Builds the hash (cell `reach`) or refits the tree on `x`, in parallel when `exec` is.
     fn build_structure(&self, st: &mut State, x: [&[f32]; 3], n: usize, reach: f32, broadphase: SelfBroadphase, exec: Exec) -> Result<()> {
-        st.structure_fresh = false;
         match broadphase {
-            SelfBroadphase::Hash => {
-                build_hash(&mut st.hash, x, n, reach, self.rest(), &self.cloth_of, exec.parallel())?;
-            }
+            SelfBroadphase::Hash => build_hash(&mut st.hash, x, n, reach, self.rest(), &self.cloth_of, exec.parallel()),
             SelfBroadphase::AabbTree => {
                 let t = match st.tree.take() {
                     Some(mut t) if t.len() == n && exec.parallel() => t.refit(x[0], x[1], x[2], n).map(|_| t),
@@ -357,32 +278,21 @@ impl SelfCollisionData {
                     _ => ParticleTree::build(x[0], x[1], x[2], n, TreeShape::LeafSize(TREE_LEAF)),
                 }?;
                 st.tree = Some(t);
+                Ok(())
             }
         }
-        st.structure_fresh = true;
-        Ok(())
     }
 
-    /// Copies the predicted positions (the VcCPBD box centres) of the active blocks after
-    /// the speed clamp.
-    #[cfg(test)]
-    pub(crate) fn keep_predictions(&mut self, p: [&[f32]; 3]) {
-        if let Some(st) = &mut self.state {
-            st.active.keep_predictions(p);
-        }
-    }
-
-    /// Where the speed clamp's chunks copy the predictions of the active blocks (the parallel
-    /// form of [`SelfCollisionData::keep_predictions`], the same copy).
+    /// Where the speed clamp's chunks copy the predicted positions (the VcCPBD box centres).
     /// Only VcCPBD reads the box centres: the other responses get no sink (and the clamp
     /// copies nothing), and neither does a substep whose centres the correction derives from
     /// the velocities (`derive`: nothing changes the predictions or the velocities between
     /// predict and the clamp, i.e. no obstacles; then every free particle's prediction is
     /// `x + h v`, computed alike by both, and the velocities stay until the update).
-    pub(crate) fn prediction_sink(&mut self, derive: bool) -> Option<PredictionSink<'_>> {
+    pub(crate) fn prediction_sink(&mut self, derive: bool) -> Option<PredictionSink> {
         let vc = self.config.as_ref().is_some_and(|c| c.response == Response::Vccpbd);
         let copy = vc && !self.derives_centres(derive);
-        self.state.as_mut().filter(|_| copy).map(|st| st.active.prediction_sink())
+        self.state.as_mut().filter(|_| copy).map(|st| st.pass.prediction_sink())
     }
 
     /// Whether the correction derives the box centres from the velocities when the step
@@ -391,69 +301,63 @@ impl SelfCollisionData {
         derive && !self.copy_centres
     }
 
-    /// The pair pass: updates the near list, then fills the contact sums of the active blocks
-    /// from the predicted positions `p`, start positions `x` and inverse masses `w` (see the
-    /// module docs). Parallel over fixed chunks when `parallel`; the serial loop is its twin.
-    pub(crate) fn pair_pass(&mut self, x: [&[f32]; 3], p: [&[f32]; 3], w: &[f32], n: usize, exec: Exec) {
+    /// The pair pass: fills the contact sums from the predicted positions `p`, start
+    /// positions `x` and inverse masses `w` (see the module docs). Parallel over fixed chunks
+    /// of the pair list when `exec` is; the same bits either way.
+    pub(crate) fn pair_pass(&mut self, x: [&[f32]; 3], p: [&[f32]; 3], w: &[f32], exec: Exec) {
         let t0 = Instant::now();
         let Some(a) = self.active() else { return };
         let Some(st) = self.state.as_mut().filter(|s| s.ready) else {
             return;
         };
-        let q = QUERY_FACTOR * a.d;
-        let source = if st.verlet.is_direct() {
-            MidSource::Hash(RestRule::of(&self.rest, &self.cloth_of, a.d))
-        } else {
-            // The candidate lists reach `q` plus their skin.
-            MidSource::Candidates {
-                cand: &st.verlet.cand,
-                reach: q + st.verlet.skin(),
-            }
-        };
-        let mid = st.near.update(source, p, &st.active.blocks, n, a.d, exec);
         let ctx = PairCtx {
             x,
             p,
             w,
             rest: [&self.rest[0], &self.rest[1], &self.rest[2]],
             cloth_of: &self.cloth_of,
-            start: [&st.start[0], &st.start[1], &st.start[2]],
-            q2: q * q,
             d: a.d,
             response: a.response,
         };
-        st.active.pair_pass(&ctx, &st.near.pairs, exec);
-        let ph = &mut self.stats.phases;
-        ph.pairs_s += t0.elapsed().as_secs_f64();
-        ph.mid_queries += u64::from(mid == MidUpdate::Queried);
-        ph.mid_refreshes += u64::from(mid == MidUpdate::Refreshed);
+        st.pass.pair_pass(&ctx, &st.pairs, exec);
+        self.stats.phases.pairs_s += t0.elapsed().as_secs_f64();
     }
 
-    /// The velocity-correction kernel on the active blocks of the predicted positions `p`;
-    /// with the substep's velocities `v`, the box centres are derived as `x + h v` instead of
-    /// read from the copy the clamp kept (see [`SelfCollisionData::prediction_sink`]).
-    #[allow(clippy::too_many_arguments)]
+    /// The velocity-correction kernel on the blocks the pair pass touched, on the predicted
+    /// positions `p`; with the substep's velocities `v`, the box centres are derived as
+    /// `x + h v` instead of read from the copy the clamp kept (see
+    /// [`SelfCollisionData::prediction_sink`]).
     pub(crate) fn apply(&mut self, x: [&[f32]; 3], w: &[f32], v: Option<[&[f32]; 3]>, p: [&mut [f32]; 3], ap: ApplyParams, exec: Exec) {
-        let simd = exec.simd();
         let t0 = Instant::now();
         if let Some(st) = self.state.as_ref().filter(|s| s.ready) {
-            // On one worker the serial path (runs of blocks, one kernel call) is the faster.
-            let parallel = exec.parallel() && st.active.touched() >= APPLY_PARALLEL_BLOCKS && rayon::current_num_threads() > 1;
-            st.active.apply(x, w, v, p, ap, Exec::new(simd, parallel));
+            st.pass.apply(x, w, v, p, ap, exec);
         }
         self.stats.phases.correction_s += t0.elapsed().as_secs_f64();
     }
 
-    /// Number of active blocks (groups of eight particles the substeps work on): those holding
-    /// a particle with a partner in the candidate lists (a superset of the step's lists).
-    pub fn active_blocks(&self) -> usize {
-        self.state.as_ref().filter(|s| s.ready).map_or(0, |s| s.active.len())
+    /// Number of pairs in the step's list.
+    pub fn pair_count(&self) -> usize {
+        self.state.as_ref().filter(|s| s.ready).map_or(0, |s| s.pairs.len())
     }
 
-    /// Blocks the last pair pass found a contact in.
+    /// Blocks of eight particles the last pair pass found a contact in.
     pub fn touched_blocks(&self) -> usize {
-        self.state.as_ref().filter(|s| s.ready).map_or(0, |s| s.active.touched())
+        self.state.as_ref().filter(|s| s.ready).map_or(0, |s| s.pass.touched())
     }
+
+    /// The pair lists of the current step (empty before the first step with self-collision).
+    pub fn lists(&self) -> Option<&Neighbours> {
+        self.state.as_ref().filter(|s| s.ready).map(|s| &s.lists)
+    }
+}
+
+/// Whether `i` and `j` are rest neighbours: one cloth, rest distance at most
+/// `REST_SKIP_FACTOR d`. Such pairs are never contacts (the cloth's own constraints keep them
+/// apart), so the broadphase drops them when it writes the list.
+#[inline]
+fn rest_skipped(rest: &[Vec<f32>; 3], cloth_of: &[u32], i: usize, j: usize, d: f32) -> bool {
+    let skip = REST_SKIP_FACTOR * d;
+    cloth_of[i] == cloth_of[j] && dist2(rest, i, j) <= skip * skip
 }
 
 /// Builds `hash` on `x` (first `n`) with cells of `reach` (times [`CELL_FACTOR`]) and
@@ -497,4 +401,4 @@ pub(crate) fn validate(c: &SelfCollision) -> Result<()> {
 mod metric;
 
 #[cfg(test)]
-mod active_tests;
+mod contacts_tests;

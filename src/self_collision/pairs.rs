@@ -1,12 +1,40 @@
-//! The self-collision pair pass: the contact sums of one particle over its pair list (the
-//! method is described in [`crate::self_collision`]).
+//! The step's pair list and the per-pair contact of the substep pass (the method is described
+//! in [`crate::self_collision`]).
 
-use crate::data::lanes::{gather1_unchecked, idx8, F32s, Vec3x8, LANES};
+use crate::data::lanes::{gather1_unchecked, load_idx_unchecked, F32s, Vec3x8, LANES};
 use crate::model::self_collision::Response;
-use crate::self_collision::near::scan::largest_id;
-use crate::self_collision::neighbours::within;
 #[cfg(test)]
 use crate::self_collision::neighbours::Neighbours;
+
+/// The step's pairs in structure-of-arrays form: pair `k` is `(i[k], j[k])`, `i < j`, ordered
+/// by `i` then `j` (the CSR lists of the broadphase, flattened once a step).
+#[derive(Clone, Debug, Default)]
+pub(crate) struct PairList {
+    pub(crate) i: Vec<u32>,
+    pub(crate) j: Vec<u32>,
+    /// The largest id in the list (every gather below it is in bounds).
+    top: u32,
+}
+
+impl PairList {
+    /// Flattens CSR lists whose entries are the upper partners `j > i` of each `i`.
+    pub(crate) fn fill(&mut self, first: &[u32], ids: &[u32]) {
+        self.i.clear();
+        self.j.clear();
+        self.j.extend_from_slice(ids);
+        for (i, w) in first.windows(2).enumerate() {
+            let len = w[1].saturating_sub(w[0]) as usize;
+            self.i.extend(std::iter::repeat_n(i as u32, len));
+        }
+        // Every `i` of a pair is below its `j`.
+        self.top = ids.iter().copied().max().unwrap_or(0);
+    }
+
+    /// Number of pairs.
+    pub(crate) fn len(&self) -> usize {
+        self.j.len()
+    }
+}
 
 /// Everything the pair pass reads.
 pub(crate) struct PairCtx<'a> {
@@ -15,10 +43,6 @@ pub(crate) struct PairCtx<'a> {
     pub(crate) w: &'a [f32],
     pub(crate) rest: [&'a [f32]; 3],
     pub(crate) cloth_of: &'a [u32],
-    /// Positions at the start of the step (the lists' positions).
-    pub(crate) start: [&'a [f32]; 3],
-    /// Squared query radius: a pair is in the step's lists when within it at the start.
-    pub(crate) q2: f32,
     pub(crate) d: f32,
     pub(crate) response: Response,
 }
@@ -27,51 +51,59 @@ pub(crate) struct PairCtx<'a> {
 const COINCIDENT: [f32; 3] = [0.267_261_24, 0.534_522_5, 0.801_783_7];
 
 impl PairCtx<'_> {
-    /// Appends to `out` the near pairs `(i, j)` that may be in contact: closer than `d` (with
-    /// a 1e-4 margin, so the exact test of [`PairCtx::contact`] makes every decision and both
-    /// paths lead to the same sums) and in the lists of the step (within `q` at its start,
-    /// the broadphase's predicate). Eight pairs at a time (`f32x8` on gathered predicted
-    /// positions) when `simd`, else one by one.
-    pub(crate) fn near_candidates(&self, pairs: &[(u32, u32)], simd: bool, out: &mut Vec<(u32, u32)>) {
+    /// Appends to `out` the pairs `(i[k], j[k])` of `range` of `list` that may be in contact:
+    /// closer than `d` at the predicted positions, with a 1e-4 margin so that the exact test of
+    /// [`PairCtx::pair_contact`] makes every decision and both backends find the same contacts.
+    /// Eight pairs at a time (`f32x8` on gathered predictions) when `simd`, else one by one
+    /// (the scalar twin).
+    pub(crate) fn touching(&self, list: &PairList, range: std::ops::Range<usize>, simd: bool, out: &mut Vec<(u32, u32)>) {
         let lim = self.d * self.d * 1.0001;
-        let s = self.start;
-        let listed = |i: usize, j: usize| within(s[0][i], s[1][i], s[2][i], s[0][j], s[1][j], s[2][j], self.q2);
+        let (li, lj) = (&list.i[range.clone()], &list.j[range]);
         let mut done = 0;
         // Every index below the arrays' length, checked once, so the gathers need no checks.
         let len = self.p.iter().map(|a| a.len()).min().unwrap_or(0);
-        let top = largest_id(pairs);
-        if simd && (top as usize) < len {
+        if simd && (list.top as usize) < len {
             let limv = F32s::splat(lim);
-            let groups = pairs.as_chunks::<LANES>().0;
-            for group in groups {
-                let ii = idx8(|l| group[l].0);
-                let jj = idx8(|l| group[l].1);
-                // SAFETY: every index of `pairs` is at most `top < len` (checked above).
-                let g = |a: &[f32], side: usize| unsafe { gather1_unchecked(a, if side == 0 { &ii } else { &jj }) };
-                let v = Vec3x8 {
-                    x: g(self.p[0], 0) - g(self.p[0], 1),
-                    y: g(self.p[1], 0) - g(self.p[1], 1),
-                    z: g(self.p[2], 0) - g(self.p[2], 1),
+            let groups = li.len() / LANES;
+            for g in 0..groups {
+                let o = g * LANES;
+                // SAFETY: `o + LANES <= li.len() == lj.len()`; every id is at most
+                // `list.top < len` (checked above).
+                let v = unsafe {
+                    let jj = load_idx_unchecked(lj, o);
+                    let g = |a: &[f32]| gather1_unchecked(a, &jj);
+                    // The list is sorted by `i`: eight pairs mostly share it, then one load
+                    // broadcast (the same values as the gather).
+                    let pi = if li[o] == li[o + LANES - 1] {
+                        let i = li[o] as usize;
+                        [self.p[0], self.p[1], self.p[2]].map(|a| F32s::splat(*a.get_unchecked(i)))
+                    } else {
+                        let ii = load_idx_unchecked(li, o);
+                        [self.p[0], self.p[1], self.p[2]].map(|a| gather1_unchecked(a, &ii))
+                    };
+                    Vec3x8 {
+                        x: pi[0] - g(self.p[0]),
+                        y: pi[1] - g(self.p[1]),
+                        z: pi[2] - g(self.p[2]),
+                    }
                 };
                 let mut bits = v.length_sq().simd_lt(limv).to_bitmask();
                 while bits != 0 {
-                    let (i, j) = group[bits.trailing_zeros() as usize];
+                    let l = o + bits.trailing_zeros() as usize;
                     bits &= bits - 1;
-                    if listed(i as usize, j as usize) {
-                        out.push((i, j));
-                    }
+                    out.push((li[l], lj[l]));
                 }
             }
-            done = groups.len() * LANES;
+            done = groups * LANES;
         }
-        for &(i, j) in &pairs[done..] {
+        for (&i, &j) in li[done..].iter().zip(&lj[done..]) {
             let (iu, ju) = (i as usize, j as usize);
             let v = [
                 self.p[0][iu] - self.p[0][ju],
                 self.p[1][iu] - self.p[1][ju],
                 self.p[2][iu] - self.p[2][ju],
             ];
-            if v[0] * v[0] + v[1] * v[1] + v[2] * v[2] < lim && listed(iu, ju) {
+            if v[0] * v[0] + v[1] * v[1] + v[2] * v[2] < lim {
                 out.push((i, j));
             }
         }

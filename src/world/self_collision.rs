@@ -32,10 +32,9 @@ impl World {
         self.selfcol.lists()
     }
 
-    /// Groups of eight consecutive particles the substeps of the last step worked on (those
-    /// holding a particle with a partner in the pair lists).
-    pub fn self_collision_active_blocks(&self) -> usize {
-        self.selfcol.active_blocks()
+    /// Number of pairs in the last step's pair list (the pairs the substeps test).
+    pub fn self_collision_pair_count(&self) -> usize {
+        self.selfcol.pair_count()
     }
 
     /// Average-collision statistics and self-collision time so far.

@@ -89,9 +89,8 @@ impl World {
 
     /// The self-collision pair pass and its correction of the predictions `p`.
     pub(crate) fn self_collision_pairs_pass(&mut self, a: Active, h: f32, exec: Exec) {
-        let n = self.particles.count();
         let p = &self.particles;
-        self.selfcol.pair_pass([&p.x, &p.y, &p.z], [&p.px, &p.py, &p.pz], &p.w, n, exec);
+        self.selfcol.pair_pass([&p.x, &p.y, &p.z], [&p.px, &p.py, &p.pz], &p.w, exec);
         let ap = a.apply_params(h);
         let derive = self.selfcol.derives_centres(self.obstacles.is_empty());
         let p = &mut self.particles;

@@ -97,7 +97,7 @@ fn self_collision_mean_summed_in_predict_equals_separate_pass_bitwise() {
             assert_eq!(bits(&fused), bits(&split), "{threads} thread(s), {backend:?}, step {step}");
         }
         assert!(
-            fused.selfcol.touched_blocks() + fused.selfcol.active_blocks() > 0,
+            fused.selfcol.touched_blocks() + fused.selfcol.pair_count() > 0,
             "no self-collision work"
         );
     }

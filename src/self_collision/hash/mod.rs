@@ -89,6 +89,13 @@ pub struct SpatialHash {
     strides: Option<(u64, u64)>,
 }
 
+impl Default for SpatialHash {
+    /// An empty hash (for no particles).
+    fn default() -> Self {
+        Self::new(0)
+    }
+}
+
 /// The table size used for `n` particles: smallest power of two `>= max(2n, 16)`.
 pub fn table_size_for(n: usize) -> usize {
     (2 * n).max(16).next_power_of_two()

@@ -264,44 +264,6 @@ impl SpatialHash {
             && !(rc.cloth[c] == q.cloth && dx * dx + dy * dy + dz * dz <= k.s2)
     }
 
-    /// Every particle `j != i` of the last build within `max_dist` of the point `p` (not
-    /// necessarily particle `i`'s position at the build) that is not a rest neighbour of
-    /// `i` (same cloth `cloth`, rest distance to `rest` at most `skip`): the rule of the
-    /// self-collision query for one particle, on both sides of it, with the same operations
-    /// (a pair decides alike whichever side tests it). Calls `emit(j)` for each, in slot
-    /// order, and returns `false`, calling nothing, when `p`'s search box spans more than four
-    /// cells an axis (a point far off the build's scale) or no rest data is attached. `p`
-    /// must be finite.
-    #[allow(clippy::too_many_arguments)]
-    pub(crate) fn probe_unskipped(
-        &self,
-        i: u32,
-        p: [f32; 3],
-        rest: [f32; 3],
-        cloth: u32,
-        max_dist: f32,
-        skip: f32,
-        mut emit: impl FnMut(u32),
-    ) -> bool {
-        if !self.rest.valid {
-            return false;
-        }
-        let q = Probe { i, p, r: rest, cloth };
-        let k = Reach {
-            md2: max_dist * max_dist,
-            r: search_radius(max_dist),
-            s2: skip * skip,
-            len: self.scan_len(),
-        };
-        self.box_ranges(p, k.r, |b0, b1| {
-            for c in self.cell_start[b0] as usize..self.cell_start[b1] as usize {
-                if self.kept(&q, k, c) {
-                    emit(self.rest.ids[c]);
-                }
-            }
-        })
-    }
-
     /// Slots `s..e` eight at a time: distance, then (for lanes within reach) identity, cloth
     /// and rest distance, each computed like [`SpatialHash::pair_scan_scalar`] (no FMA).
     #[inline(always)]

@@ -1,11 +1,11 @@
-//! The compact step (lists built once, rest neighbours dropped, substeps on the active blocks)
-//! against a recomputation from scratch: the pair sums of a brute force over all pairs with the
-//! same rules, and the correction kernel run on every particle. Bit for bit, for the three
-//! responses, SIMD and scalar, serial and parallel on one and two threads.
+//! The step's pass (lists built once a step, rest neighbours dropped, contacts added in list
+//! order, the correction on the touched blocks) against a recomputation from scratch: the pair
+//! sums of a brute force over all pairs with the same rules, and the correction kernel run on
+//! every particle. Bit for bit, for the three responses, SIMD and scalar, serial and parallel
+//! on one and two threads.
 
 use super::*;
 use crate::data::exec::Exec;
-use crate::data::lanes::LANES;
 use crate::self_collision::response::{apply, ApplyInput, ContactSums};
 use crate::test_rng::signed;
 
@@ -41,7 +41,7 @@ fn padded(v: &[f32]) -> Vec<f32> {
     p
 }
 
-/// Runs one pair pass and one correction on the compact set; returns `(p after, sums by particle)`.
+/// Runs one pair pass and one correction; returns `(p after, sums by particle)`.
 #[allow(clippy::type_complexity)]
 fn compact(
     data: &mut SelfCollisionData,
@@ -55,26 +55,23 @@ fn compact(
     let xs = [&x[0][..], &x[1][..], &x[2][..]];
     assert!(data.begin_step(xs, n, &damping, crate::data::exec::Exec::Parallel).unwrap());
     let mut out = p.clone();
-    data.keep_predictions([&out[0][..], &out[1][..], &out[2][..]]);
-    data.pair_pass(xs, [&p[0][..], &p[1][..], &p[2][..]], w, n, exec);
+    // VcCPBD's box centres (the other responses read none).
+    if let Some(sink) = data.prediction_sink(false) {
+        sink.keep(0, [&out[0][..], &out[1][..], &out[2][..]]);
+    }
+    data.pair_pass(xs, [&p[0][..], &p[1][..], &p[2][..]], w, exec);
     let a = data.active().unwrap();
     let ap = a.apply_params(0.005);
     let [o0, o1, o2] = &mut out;
     data.apply(xs, w, None, [o0, o1, o2], ap, exec);
-    let st = data.state.as_ref().unwrap();
-    let s = &st.active.sums;
-    let mut by_particle = vec![[0.0f32; 11]; n];
-    for (k, &b) in st.active.blocks.iter().enumerate() {
-        for l in 0..LANES {
-            let (i, g) = (b as usize * LANES + l, k * LANES + l);
-            if i < n {
-                let v = [
-                    s.c[0][g], s.c[1][g], s.c[2][g], s.f[0][g], s.f[1][g], s.f[2][g], s.n[0][g], s.n[1][g], s.n[2][g], s.gap[g], s.count[g],
-                ];
-                by_particle[i] = v;
-            }
-        }
-    }
+    let s = data.state.as_ref().unwrap().pass.sums();
+    let by_particle = (0..n)
+        .map(|g| {
+            [
+                s.c[0][g], s.c[1][g], s.c[2][g], s.f[0][g], s.f[1][g], s.f[2][g], s.n[0][g], s.n[1][g], s.n[2][g], s.gap[g], s.count[g],
+            ]
+        })
+        .collect();
     (out, by_particle)
 }
 
@@ -85,7 +82,11 @@ fn reference(data: &SelfCollisionData, x: &[Vec<f32>; 3], p: &[Vec<f32>; 3], w: 
     let a = data.active().unwrap();
     let mut all = Neighbours::new();
     all.fill_serial(n, |i, buf| {
-        buf.extend((0..n).filter(|&j| j != i && !data.rest_skipped(i, j, a.d)).map(|j| j as u32))
+        buf.extend(
+            (0..n)
+                .filter(|&j| j != i && !rest_skipped(&data.rest, &data.cloth_of, i, j, a.d))
+                .map(|j| j as u32),
+        )
     })
     .unwrap();
     let ctx = PairCtx {
@@ -94,8 +95,6 @@ fn reference(data: &SelfCollisionData, x: &[Vec<f32>; 3], p: &[Vec<f32>; 3], w: 
         w,
         rest: [&data.rest[0], &data.rest[1], &data.rest[2]],
         cloth_of: &data.cloth_of,
-        start: [&x[0], &x[1], &x[2]],
-        q2: f32::INFINITY,
         d: a.d,
         response: a.response,
     };
@@ -164,7 +163,7 @@ fn compact_step_equals_recomputation_from_scratch() {
                 }
             }
         }
-        assert!(data.active_blocks() > 0);
+        assert!(data.pair_count() > 0);
     }
 }
 
@@ -188,7 +187,7 @@ fn rest_neighbours_are_never_listed() {
     for (i, j) in lists.pairs() {
         let (ri, rj) = (i as usize / cols, j as usize / cols);
         assert!(ri.abs_diff(rj) >= 3, "{i} {j}");
-        assert!(!data.rest_skipped(i as usize, j as usize, d));
+        assert!(!rest_skipped(&data.rest, &data.cloth_of, i as usize, j as usize, d));
     }
     // A flat cloth: the step has nothing to do.
     let flat: Vec<f32> = (0..n).map(|i| (i / cols) as f32 * s).collect();
@@ -198,12 +197,12 @@ fn rest_neighbours_are_never_listed() {
         .begin_step([&xs, &zero, &flat], n, &zero, crate::data::exec::Exec::Parallel)
         .unwrap());
     assert_eq!(data.lists().unwrap().total(), 0);
-    assert_eq!(data.active_blocks(), 0);
+    assert_eq!(data.pair_count(), 0);
 }
 
 /// The cloth of `weft reproduce vccpbd` at `size x size`: hung over its middle row, both
 /// halves fall and fold face to face.
-fn hung(size: u32, response: Response, broadphase: SelfBroadphase, threads: usize, fresh: bool) -> (crate::World, f32) {
+fn hung(size: u32, response: Response, broadphase: SelfBroadphase, threads: usize) -> (crate::World, f32) {
     let params = crate::SolverParams {
         substeps: 10,
         iterations: 1,
@@ -216,61 +215,32 @@ fn hung(size: u32, response: Response, broadphase: SelfBroadphase, threads: usiz
         measure: true,
         ..SelfCollision::default()
     };
-    let (mut w, dt) = crate::perf::fold_world(size, crate::Fabric::preset("wool").unwrap(), params, sc).unwrap();
-    w.selfcol.fresh_every_step = fresh;
-    (w, dt)
+    crate::perf::fold_world(size, crate::Fabric::preset("wool").unwrap(), params, sc).unwrap()
 }
 
+/// The hash and the AABB tree list the same pairs every step of the fold (each pair once,
+/// rest neighbours dropped), and the two runs give the same bits.
 #[test]
-fn reused_candidate_lists_give_the_fresh_lists_and_the_same_bits() {
-    for (response, broadphase) in [
-        (Response::Vccpbd, SelfBroadphase::Hash),
-        (Response::MovementSpeed, SelfBroadphase::Hash),
-        (Response::Pbd, SelfBroadphase::AabbTree),
-    ] {
-        let steps = 100;
-        let (mut fresh, dt) = hung(24, response, broadphase, 1, true);
-        let mut reuse: Vec<_> = [1, 2].map(|t| hung(24, response, broadphase, t, false).0).into();
+fn hash_and_tree_give_the_same_lists_and_bits() {
+    for response in [Response::Vccpbd, Response::MovementSpeed, Response::Pbd] {
+        let (mut hash, dt) = hung(24, response, SelfBroadphase::Hash, 1);
+        let (mut tree, _) = hung(24, response, SelfBroadphase::AabbTree, 2);
         let mut contacts = 0;
-        for step in 0..steps {
-            fresh.step(dt).unwrap();
-            let want = fresh.self_collision_pairs().unwrap().clone();
-            contacts += fresh.selfcol.touched_blocks();
-            for w in &mut reuse {
-                w.step(dt).unwrap();
-                assert_eq!(w.self_collision_pairs().unwrap(), &want, "{response:?} {broadphase:?} step {step}");
-                for (a, b) in w.positions().iter().zip(fresh.positions()) {
-                    assert!(a.iter().zip(b).all(|(u, v)| u.to_bits() == v.to_bits()), "{response:?} step {step}");
-                }
+        for step in 0..100 {
+            hash.step(dt).unwrap();
+            tree.step(dt).unwrap();
+            contacts += hash.selfcol.touched_blocks();
+            assert_eq!(
+                tree.self_collision_pairs().unwrap(),
+                hash.self_collision_pairs().unwrap(),
+                "{response:?} step {step}"
+            );
+            for (a, b) in tree.positions().iter().zip(hash.positions()) {
+                assert!(a.iter().zip(b).all(|(u, v)| u.to_bits() == v.to_bits()), "{response:?} step {step}");
             }
         }
-        let ph = &reuse[0].self_collision_stats().phases;
-        assert_eq!(fresh.self_collision_stats().phases.rebuilds, steps);
-        assert!(
-            ph.rebuilds < steps * 2 / 3,
-            "{response:?}: the lists were rebuilt {} times in {steps} steps",
-            ph.rebuilds
-        );
-        let near = &reuse[0].selfcol.state.as_ref().unwrap().near;
-        assert!(near.rebuilds < steps * 5, "near list rebuilt {} times", near.rebuilds);
-        eprintln!(
-            "{response:?} {broadphase:?}: {} list builds, {} near builds, {contacts} touched blocks",
-            ph.rebuilds, near.rebuilds
-        );
         assert!(contacts > 0, "{response:?}: no contact in the run");
-        // The hash runs the slow steps without candidate lists (mid lists from the hash,
-        // queried and refreshed for the particles that moved).
-        assert_eq!(
-            (ph.mid_queries > 0, ph.mid_refreshes > 0),
-            (broadphase == SelfBroadphase::Hash, broadphase == SelfBroadphase::Hash),
-            "{} mid queries, {} refreshes",
-            ph.mid_queries,
-            ph.mid_refreshes
-        );
-        assert_eq!(
-            reuse[0].self_collision_stats().average_pct,
-            fresh.self_collision_stats().average_pct
-        );
+        assert_eq!(tree.self_collision_stats().average_pct, hash.self_collision_stats().average_pct);
     }
 }
 
@@ -279,9 +249,9 @@ fn reused_candidate_lists_give_the_fresh_lists_and_the_same_bits() {
 #[test]
 fn derived_box_centres_equal_the_kept_copy() {
     for threads in [1, 2] {
-        let (mut copy, dt) = hung(24, Response::Vccpbd, SelfBroadphase::Hash, threads, false);
+        let (mut copy, dt) = hung(24, Response::Vccpbd, SelfBroadphase::Hash, threads);
         copy.selfcol.copy_centres = true;
-        let (mut derive, _) = hung(24, Response::Vccpbd, SelfBroadphase::Hash, threads, false);
+        let (mut derive, _) = hung(24, Response::Vccpbd, SelfBroadphase::Hash, threads);
         let mut touched = 0;
         for step in 0..100 {
             copy.step(dt).unwrap();
@@ -367,7 +337,7 @@ fn parallel_correction_equals_serial() {
     let w = padded(&vec![1.0f32; n]);
     let (want, _) = compact(&mut data, &x, &p, &w, n, Exec::Simd);
     assert!(
-        data.touched_blocks() > 2 * crate::self_collision::active::APPLY_BLOCKS,
+        data.touched_blocks() > 2 * crate::self_collision::contacts::APPLY_BLOCKS,
         "{} touched blocks",
         data.touched_blocks()
     );
@@ -378,7 +348,7 @@ fn parallel_correction_equals_serial() {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         let mut got = p.clone();
         let [g0, g1, g2] = &mut got;
-        pool.install(|| st.active.apply(xs, &w, None, [g0, g1, g2], ap, Exec::Parallel));
+        pool.install(|| st.pass.apply(xs, &w, None, [g0, g1, g2], ap, Exec::Parallel));
         for a in 0..3 {
             assert!(
                 got[a].iter().zip(&want[a]).all(|(u, v)| u.to_bits() == v.to_bits()),
@@ -389,11 +359,10 @@ fn parallel_correction_equals_serial() {
     }
 }
 
-/// The fold at 48 x 48 (its candidate pairs and mid lists span several chunks, so the near
-/// list is rebuilt in parallel): 1 and 2 threads and the scalar backend (serial) give the
-/// same bits every step.
+/// The fold at 48 x 48 (its pair list spans several chunks once folded, so the pass runs in
+/// parallel): 1 and 2 threads and the scalar backend (serial) give the same bits every step.
 #[test]
-fn fold_with_parallel_near_ranges_is_bitwise_on_any_thread_count() {
+fn fold_with_parallel_pair_chunks_is_bitwise_on_any_thread_count() {
     let make = |threads: usize, backend: crate::Backend| {
         let params = crate::SolverParams {
             substeps: 10,
@@ -413,8 +382,7 @@ fn fold_with_parallel_near_ranges_is_bitwise_on_any_thread_count() {
     let mut ranged = 0;
     for step in 0..80 {
         one.step(dt).unwrap();
-        let near = &one.selfcol.state.as_ref().unwrap().near;
-        ranged += usize::from(near.ranges() > 1);
+        ranged += usize::from(one.selfcol.pair_count() > crate::self_collision::contacts::PAIR_CHUNK);
         for w in &mut others {
             w.step(dt).unwrap();
             for (a, b) in w.positions().iter().zip(one.positions()) {
@@ -422,5 +390,5 @@ fn fold_with_parallel_near_ranges_is_bitwise_on_any_thread_count() {
             }
         }
     }
-    assert!(ranged > 4, "the near list spanned several parts in {ranged} steps");
+    assert!(ranged > 4, "the pair list spanned several chunks in {ranged} steps");
 }

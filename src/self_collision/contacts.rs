@@ -1,0 +1,240 @@
+//! The substep pass over the step's pair list (the method is described in
+//! [`crate::self_collision`]): the pairs in contact are found eight at a time, in parallel over
+//! fixed chunks of the list, each with its contact computed once for both particles
+//! ([`PairCtx::pair_contact`]); the contacts are then added, serially in list order, to both
+//! particles' sums, and the velocity-correction kernel
+//! ([`crate::self_collision::response::apply_runs`]) runs on the blocks of [`LANES`] particles
+//! that received one.
+//!
+//! The list is ordered by `i` then `j`, so every particle receives its contacts in ascending
+//! partner order, as a loop over its own sorted list would; the chunks are fixed, so nothing
+//! depends on the thread count. The sums live in per-particle arrays that are zero outside the
+//! particles the last pass wrote, which the next pass zeroes first: a pass writes as many sums
+//! as it finds contacts, not as many as there are particles.
+
+use crate::data::exec::Exec;
+use rayon::prelude::*;
+
+use crate::data::lanes::{SharedVec3, Vec3x8, LANES};
+use crate::model::self_collision::Response;
+use crate::self_collision::pairs::{PairContact, PairCtx, PairList};
+use crate::self_collision::response::{apply_runs, ApplyInput, ContactSums};
+
+/// Pairs one parallel task tests in the pair pass.
+pub(crate) const PAIR_CHUNK: usize = 4096;
+
+/// Particle blocks one parallel task handles in the correction pass.
+pub(crate) const APPLY_BLOCKS: usize = 64;
+
+/// Touched blocks from which the correction runs in parallel (fewer cost more to fork than to
+/// correct).
+const APPLY_PARALLEL_BLOCKS: usize = 17;
+
+/// The correction's settings besides the particle arrays.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct ApplyParams {
+    pub response: Response,
+    pub friction: f32,
+    pub h: f32,
+    pub r: f32,
+}
+
+/// Where the speed clamp's chunks copy the predicted positions (the VcCPBD box centres), from
+/// any chunk on any thread ([`ContactPass::prediction_sink`]).
+pub(crate) struct PredictionSink {
+    pred: SharedVec3,
+}
+
+impl PredictionSink {
+    /// Copies the predictions `p` of the particles `start..start + len` (one chunk's slices;
+    /// `start` and the lengths multiples of [`LANES`]). Concurrent calls must be given
+    /// disjoint chunks (the clamp's chunks are).
+    pub(crate) fn keep(&self, start: usize, p: [&[f32]; 3]) {
+        let len = p[0].len().min(p[1].len()).min(p[2].len());
+        for l in (0..len / LANES).map(|b| b * LANES) {
+            if start + l + LANES <= self.pred.len() {
+                let v = Vec3x8::load(p[0], p[1], p[2], l);
+                // SAFETY: in bounds (checked); the run belongs to this chunk alone, and nothing
+                // reads the copy while the clamp's chunks write it.
+                unsafe { self.pred.store_run(start + l, v) };
+            }
+        }
+    }
+}
+
+/// The buffers of the substep pass, kept across steps (no allocation once sized).
+#[derive(Clone, Debug, Default)]
+pub(crate) struct ContactPass {
+    /// Contact sums per particle (padded to whole blocks), zero outside `written`.
+    sums: ContactSums,
+    /// Box centres: the predictions after the clamp, when the kernel cannot derive them.
+    pred: [Vec<f32>; 3],
+    /// Damping rates per particle, padded.
+    damping: Vec<f32>,
+    /// Pairs in contact range, one buffer per chunk of the list.
+    near: Vec<Vec<(u32, u32)>>,
+    /// Their contacts (computed in the parallel part), same layout.
+    found: Vec<Vec<Option<PairContact>>>,
+    /// Sums and approaching counts of one particle while its contacts are added (zero
+    /// between passes).
+    acc: Vec<([f32; 11], f32)>,
+    /// Particles the last pass added a contact to, in first-contact order.
+    written: Vec<u32>,
+    /// Blocks holding them, ascending.
+    touched: Vec<u32>,
+    /// Whether each block is in `touched`.
+    hit: Vec<bool>,
+}
+
+impl ContactPass {
+    /// Sizes the buffers for `n` particles and copies their damping rates (at each step start).
+    pub(crate) fn prepare(&mut self, n: usize, damping: &[f32]) {
+        let len = n.div_ceil(LANES) * LANES;
+        let s = &mut self.sums;
+        for v in s.c.iter_mut().chain(s.f.iter_mut()).chain(s.n.iter_mut()) {
+            v.resize(len, 0.0);
+        }
+        s.gap.resize(len, 0.0);
+        s.count.resize(len, 0.0);
+        for v in &mut self.pred {
+            v.resize(len, 0.0);
+        }
+        self.acc.resize(len, ([0.0; 11], 0.0));
+        self.hit.resize(len / LANES, false);
+        self.damping.clear();
+        self.damping.extend((0..len).map(|i| damping.get(i).copied().unwrap_or(0.0)));
+    }
+
+    /// A sink the speed clamp's chunks copy the box centres into.
+    pub(crate) fn prediction_sink(&mut self) -> PredictionSink {
+        let [x, y, z] = &mut self.pred;
+        PredictionSink {
+            pred: SharedVec3::new(x, y, z),
+        }
+    }
+
+    /// The contact sums of the last pass.
+    #[cfg(test)]
+    pub(crate) fn sums(&self) -> &ContactSums {
+        &self.sums
+    }
+
+    /// Number of blocks the last pass wrote contacts to.
+    pub(crate) fn touched(&self) -> usize {
+        self.touched.len()
+    }
+
+    /// The pair pass: the contact sums of every particle from the predicted positions of
+    /// `ctx` over the pairs of `list` (see the module docs).
+    pub(crate) fn pair_pass(&mut self, ctx: &PairCtx<'_>, list: &PairList, exec: Exec) {
+        let simd = exec.simd();
+        let chunks = list.len().div_ceil(PAIR_CHUNK);
+        if self.near.len() < chunks {
+            self.near.resize_with(chunks, Vec::new);
+            self.found.resize_with(chunks, Vec::new);
+        }
+        let find = |c: usize, (near, found): (&mut Vec<(u32, u32)>, &mut Vec<Option<PairContact>>)| {
+            near.clear();
+            ctx.touching(list, c * PAIR_CHUNK..((c + 1) * PAIR_CHUNK).min(list.len()), simd, near);
+            found.clear();
+            found.extend(near.iter().map(|&(i, j)| ctx.pair_contact(i as usize, j as usize)));
+        };
+        let bufs = (&mut self.near[..chunks], &mut self.found[..chunks]);
+        if exec.parallel() && chunks > 1 {
+            bufs.into_par_iter().enumerate().for_each(|(c, b)| find(c, b));
+        } else {
+            bufs.0.iter_mut().zip(bufs.1.iter_mut()).enumerate().for_each(|(c, b)| find(c, b));
+        }
+        let mut rows = self.sums.rows();
+        for &k in &self.written {
+            rows.set(k as usize, &[0.0; 11]);
+        }
+        for &b in &self.touched {
+            self.hit[b as usize] = false;
+        }
+        self.written.clear();
+        self.touched.clear();
+        let found = self.near[..chunks].iter().flatten().zip(self.found[..chunks].iter().flatten());
+        for (&(i, j), contact) in found {
+            let Some(c) = contact else { continue };
+            for (side, a) in [(0, i as usize), (1, j as usize)] {
+                let Some((out, approaching)) = self.acc.get_mut(a) else { continue };
+                let first = out[10] == 0.0;
+                if c.add_to(side, out, approaching) && first {
+                    self.written.push(a as u32);
+                    let b = a / LANES;
+                    if !self.hit[b] {
+                        self.hit[b] = true;
+                        self.touched.push(b as u32);
+                    }
+                }
+            }
+        }
+        self.touched.sort_unstable();
+        for &k in &self.written {
+            let (out, approaching) = &mut self.acc[k as usize];
+            PairCtx::finish(out, *approaching);
+            rows.set(k as usize, out);
+            self.acc[k as usize] = ([0.0; 11], 0.0);
+        }
+    }
+
+    /// The velocity-correction kernel on the touched blocks of the predicted positions `p`
+    /// (padded particle arrays), with start positions `x`, inverse masses `w` and, when given,
+    /// the substep's velocities `v` (the box centres are then `x + h v`, else the clamp's
+    /// copy). The kernel leaves particles without contacts as they are, so the other blocks
+    /// are skipped. In parallel over fixed groups of [`APPLY_BLOCKS`] blocks when `exec` is
+    /// parallel and enough blocks were touched, else the runs of consecutive touched blocks
+    /// in one call: the same bits either way.
+    pub(crate) fn apply(&self, x: [&[f32]; 3], w: &[f32], v: Option<[&[f32]; 3]>, p: [&mut [f32]; 3], ap: ApplyParams, exec: Exec) {
+        let simd = exec.simd();
+        let inp = |x, w, v| ApplyInput {
+            start: 0,
+            x,
+            w,
+            v,
+            q: [&self.pred[0][..], &self.pred[1][..], &self.pred[2][..]],
+            b: &self.damping,
+            sums: &self.sums,
+            friction: ap.friction,
+            h: ap.h,
+            r: ap.r,
+        };
+        let [px, py, pz] = p;
+        let nb = self.hit.len().min(px.len() / LANES).min(py.len() / LANES).min(pz.len() / LANES);
+        let parallel = exec.parallel() && self.touched.len() >= APPLY_PARALLEL_BLOCKS && rayon::current_num_threads() > 1;
+        if parallel {
+            let len = APPLY_BLOCKS * LANES;
+            (
+                px[..nb * LANES].par_chunks_mut(len),
+                py[..nb * LANES].par_chunks_mut(len),
+                pz[..nb * LANES].par_chunks_mut(len),
+            )
+                .into_par_iter()
+                .enumerate()
+                .for_each(|(c, (a, b, d))| {
+                    let g = c * len..c * len + a.len();
+                    let b0 = c * APPLY_BLOCKS;
+                    // Runs of one block: (block of the sums, block of the group's slices).
+                    let runs = (0..a.len() / LANES).filter_map(|l| self.hit[b0 + l].then_some((b0 + l, l, 1)));
+                    let x = [&x[0][g.clone()], &x[1][g.clone()], &x[2][g.clone()]];
+                    let v = v.map(|v| [&v[0][g.clone()], &v[1][g.clone()], &v[2][g.clone()]]);
+                    apply_runs(&inp(x, &w[g], v), [a, b, d], runs, ap.response, simd);
+                });
+        } else {
+            let mut t = 0;
+            let touched = &self.touched;
+            let runs = std::iter::from_fn(|| {
+                let b = *touched.get(t)? as usize;
+                let mut run = 1;
+                while t + run < touched.len() && touched[t + run] as usize == b + run {
+                    run += 1;
+                }
+                t += run;
+                Some((b, b, run))
+            })
+            .filter(|&(b, _, run)| b + run <= nb);
+            apply_runs(&inp(x, w, v), [px, py, pz], runs, ap.response, simd);
+        }
+    }
+}
