@@ -44,7 +44,7 @@ fn main() -> weft::Result<()> {
         Some(t) => Some(t.parse::<f32>().map_err(|e| weft::WeftError::param("tethers", t, e.to_string()))?),
     };
     let (mut w, dt) = weft::perf::fold_world_tethered(100, fabric, params, sc, tethers)?;
-    println!("step   total   build   query   start   pairs    corr   clamp rebuild blocks mid-q mid-r");
+    println!("step   total   build   query   start   pairs    corr   clamp rebuild  pairs");
     let mut last = w.self_collision_stats().clone();
     for s in 0..steps {
         w.step(dt)?;
@@ -64,13 +64,7 @@ fn main() -> weft::Result<()> {
         for v in parts.iter().chain([&clamp]) {
             print!(" {v:7.3}");
         }
-        println!(
-            " {:7} {:6} {:5} {:5}",
-            p.rebuilds - q.rebuilds,
-            w.self_collision_pair_count(),
-            p.mid_queries - q.mid_queries,
-            p.mid_refreshes - q.mid_refreshes
-        );
+        println!(" {:7} {:6}", p.rebuilds - q.rebuilds, w.self_collision_pair_count());
         last = now;
     }
     Ok(())

@@ -32,26 +32,18 @@ pub struct SelfCollisionStats {
 /// rest of [`SelfCollisionStats::time_s`]).
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
 pub struct SelfCollisionPhases {
-    /// Hash build or tree refit (steps that rebuild the candidate lists).
+    /// Hash build or tree refit (steps that build the candidate lists).
     pub build_s: f64,
-    /// Broadphase query for the candidate lists.
+    /// Broadphase query, and the candidates filtered to the step's lists.
     pub query_s: f64,
-    /// The rest of the step start: the reuse check, the start positions, the active blocks.
-    pub lists_s: f64,
-    /// Step starts in all (`build_s + query_s + lists_s` plus the copy of the start positions).
+    /// Step starts in all (`build_s + query_s`, the reuse check and the flat pair list).
     pub step_start_s: f64,
-    /// Pair passes of the substeps (near list and contact sums).
+    /// Pair passes of the substeps (contact tests and sums).
     pub pairs_s: f64,
     /// Velocity corrections of the substeps.
     pub correction_s: f64,
-    /// Steps that rebuilt the candidate lists (ran the broadphase).
+    /// Steps that built the candidate lists (ran the broadphase); the others kept them.
     pub rebuilds: u64,
-    /// Mid lists queried from the hash of the predicted positions in the substeps of slow
-    /// steps, which run without candidate lists (their time is in `pairs_s`).
-    pub mid_queries: u64,
-    /// Mid lists refreshed for the few particles that moved past their bound instead of
-    /// queried afresh (their time is in `pairs_s`).
-    pub mid_refreshes: u64,
 }
 
 impl SelfCollisionStats {

@@ -71,6 +71,9 @@ pub(crate) struct ContactPass {
     pred: [Vec<f32>; 3],
     /// Damping rates per particle, padded.
     damping: Vec<f32>,
+    /// The predicted positions, one `[x, y, z, 0]` record a particle (whole positions
+    /// gathered in one load each).
+    xyzw: Vec<[f32; 4]>,
     /// Pairs in contact range, one buffer per chunk of the list.
     near: Vec<Vec<(u32, u32)>>,
     /// Their contacts (computed in the parallel part), same layout.
@@ -133,9 +136,16 @@ impl ContactPass {
             self.near.resize_with(chunks, Vec::new);
             self.found.resize_with(chunks, Vec::new);
         }
+        let p = ctx.p;
+        let n = p[0].len().min(p[1].len()).min(p[2].len());
+        self.xyzw.clear();
+        if list.len() > 0 {
+            self.xyzw.extend((0..n).map(|i| [p[0][i], p[1][i], p[2][i], 0.0]));
+        }
+        let xyzw = &self.xyzw[..];
         let find = |c: usize, (near, found): (&mut Vec<(u32, u32)>, &mut Vec<Option<PairContact>>)| {
             near.clear();
-            ctx.touching(list, c * PAIR_CHUNK..((c + 1) * PAIR_CHUNK).min(list.len()), simd, near);
+            ctx.touching(list, c * PAIR_CHUNK..((c + 1) * PAIR_CHUNK).min(list.len()), xyzw, simd, near);
             found.clear();
             found.extend(near.iter().map(|&(i, j)| ctx.pair_contact(i as usize, j as usize)));
         };

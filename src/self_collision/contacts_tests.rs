@@ -392,3 +392,53 @@ fn fold_with_parallel_pair_chunks_is_bitwise_on_any_thread_count() {
     }
     assert!(ranged > 4, "the pair list spanned several chunks in {ranged} steps");
 }
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+    /// The eight-lane contact test equals its scalar twin on random lists (runs of one `i`
+    /// and mixed groups, lengths around the lane width and the chunk size), and finds exactly
+    /// the pairs closer than the margin of `d` (the scalar decision, written out here).
+    #[test]
+    fn touching_lanes_equal_the_scalar_test(n in 2usize..300, pairs in 0usize..5000, seed in proptest::prelude::any::<u64>()) {
+        let mut rng = signed(seed | 1);
+        let p: [Vec<f32>; 3] = std::array::from_fn(|_| (0..n).map(|_| 0.05 * rng()).collect());
+        let xyzw: Vec<[f32; 4]> = (0..n).map(|i| [p[0][i], p[1][i], p[2][i], 0.0]).collect();
+        // CSR lists of random upper partners, some particles with long runs.
+        let mut first = vec![0u32];
+        let mut ids = Vec::new();
+        for i in 0..n - 1 {
+            let k = if rng() > 0.6 { (pairs / n).min(n - 1 - i) } else { ((rng() + 1.0) * 3.0) as usize % (n - i) };
+            let mut js: Vec<u32> = (0..k).map(|_| (i + 1 + ((rng() + 1.0) * 0.5 * (n - i - 1) as f32) as usize).min(n - 1) as u32).collect();
+            js.sort_unstable();
+            js.dedup();
+            ids.extend(js);
+            first.push(ids.len() as u32);
+        }
+        first.push(ids.len() as u32);
+        let mut list = PairList::default();
+        list.fill(&first, &ids);
+        let (w, rest, cloth) = (vec![1.0; n], [vec![0.0; n], vec![0.0; n], vec![0.0; n]], vec![0u32; n]);
+        let ctx = PairCtx {
+            x: [&p[0], &p[1], &p[2]],
+            p: [&p[0], &p[1], &p[2]],
+            w: &w,
+            rest: [&rest[0], &rest[1], &rest[2]],
+            cloth_of: &cloth,
+            d: 0.03,
+            response: Response::Pbd,
+        };
+        let (mut lanes, mut scalar) = (Vec::new(), Vec::new());
+        for start in (0..list.len()).step_by(1000) {
+            let r = start..(start + 1000).min(list.len());
+            ctx.touching(&list, r.clone(), &xyzw, true, &mut lanes);
+            ctx.touching(&list, r, &xyzw, false, &mut scalar);
+        }
+        proptest::prop_assert_eq!(&lanes, &scalar);
+        let lim = 0.03f32 * 0.03 * 1.0001;
+        let want: Vec<(u32, u32)> = list.i.iter().zip(&list.j).map(|(&i, &j)| (i, j)).filter(|&(i, j)| {
+            let v: [f32; 3] = std::array::from_fn(|a| p[a][i as usize] - p[a][j as usize]);
+            v[0] * v[0] + v[1] * v[1] + v[2] * v[2] < lim
+        }).collect();
+        proptest::prop_assert_eq!(&lanes, &want);
+    }
+}

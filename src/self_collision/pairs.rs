@@ -1,7 +1,7 @@
 //! The step's pair list and the per-pair contact of the substep pass (the method is described
 //! in [`crate::self_collision`]).
 
-use crate::data::lanes::{gather1_unchecked, load_idx_unchecked, F32s, Vec3x8, LANES};
+use crate::data::lanes::{gather_xyzw8_unchecked, load_idx_unchecked, F32s, Vec3x8, LANES};
 use crate::model::self_collision::Response;
 #[cfg(test)]
 use crate::self_collision::neighbours::Neighbours;
@@ -52,40 +52,45 @@ const COINCIDENT: [f32; 3] = [0.267_261_24, 0.534_522_5, 0.801_783_7];
 
 impl PairCtx<'_> {
     /// Appends to `out` the pairs `(i[k], j[k])` of `range` of `list` that may be in contact:
-    /// closer than `d` at the predicted positions, with a 1e-4 margin so that the exact test of
-    /// [`PairCtx::pair_contact`] makes every decision and both backends find the same contacts.
-    /// Eight pairs at a time (`f32x8` on gathered predictions) when `simd`, else one by one
-    /// (the scalar twin).
-    pub(crate) fn touching(&self, list: &PairList, range: std::ops::Range<usize>, simd: bool, out: &mut Vec<(u32, u32)>) {
+    /// closer than `d` at the predicted positions `xyzw` (a copy of `p`, one record a
+    /// particle), with a 1e-4 margin so that the exact test of [`PairCtx::pair_contact`]
+    /// makes every decision and both backends find the same contacts. Eight pairs at a time
+    /// when `simd`, else one by one (the scalar twin); the differences and squares are the same
+    /// operations either way.
+    pub(crate) fn touching(
+        &self,
+        list: &PairList,
+        range: std::ops::Range<usize>,
+        xyzw: &[[f32; 4]],
+        simd: bool,
+        out: &mut Vec<(u32, u32)>,
+    ) {
         let lim = self.d * self.d * 1.0001;
         let (li, lj) = (&list.i[range.clone()], &list.j[range]);
         let mut done = 0;
-        // Every index below the arrays' length, checked once, so the gathers need no checks.
-        let len = self.p.iter().map(|a| a.len()).min().unwrap_or(0);
-        if simd && (list.top as usize) < len {
+        // Every index below the records' length, checked once, so the gathers need no checks.
+        if simd && (list.top as usize) < xyzw.len() {
             let limv = F32s::splat(lim);
             let groups = li.len() / LANES;
             for g in 0..groups {
                 let o = g * LANES;
                 // SAFETY: `o + LANES <= li.len() == lj.len()`; every id is at most
-                // `list.top < len` (checked above).
-                let v = unsafe {
-                    let jj = load_idx_unchecked(lj, o);
-                    let g = |a: &[f32]| gather1_unchecked(a, &jj);
-                    // The list is sorted by `i`: eight pairs mostly share it, then one load
+                // `list.top < xyzw.len()` (checked above).
+                let (a, b) = unsafe {
+                    let b = gather_xyzw8_unchecked(xyzw, &load_idx_unchecked(lj, o));
+                    // The list is sorted by `i`: eight pairs mostly share it, then one record
                     // broadcast (the same values as the gather).
-                    let pi = if li[o] == li[o + LANES - 1] {
-                        let i = li[o] as usize;
-                        [self.p[0], self.p[1], self.p[2]].map(|a| F32s::splat(*a.get_unchecked(i)))
+                    let a = if li[o] == li[o + LANES - 1] {
+                        xyzw.get_unchecked(li[o] as usize).map(F32s::splat)
                     } else {
-                        let ii = load_idx_unchecked(li, o);
-                        [self.p[0], self.p[1], self.p[2]].map(|a| gather1_unchecked(a, &ii))
+                        gather_xyzw8_unchecked(xyzw, &load_idx_unchecked(li, o))
                     };
-                    Vec3x8 {
-                        x: pi[0] - g(self.p[0]),
-                        y: pi[1] - g(self.p[1]),
-                        z: pi[2] - g(self.p[2]),
-                    }
+                    (a, b)
+                };
+                let v = Vec3x8 {
+                    x: a[0] - b[0],
+                    y: a[1] - b[1],
+                    z: a[2] - b[2],
                 };
                 let mut bits = v.length_sq().simd_lt(limv).to_bitmask();
                 while bits != 0 {
@@ -97,12 +102,8 @@ impl PairCtx<'_> {
             done = groups * LANES;
         }
         for (&i, &j) in li[done..].iter().zip(&lj[done..]) {
-            let (iu, ju) = (i as usize, j as usize);
-            let v = [
-                self.p[0][iu] - self.p[0][ju],
-                self.p[1][iu] - self.p[1][ju],
-                self.p[2][iu] - self.p[2][ju],
-            ];
+            let (a, b) = (xyzw[i as usize], xyzw[j as usize]);
+            let v = [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
             if v[0] * v[0] + v[1] * v[1] + v[2] * v[2] < lim {
                 out.push((i, j));
             }
@@ -263,7 +264,7 @@ impl PairCtx<'_> {
             let rl = rest2.sqrt();
             r.map(|c| c / rl)
         } else {
-            // `i < j` here (the near list's order); the reverse side gets the negation.
+            // `i < j` here (the pair list's order); the reverse side gets the negation.
             let s = if i < j { 1.0 } else { -1.0 };
             COINCIDENT.map(|c| c * s)
         };

@@ -76,7 +76,7 @@ impl World {
             limit: TRAVEL_FACTOR * a.d / n_sub as f32,
             h,
         };
-        // Each chunk also copies the predictions of its active blocks (one parallel pass),
+        // Each chunk also copies its predictions as VcCPBD's box centres (one parallel pass),
         // unless the correction derives them (no obstacles).
         let sink = self.selfcol.prediction_sink(self.obstacles.is_empty());
         self.particles.for_chunks(parallel, |mut c| {

@@ -26,7 +26,7 @@
 //! reads the positions from the build's cell-ordered copy (the query particle's through its
 //! slot), so unlike [`SpatialHash::query_all`] it needs no pass checking that it was given the
 //! build's positions. The lane loop is then the cost (the candidates scanned), and the skin policy
-//! (`self_verlet`) decides how often it runs.
+//! (`self_collision::reuse`) decides how often it runs.
 
 use crate::data::lanes::{load_idx, F32s, Vec3x8, LANES};
 use crate::self_collision::hash::{SpatialHash, NO_BUCKET};

@@ -98,18 +98,12 @@ struct Row {
     /// Largest constraint strain `|l - l0| / l0` at the end of the row.
     max_strain: f64,
     /// Collision wall time a step by phase, ms: hash build (or tree refit), broadphase
-    /// query, rest of the step start (reuse check, active blocks), substep pair passes,
+    /// query, rest of the step start (reuse check, flat pair list), substep pair passes,
     /// substep corrections; the speed clamp (with its mean velocity, summed in the predict
     /// pass) is the rest of `collision_ms`.
     phase_ms: [f64; 5],
-    /// Steps that ran the broadphase (the others reused the candidate lists or, slow steps
-    /// with the hash, went without them).
+    /// Steps that ran the broadphase (the others kept the candidate lists).
     rebuilds: u64,
-    /// Mid lists queried from a hash of the predicted positions in the substeps of slow steps
-    /// (their time is in the pairs phase).
-    mid_queries: u64,
-    /// Mid lists refreshed for the few particles past their bound instead (in the pairs phase).
-    mid_refreshes: u64,
     /// Runs of the row (`--repeat`); the row is the one with the median collision time.
     runs: u32,
     /// Smallest and largest collision wall ms a step over the runs.
@@ -234,8 +228,6 @@ fn measure(size: u32, fi: usize, ri: usize, broadphase: SelfBroadphase, cfg: Run
             [p.build_s, p.query_s, list_rest, p.pairs_s, p.correction_s].map(|t| t * 1e3 / steps.max(1) as f64)
         },
         rebuilds: st.phases.rebuilds,
-        mid_queries: st.phases.mid_queries,
-        mid_refreshes: st.phases.mid_refreshes,
         runs: 1,
         collision_ms_range: [st.ms_per_step(); 2],
     })
@@ -320,17 +312,15 @@ pub fn run(args: VccpbdArgs) -> weft::Result<ExitCode> {
         );
     }
     println!();
+    println!("collision wall ms a step by phase (clamp = the rest), broadphase runs out of {steps} steps");
     println!(
-        "collision wall ms a step by phase (clamp = the rest), broadphase runs out of {steps} steps, mid lists queried and refreshed in the substeps (in pairs)"
-    );
-    println!(
-        "{} {:>7} {:>7} {:>7} {:>7} {:>7} {:>7} {:>8} {:>6} {:>6}",
-        KEY_HEAD, "build", "query", "start", "pairs", "correct", "clamp", "rebuilds", "mid q", "mid r"
+        "{} {:>7} {:>7} {:>7} {:>7} {:>7} {:>7} {:>8}",
+        KEY_HEAD, "build", "query", "start", "pairs", "correct", "clamp", "rebuilds"
     );
     for r in &rows {
         let p = r.phase_ms;
         println!(
-            "{} {:>7.3} {:>7.3} {:>7.3} {:>7.3} {:>7.3} {:>7.3} {:>8} {:>6} {:>6}",
+            "{} {:>7.3} {:>7.3} {:>7.3} {:>7.3} {:>7.3} {:>7.3} {:>8}",
             key(r),
             p[0],
             p[1],
@@ -338,9 +328,7 @@ pub fn run(args: VccpbdArgs) -> weft::Result<ExitCode> {
             p[3],
             p[4],
             r.collision_ms - p.iter().sum::<f64>(),
-            r.rebuilds,
-            r.mid_queries,
-            r.mid_refreshes
+            r.rebuilds
         );
     }
     println!();
