@@ -40,7 +40,7 @@
 //!   at random places); the choice is made at each build from its positions (module `rows`).
 //! * The build also copies the positions into `cell_entries` order, so candidates are read
 //!   contiguously; the query checks that it is given the positions of the build. The
-//!   self-collision query ([`SpatialHash::query_upper_unskipped`], module `hash_rest`) also
+//!   self-collision query ([`SpatialHash::query_upper_unskipped_cells`], module `hash_rest`) also
 //!   reads rest positions and cloth ids copied into that order after the build.
 //! * Spacing: the paper uses `spacing = max_dist`. On a folded cloth at rest (particles on the
 //!   cell lattice) a spacing of about `1.5 * max_dist` queried ~1.5x faster in our runs (fewer

@@ -84,7 +84,7 @@ impl SpatialHash {
     where
         K: Fn(usize, u32) -> bool + Sync,
     {
-        self.query_parallel::<false, K>(x, y, z, n, max_dist, keep, out)
+        self.query_parallel(x, y, z, n, max_dist, keep, out)
     }
 
     /// Serial, scalar twin of [`SpatialHash::query_filtered`]; produces identical lists.
@@ -102,94 +102,38 @@ impl SpatialHash {
     where
         K: Fn(usize, u32) -> bool,
     {
-        self.query_serial::<false, K>(x, y, z, n, max_dist, keep, out)
+        self.query_serial(x, y, z, n, max_dist, keep, out)
     }
 
-    /// [`SpatialHash::query_filtered`] listing each pair once, in the list of its smaller id
-    /// (`j > i` is tested on the candidates before `keep` and before they are stored).
-    /// Equal to `query_filtered` with `keep(i, j) && j > i`; parallel like it.
+    /// The parallel query: the build's positions checked in parallel, then the lanes scan of
+    /// every particle.
     #[allow(clippy::too_many_arguments)]
-    pub fn query_upper_filtered<K>(
-        &self,
-        x: &[f32],
-        y: &[f32],
-        z: &[f32],
-        n: usize,
-        max_dist: f32,
-        keep: &K,
-        out: &mut Neighbours,
-    ) -> Result<()>
-    where
-        K: Fn(usize, u32) -> bool + Sync,
-    {
-        self.query_parallel::<true, K>(x, y, z, n, max_dist, keep, out)
-    }
-
-    /// Serial, scalar twin of [`SpatialHash::query_upper_filtered`]; produces identical lists.
-    #[allow(clippy::too_many_arguments)]
-    pub fn query_upper_filtered_serial<K>(
-        &self,
-        x: &[f32],
-        y: &[f32],
-        z: &[f32],
-        n: usize,
-        max_dist: f32,
-        keep: &K,
-        out: &mut Neighbours,
-    ) -> Result<()>
-    where
-        K: Fn(usize, u32) -> bool,
-    {
-        self.query_serial::<true, K>(x, y, z, n, max_dist, keep, out)
-    }
-
-    /// The parallel queries: the build's positions checked in parallel, then the lanes scan
-    /// of every particle (each pair once when `UPPER`).
-    #[allow(clippy::too_many_arguments)]
-    fn query_parallel<const UPPER: bool, K>(
-        &self,
-        x: &[f32],
-        y: &[f32],
-        z: &[f32],
-        n: usize,
-        max_dist: f32,
-        keep: &K,
-        out: &mut Neighbours,
-    ) -> Result<()>
+    fn query_parallel<K>(&self, x: &[f32], y: &[f32], z: &[f32], n: usize, max_dist: f32, keep: &K, out: &mut Neighbours) -> Result<()>
     where
         K: Fn(usize, u32) -> bool + Sync,
     {
         let same = || (0..n).into_par_iter().all(|i| self.unchanged(x, y, z, i));
         let md2 = self.check_query(x, y, z, n, max_dist, same)?;
         let r = search_radius(max_dist);
-        out.fill_parallel(n, |i, buf| self.scan::<true, UPPER, K>(x, y, z, n, i, md2, r, keep, buf))
+        out.fill_parallel(n, |i, buf| self.scan::<true, K>(x, y, z, n, i, md2, r, keep, buf))
     }
 
     /// The serial scalar twins of [`SpatialHash::query_parallel`].
     #[allow(clippy::too_many_arguments)]
-    fn query_serial<const UPPER: bool, K>(
-        &self,
-        x: &[f32],
-        y: &[f32],
-        z: &[f32],
-        n: usize,
-        max_dist: f32,
-        keep: &K,
-        out: &mut Neighbours,
-    ) -> Result<()>
+    fn query_serial<K>(&self, x: &[f32], y: &[f32], z: &[f32], n: usize, max_dist: f32, keep: &K, out: &mut Neighbours) -> Result<()>
     where
         K: Fn(usize, u32) -> bool,
     {
         let same = || (0..n).all(|i| self.unchanged(x, y, z, i));
         let md2 = self.check_query(x, y, z, n, max_dist, same)?;
         let r = search_radius(max_dist);
-        out.fill_serial(n, |i, buf| self.scan::<false, UPPER, K>(x, y, z, n, i, md2, r, keep, buf))
+        out.fill_serial(n, |i, buf| self.scan::<false, K>(x, y, z, n, i, md2, r, keep, buf))
     }
 
     /// Appends the sorted neighbours `j` of particle `i` with `keep(i, j)` to `buf`.
     #[allow(clippy::too_many_arguments)]
     #[inline]
-    fn scan<const SIMD: bool, const UPPER: bool, K: Fn(usize, u32) -> bool>(
+    fn scan<const SIMD: bool, K: Fn(usize, u32) -> bool>(
         &self,
         x: &[f32],
         y: &[f32],
@@ -208,10 +152,10 @@ impl SpatialHash {
         let start = buf.len();
         let iu = i as u32;
         let p = [xi, yi, zi];
-        let boxed = self.box_ranges(p, r, |b0, b1| self.scan_buckets::<SIMD, UPPER>(b0, b1, iu, p, md2, buf));
+        let boxed = self.box_ranges(p, r, |b0, b1| self.scan_buckets::<SIMD>(b0, b1, iu, p, md2, buf));
         if !boxed {
             for j in 0..n {
-                if (if UPPER { j > i } else { j != i }) && within(xi, yi, zi, x[j], y[j], z[j], md2) && keep(i, j as u32) {
+                if j != i && within(xi, yi, zi, x[j], y[j], z[j], md2) && keep(i, j as u32) {
                     buf.push(j as u32);
                 }
             }
@@ -255,10 +199,10 @@ impl SpatialHash {
 
     /// Tests the particles of buckets `b0..b1` (one contiguous range) against `p`.
     #[inline(always)]
-    fn scan_buckets<const SIMD: bool, const UPPER: bool>(&self, b0: usize, b1: usize, iu: u32, p: [f32; 3], md2: f32, buf: &mut Vec<u32>) {
+    fn scan_buckets<const SIMD: bool>(&self, b0: usize, b1: usize, iu: u32, p: [f32; 3], md2: f32, buf: &mut Vec<u32>) {
         let range = self.cell_start[b0] as usize..self.cell_start[b1] as usize;
         let c = Candidates {
-            above: UPPER,
+            above: false,
             ids: &self.cell_entries,
             x: &self.sx,
             y: &self.sy,
@@ -274,29 +218,28 @@ mod tests {
     use crate::test_rng::signed;
 
     #[test]
-    fn upper_query_equals_the_filtered_query_and_its_twin() {
+    fn filtered_query_equals_its_twin_and_the_all_pairs_path() {
         let mut rng = signed(5);
         let n = 700;
         let p: [Vec<f32>; 3] = std::array::from_fn(|_| (0..n).map(|_| 0.3 * rng()).collect());
         let mut h = SpatialHash::new(n);
         h.build(&p[0], &p[1], &p[2], n, 0.05).unwrap();
         let keep = |i: usize, j: u32| !(i + j as usize).is_multiple_of(3);
-        let mut want = Neighbours::new();
-        h.query_filtered(&p[0], &p[1], &p[2], n, 0.05, &|i, j| keep(i, j) && j as usize > i, &mut want)
-            .unwrap();
-        assert!(want.total() > 100);
-        let (mut a, mut b) = (Neighbours::new(), Neighbours::new());
-        h.query_upper_filtered(&p[0], &p[1], &p[2], n, 0.05, &keep, &mut a).unwrap();
-        h.query_upper_filtered_serial(&p[0], &p[1], &p[2], n, 0.05, &keep, &mut b).unwrap();
-        assert_eq!(a, want);
-        assert_eq!(b, want);
+        let (mut a, mut b, mut all) = (Neighbours::new(), Neighbours::new(), Neighbours::new());
+        h.query_filtered(&p[0], &p[1], &p[2], n, 0.05, &keep, &mut a).unwrap();
+        h.query_filtered_serial(&p[0], &p[1], &p[2], n, 0.05, &keep, &mut b).unwrap();
+        h.query_all(&p[0], &p[1], &p[2], n, 0.05, &mut all).unwrap();
+        all.retain(keep);
+        assert!(all.total() > 100);
+        assert_eq!(a, all);
+        assert_eq!(b, all);
         // A spacing far below the radius's rounding margin takes the all-pairs path.
         let tiny = [vec![0.0f32; 5], vec![0.0; 5], vec![0.0; 5]];
         h.build(&tiny[0], &tiny[1], &tiny[2], 5, 1e-30).unwrap();
-        h.query_upper_filtered_serial(&tiny[0], &tiny[1], &tiny[2], 5, 1e-30, &|_, _| true, &mut b)
+        h.query_filtered_serial(&tiny[0], &tiny[1], &tiny[2], 5, 1e-30, &|_, _| true, &mut b)
             .unwrap();
         assert_eq!(b.pairs().count(), 10);
-        assert!((0..5).all(|i| b.of(i).iter().all(|&j| j as usize > i)));
+        assert_eq!(b.total(), 20);
     }
 
     /// The row memo of `fill_buckets` gives every particle the bucket of its own point: runs

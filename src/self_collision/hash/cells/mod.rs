@@ -1,6 +1,6 @@
-//! The self-collision query of the spatial hash, cell by cell over a half shell: the lists of
-//! [`SpatialHash::query_upper_unskipped`] (module `hash_rest`), found with half the distance
-//! tests and a ninth of the row look-ups.
+//! The self-collision query of the spatial hash, cell by cell over a half shell: each pair
+//! once, rest neighbours dropped (the rule of module `hash_rest`), found with half the
+//! distance tests and a ninth of the row look-ups of a query particle by particle.
 //!
 //! # Method
 //! The particle query scans, for each particle, the 3x3x3 cells around it: 9 rows, each a
@@ -74,11 +74,12 @@ struct Reach {
 }
 
 impl SpatialHash {
-    /// Same lists as [`SpatialHash::query_upper_unskipped`] (each pair once under its smaller
+    /// The self-collision lists (each pair once under its smaller
     /// id, within `max_dist`, rest neighbours within `skip` dropped), found cell by cell over
     /// a half shell (see the module docs); parallel over fixed groups of buckets.
     ///
-    /// Errors like [`SpatialHash::query_upper_unskipped`].
+    /// Errors if `max_dist` or `skip` is negative or non-finite, `max_dist` exceeds the
+    /// spacing, or no rest data was attached since the last build.
     pub fn query_upper_unskipped_cells(&self, max_dist: f32, skip: f32, out: &mut Neighbours) -> Result<()> {
         let (md2, s2) = self.check_rest_query(max_dist, skip)?;
         let k = Reach {

@@ -33,8 +33,6 @@ fn check(s: &Scene, spacing: f32, reach: f32, skip: f32) -> usize {
     h.build(&p[0], &p[1], &p[2], n, spacing).unwrap();
     h.attach_rest([&rest[0], &rest[1], &rest[2]], cloth).unwrap();
     let mut got = Neighbours::new();
-    h.query_upper_unskipped(reach, skip, &mut got).unwrap();
-    assert_eq!(got, want, "particle query");
     for t in [1, 2] {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(t).build().unwrap();
         pool.install(|| h.query_upper_unskipped_cells(reach, skip, &mut got)).unwrap();
@@ -50,7 +48,7 @@ fn check(s: &Scene, spacing: f32, reach: f32, skip: f32) -> usize {
 }
 
 #[test]
-fn cells_query_equals_particle_query_and_brute_force_on_lattices() {
+fn cells_query_equals_the_brute_force_on_lattices() {
     let h = 0.01f32;
     // Crumpled, partly overlapping, one particle NaN.
     let mut s = lattices(14, h, 1.0, 0.5, 17);
