@@ -26,6 +26,9 @@ pub(crate) const PAIR_CHUNK: usize = 4096;
 /// Particle blocks one parallel task handles in the correction pass.
 pub(crate) const APPLY_BLOCKS: usize = 64;
 
+/// Contacts from which the pair pass adds them in parallel (fewer cost more to fork).
+pub(crate) const PARALLEL_CONTACTS: usize = 2048;
+
 /// Touched blocks from which the correction runs in parallel (fewer cost more to fork than to
 /// correct).
 const APPLY_PARALLEL_BLOCKS: usize = 17;
@@ -81,8 +84,9 @@ pub(crate) struct ContactPass {
     /// Sums and approaching counts of one particle while its contacts are added (zero
     /// between passes).
     acc: Vec<([f32; 11], f32)>,
-    /// Particles the last pass added a contact to, in first-contact order.
-    written: Vec<u32>,
+    /// Particles the last pass added a contact to, by part (see [`ContactPass::pair_pass`]),
+    /// in first-contact order.
+    written: Vec<Vec<u32>>,
     /// Blocks holding them, ascending.
     touched: Vec<u32>,
     /// Whether each block is in `touched`.
@@ -156,32 +160,57 @@ impl ContactPass {
             bufs.0.iter_mut().zip(bufs.1.iter_mut()).enumerate().for_each(|(c, b)| find(c, b));
         }
         let mut rows = self.sums.rows();
-        for &k in &self.written {
+        for &k in self.written.iter().flatten() {
             rows.set(k as usize, &[0.0; 11]);
         }
         for &b in &self.touched {
             self.hit[b as usize] = false;
         }
-        self.written.clear();
         self.touched.clear();
-        let found = self.near[..chunks].iter().flatten().zip(self.found[..chunks].iter().flatten());
-        for (&(i, j), contact) in found {
-            let Some(c) = contact else { continue };
-            for (side, a) in [(0, i as usize), (1, j as usize)] {
-                let Some((out, approaching)) = self.acc.get_mut(a) else { continue };
-                let first = out[10] == 0.0;
-                if c.add_to(side, out, approaching) && first {
-                    self.written.push(a as u32);
-                    let b = a / LANES;
-                    if !self.hit[b] {
-                        self.hit[b] = true;
-                        self.touched.push(b as u32);
+        self.written.iter_mut().for_each(Vec::clear);
+        // The particles are split into parts, each adding the contacts of its own particles
+        // in list order (every part reads the whole contact list): the same sums whatever the
+        // split, so it follows the threads.
+        let contacts: usize = self.near[..chunks].iter().map(Vec::len).sum();
+        let parts = if exec.parallel() && contacts >= PARALLEL_CONTACTS {
+            rayon::current_num_threads().clamp(1, 8)
+        } else {
+            1
+        };
+        let blocks = self.hit.len().div_ceil(parts).max(1);
+        self.written.resize_with(parts.max(self.written.len()), Vec::new);
+        let (near, found) = (&self.near[..chunks], &self.found[..chunks]);
+        let add = |part: usize, acc: &mut [([f32; 11], f32)], hit: &mut [bool], written: &mut Vec<u32>| {
+            let first_id = part * blocks * LANES;
+            for (&(i, j), contact) in near.iter().flatten().zip(found.iter().flatten()) {
+                let Some(c) = contact else { continue };
+                for (side, a) in [(0, i as usize), (1, j as usize)] {
+                    let Some((out, approaching)) = a.checked_sub(first_id).and_then(|k| acc.get_mut(k)) else {
+                        continue;
+                    };
+                    let first = out[10] == 0.0;
+                    if c.add_to(side, out, approaching) && first {
+                        written.push(a as u32);
+                        hit[(a - first_id) / LANES] = true;
                     }
                 }
             }
+        };
+        let written = &mut self.written[..parts];
+        if parts > 1 {
+            self.acc
+                .par_chunks_mut(blocks * LANES)
+                .zip(self.hit.par_chunks_mut(blocks))
+                .zip(written.par_iter_mut())
+                .enumerate()
+                .for_each(|(p, ((acc, hit), w))| add(p, acc, hit, w));
+        } else {
+            add(0, &mut self.acc, &mut self.hit, &mut written[0]);
         }
+        self.touched.extend(written.iter().flatten().map(|&k| k / LANES as u32));
         self.touched.sort_unstable();
-        for &k in &self.written {
+        self.touched.dedup();
+        for &k in written.iter().flatten() {
             let (out, approaching) = &mut self.acc[k as usize];
             PairCtx::finish(out, *approaching);
             rows.set(k as usize, out);

@@ -442,3 +442,42 @@ proptest::proptest! {
         proptest::prop_assert_eq!(&lanes, &want);
     }
 }
+
+/// Enough contacts that the pass adds them in parallel parts (one per thread): the sums and
+/// corrected positions equal the serial scalar pass's bit for bit, on 2 and 3 threads.
+#[test]
+fn contacts_added_in_parallel_parts_equal_the_serial_pass() {
+    let mut rng = signed(31);
+    let (rows, cols, s) = (160, 50, 0.02f32);
+    let (mut data, x0) = folded(rows, cols, s, 1.02 * s, 0.3 * s, &mut rng);
+    data.config = Some(SelfCollision::default());
+    let n = rows * cols;
+    let x = [padded(&x0[0]), padded(&x0[1]), padded(&x0[2])];
+    let mut p = x.clone();
+    for c in &mut p {
+        for v in &mut c[..n] {
+            *v += 0.5 * s * rng();
+        }
+    }
+    let w = padded(&vec![1.0f32; n]);
+    let (want_p, want) = compact(&mut data, &x, &p, &w, n, Exec::Scalar);
+    let contacts: f32 = want.iter().map(|v| v[10]).sum::<f32>() / 2.0;
+    assert!(
+        contacts as usize >= crate::self_collision::contacts::PARALLEL_CONTACTS,
+        "{contacts} contacts"
+    );
+    for threads in [2, 3] {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        let (got_p, got) = pool.install(|| compact(&mut data, &x, &p, &w, n, Exec::Parallel));
+        for i in 0..n {
+            assert_eq!(
+                got[i].map(f32::to_bits),
+                want[i].map(f32::to_bits),
+                "{threads} threads, particle {i}"
+            );
+            for a in 0..3 {
+                assert_eq!(got_p[a][i].to_bits(), want_p[a][i].to_bits(), "{threads} threads, p of {i}");
+            }
+        }
+    }
+}
