@@ -12,13 +12,19 @@
 //! [block plan](super::blocks) lets the kernel use contiguous loads and stores (or a fixed
 //! permutation of a 16-particle window) instead of gathers and scatters.
 //!
-//! Each colour is a rayon fork and join, not a spinning barrier between colours on a private
-//! pool: a barrier waits for a descheduled thread where work stealing does not.
+//! A grid cloth whose constraints are whole classes (see [`grid`](super::grid)) is laid out
+//! by class instead, and its colours run the structured kernels, which read no index, rest
+//! length or compliance array; the arrays stay for the scalar twin and every other reader.
+//!
+//! Each pass (a colour, or a grid's row-local classes together) is a rayon fork and join, not
+//! a spinning barrier between colours on a private pool: a barrier waits for a descheduled
+//! thread where work stealing does not.
 
 use rayon::prelude::*;
 
 use crate::constraints::blocks::{plan, Block, Window, GATHER, RUN, WINDOW};
 use crate::constraints::colour::colour_pairs;
+use crate::constraints::grid::{self, GridColour, GridSpec, Multipliers, Sweep};
 use crate::data::lanes::{gather1, load, load_idx, pick16, pick16_vec, round_up, store, F32s, SharedVec3, Vec3x8, LANES};
 
 pub use crate::model::params::MIN_LENGTH;
@@ -52,6 +58,9 @@ pub struct Colour {
     pub blocks: Vec<Block>,
     /// The distinct window permutations the blocks name.
     pub windows: Vec<Window>,
+    /// A class of a grid cloth: the SIMD sweep runs the structured kernel instead of the
+    /// arrays above (which list the same constraints in the kernel's order).
+    pub grid: Option<GridColour>,
 }
 
 impl Colour {
@@ -66,8 +75,21 @@ impl Colour {
 pub struct DistanceSet {
     /// The colours, solved in order.
     pub colours: Vec<Colour>,
+    /// How the SIMD sweep runs the colours, in order.
+    passes: Vec<Pass>,
     /// Multipliers were reset and not yet written: the next sweep reads them as zero.
     lambda_reset: bool,
+    /// The next sweep does not write the multipliers (see [`DistanceSet::reset_lambda_unkept`]).
+    unkept: bool,
+}
+
+/// One pass of the SIMD sweep.
+#[derive(Clone, Debug, PartialEq)]
+enum Pass {
+    /// One colour through its block plan.
+    Planned(usize),
+    /// Grid colours of one grid, row by row: one colour, or several row-local ones.
+    Grid(std::ops::Range<usize>),
 }
 
 /// A distance constraint given to [`DistanceSet::new`] (global particle indices).
@@ -86,6 +108,62 @@ pub struct DistanceInput {
 impl DistanceSet {
     /// Colours the constraints and lays them out; `sink` is an inert padding particle.
     pub fn new(input: &[DistanceInput], particle_count: usize, sink: u32) -> Self {
+        Self::with_grids(input, particle_count, sink, &[])
+    }
+
+    /// As [`new`](Self::new), where `grids` names cloth grids and the range of `input` that
+    /// holds each one's constraints: a grid whose constraints are whole classes of one rest
+    /// length and compliance each gets one colour per class and the structured kernels; the
+    /// others are coloured with the rest.
+    pub fn with_grids(input: &[DistanceInput], particle_count: usize, sink: u32, grids: &[(GridSpec, std::ops::Range<usize>)]) -> Self {
+        let mut colours = Vec::new();
+        let mut taken = vec![false; input.len()];
+        for (spec, range) in grids {
+            let Some(part) = input.get(range.clone()) else { continue };
+            let Some(classes) = grid::classify(*spec, part.iter().map(|c| (c.a, c.b, c.rest, c.compliance))) else {
+                continue;
+            };
+            for (class, slots) in classes.iter().enumerate() {
+                let Some(&first) = slots.first() else { continue };
+                let c0 = &part[first];
+                let mut col = Colour {
+                    grid: Some(GridColour::new(*spec, class as u8, c0.rest, c0.compliance)),
+                    ..Colour::default()
+                };
+                for &k in slots {
+                    let c = &part[k];
+                    col.a.push(c.a);
+                    col.b.push(c.b);
+                    col.rest.push(c.rest);
+                    col.compliance.push(c.compliance);
+                }
+                colours.push(col);
+            }
+            taken[range.clone()].fill(true);
+        }
+        let rest: Vec<DistanceInput> = input.iter().zip(&taken).filter(|(_, &t)| !t).map(|(c, _)| *c).collect();
+        colours.extend(Self::coloured(&rest, particle_count));
+        for col in &mut colours {
+            col.real = col.a.len();
+            let len = round_up(col.real);
+            col.a.resize(len, sink);
+            col.b.resize(len, sink);
+            col.rest.resize(len, 0.0);
+            col.compliance.resize(len, 0.0);
+            col.lambda = vec![0.0; len];
+            col.replan();
+        }
+        colours.retain(|c| c.real > 0);
+        let mut set = DistanceSet {
+            colours,
+            ..Default::default()
+        };
+        set.plan_passes();
+        set
+    }
+
+    /// The general colouring of constraints that are not whole grid classes.
+    fn coloured(input: &[DistanceInput], particle_count: usize) -> Vec<Colour> {
         // Large offset families (same `b − a`: on a grid, horizontal stretch, vertical bend, a
         // shear diagonal...) are coloured greedily family after family, each in order of `a`,
         // which gives mostly regular colours (alternate edges, alternate rows). The rest
@@ -126,21 +204,46 @@ impl DistanceSet {
             col.rest.push(c.rest);
             col.compliance.push(c.compliance);
         }
-        for col in &mut colours {
-            col.real = col.a.len();
-            let len = round_up(col.real);
-            col.a.resize(len, sink);
-            col.b.resize(len, sink);
-            col.rest.resize(len, 0.0);
-            col.compliance.resize(len, 0.0);
-            col.lambda = vec![0.0; len];
-            col.replan();
+        colours
+    }
+
+    /// Groups the colours into passes: a grid's consecutive row-local colours share one.
+    fn plan_passes(&mut self) {
+        self.passes.clear();
+        let mut k = 0;
+        while k < self.colours.len() {
+            let Some(g) = self.colours[k].grid else {
+                self.passes.push(Pass::Planned(k));
+                k += 1;
+                continue;
+            };
+            let mut end = k + 1;
+            while g.row_local() && end < self.colours.len() && end - k < 4 {
+                match self.colours[end].grid {
+                    Some(h) if h.spec == g.spec && h.row_local() => end += 1,
+                    _ => break,
+                }
+            }
+            self.passes.push(Pass::Grid(k..end));
+            k = end;
         }
-        colours.retain(|c| c.real > 0);
-        DistanceSet {
-            colours,
-            lambda_reset: false,
+    }
+
+    /// Re-reads each grid colour's rest length and compliance from its arrays after they were
+    /// changed; a colour whose values are no longer uniform runs through its block plan.
+    pub fn refresh_grids(&mut self) {
+        for col in &mut self.colours {
+            if let Some(g) = &mut col.grid {
+                let (rest, comp) = (&col.rest[..col.real], &col.compliance[..col.real]);
+                let same = |v: &[f32]| v.iter().all(|x| x.to_bits() == v[0].to_bits());
+                if same(rest) && same(comp) {
+                    (g.rest, g.compliance) = (rest[0], comp[0]);
+                } else {
+                    col.grid = None;
+                }
+            }
         }
+        self.plan_passes();
     }
 
     /// Number of real constraints.
@@ -159,39 +262,69 @@ impl DistanceSet {
     /// the multipliers are then only ever written).
     pub fn reset_lambda(&mut self) {
         self.lambda_reset = true;
+        self.unkept = false;
+    }
+
+    /// As [`reset_lambda`](Self::reset_lambda), for a substep of one sweep whose multipliers
+    /// nobody reads afterwards: that sweep reads them as zero and does not write them, which
+    /// saves a store per constraint. The stored values stay stale until a sweep that keeps them.
+    pub fn reset_lambda_unkept(&mut self) {
+        self.lambda_reset = true;
+        self.unkept = true;
+    }
+
+    /// Whether the next sweep reads the multipliers as zero and whether it writes them.
+    fn take_reset(&mut self) -> (bool, bool) {
+        let reset = std::mem::take(&mut self.lambda_reset);
+        let store = !(reset && std::mem::take(&mut self.unkept));
+        (reset, store)
     }
 
     /// One Gauss–Seidel sweep over all colours, SIMD, each colour in parallel chunks when
     /// `parallel` (on the current rayon pool).
     pub fn solve_simd(&mut self, px: &mut [f32], py: &mut [f32], pz: &mut [f32], w: &[f32], inv_h2: f32, parallel: bool) {
         let p = SharedVec3::new(px, py, pz);
-        let solve = if std::mem::take(&mut self.lambda_reset) {
-            solve_block_simd::<true>
-        } else {
-            solve_block_simd::<false>
+        let (solve, pass): (Solve, GridPass) = match self.take_reset() {
+            (true, true) => (solve_block_simd::<true, true>, grid::run_pass::<true, true>),
+            (true, false) => (solve_block_simd::<true, false>, grid::run_pass::<true, false>),
+            _ => (solve_block_simd::<false, true>, grid::run_pass::<false, true>),
         };
-        for col in &mut self.colours {
-            if parallel && col.a.len() > CHUNK {
-                col.a
-                    .par_chunks(CHUNK)
-                    .zip(col.b.par_chunks(CHUNK))
-                    .zip(col.rest.par_chunks(CHUNK))
-                    .zip(col.compliance.par_chunks(CHUNK))
-                    .zip(col.lambda.par_chunks_mut(CHUNK))
-                    .zip(col.blocks.par_chunks(CHUNK / LANES))
-                    .for_each(|(((((a, b), rest), comp), lambda), blocks)| {
-                        let cons = Cons { a, b, rest, comp, blocks };
-                        solve(&cons, lambda, &col.windows, &p, w, inv_h2)
-                    });
-            } else {
-                let cons = Cons {
-                    a: &col.a,
-                    b: &col.b,
-                    rest: &col.rest,
-                    comp: &col.compliance,
-                    blocks: &col.blocks,
-                };
-                solve(&cons, &mut col.lambda, &col.windows, &p, w, inv_h2);
+        let sweep = Sweep { p, w, inv_h2 };
+        for pass_k in 0..self.passes.len() {
+            match &self.passes[pass_k] {
+                Pass::Grid(range) => {
+                    // At most the four row-local classes of a grid share a pass.
+                    let mut run = [None; 4];
+                    for (slot, col) in run.iter_mut().zip(&mut self.colours[range.clone()]) {
+                        *slot = col.grid.map(|g| (g, Multipliers::new(&mut col.lambda)));
+                    }
+                    pass(&run, &sweep, parallel);
+                }
+                &Pass::Planned(k) => {
+                    let col = &mut self.colours[k];
+                    if parallel && col.a.len() > CHUNK {
+                        col.a
+                            .par_chunks(CHUNK)
+                            .zip(col.b.par_chunks(CHUNK))
+                            .zip(col.rest.par_chunks(CHUNK))
+                            .zip(col.compliance.par_chunks(CHUNK))
+                            .zip(col.lambda.par_chunks_mut(CHUNK))
+                            .zip(col.blocks.par_chunks(CHUNK / LANES))
+                            .for_each(|(((((a, b), rest), comp), lambda), blocks)| {
+                                let cons = Cons { a, b, rest, comp, blocks };
+                                solve(&cons, lambda, &col.windows, &p, w, inv_h2)
+                            });
+                    } else {
+                        let cons = Cons {
+                            a: &col.a,
+                            b: &col.b,
+                            rest: &col.rest,
+                            comp: &col.compliance,
+                            blocks: &col.blocks,
+                        };
+                        solve(&cons, &mut col.lambda, &col.windows, &p, w, inv_h2);
+                    }
+                }
             }
         }
     }
@@ -199,31 +332,61 @@ impl DistanceSet {
     /// The scalar f32 twin of [`solve_simd`](Self::solve_simd): one constraint at a time,
     /// one thread, the same arithmetic.
     pub fn solve_scalar(&mut self, px: &mut [f32], py: &mut [f32], pz: &mut [f32], w: &[f32], inv_h2: f32) {
-        let reset = std::mem::take(&mut self.lambda_reset);
+        let (reset, keep) = self.take_reset();
         for col in &mut self.colours {
             for k in 0..col.a.len() {
                 let lam = if reset { 0.0 } else { col.lambda[k] };
                 let (a, b) = (col.a[k] as usize, col.b[k] as usize);
-                let (wa, wb) = (w[a], w[b]);
-                let (dx, dy, dz) = (px[b] - px[a], py[b] - py[a], pz[b] - pz[a]);
-                let len = (dx * dx + dy * dy + dz * dz).sqrt();
-                let c = len - col.rest[k];
+                let pa = [px[a], py[a], pz[a]];
+                let pb = [px[b], py[b], pz[b]];
                 let alpha = col.compliance[k] * inv_h2;
-                let denom = wa + wb + alpha;
-                let valid = len > MIN_LENGTH && denom > 0.0;
-                let dl = if valid { (-c - alpha * lam) / denom } else { 0.0 };
-                let s = if valid { dl / len } else { 0.0 };
-                let (sa, sb) = (wa * s, wb * s);
-                px[a] -= dx * sa;
-                py[a] -= dy * sa;
-                pz[a] -= dz * sa;
-                px[b] += dx * sb;
-                py[b] += dy * sb;
-                pz[b] += dz * sb;
-                col.lambda[k] = lam + dl;
+                let (pa, pb, lam) = project1(pa, pb, w[a], w[b], col.rest[k], alpha, lam);
+                [px[a], py[a], pz[a]] = pa;
+                [px[b], py[b], pz[b]] = pb;
+                if keep {
+                    col.lambda[k] = lam;
+                }
             }
         }
     }
+}
+
+/// The kernel of one colour chunk (see [`solve_block_simd`]).
+type Solve = fn(&Cons<'_>, &mut [f32], &[Window], &SharedVec3, &[f32], f32);
+/// The kernel of one grid pass (see [`grid::run_pass`]).
+type GridPass = fn(&[Option<(GridColour, Multipliers)>], &Sweep<'_>, bool);
+
+/// One XPBD distance constraint, scalar: new `p_a`, `p_b` and multiplier, from `alpha = α / h²`.
+/// The SIMD kernels' lanes ([`project8`]) do the same operations in the same order. One
+/// division: the correction per unit of `p_b - p_a` is `s = Δλ / len`, computed as
+/// `(-C - α̃ λ) / (denom len)`, and `Δλ = s len`.
+#[inline(always)]
+pub(crate) fn project1(pa: [f32; 3], pb: [f32; 3], wa: f32, wb: f32, rest: f32, alpha: f32, lam: f32) -> ([f32; 3], [f32; 3], f32) {
+    let (dx, dy, dz) = (pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]);
+    let len = (dx * dx + dy * dy + dz * dz).sqrt();
+    let c = len - rest;
+    let denom = wa + wb + alpha;
+    let valid = len > MIN_LENGTH && denom > 0.0;
+    let s = if valid { (-c - alpha * lam) / (denom * len) } else { 0.0 };
+    let dl = if valid { s * len } else { 0.0 };
+    let (sa, sb) = (wa * s, wb * s);
+    let pa = [pa[0] - dx * sa, pa[1] - dy * sa, pa[2] - dz * sa];
+    let pb = [pb[0] + dx * sb, pb[1] + dy * sb, pb[2] + dz * sb];
+    (pa, pb, lam + dl)
+}
+
+/// Eight constraints at once: [`project1`] lane by lane.
+#[inline(always)]
+pub(crate) fn project8(pa: Vec3x8, pb: Vec3x8, wa: F32s, wb: F32s, rest: F32s, alpha: F32s, lam: F32s) -> (Vec3x8, Vec3x8, F32s) {
+    let zero = F32s::ZERO;
+    let d = pb - pa;
+    let len = d.length_sq().sqrt();
+    let c = len - rest;
+    let denom = wa + wb + alpha;
+    let valid = len.simd_gt(F32s::splat(MIN_LENGTH)) & denom.simd_gt(zero);
+    let sc = valid.select((-c - alpha * lam) / (denom * len), zero);
+    let dl = valid.select(sc * len, zero);
+    (pa - d.scale(wa * sc), pb + d.scale(wb * sc), lam + dl)
 }
 
 /// One chunk of a colour's constraint arrays (a multiple of the lane width long).
@@ -235,12 +398,18 @@ struct Cons<'a> {
     blocks: &'a [Block],
 }
 
-/// One chunk of a colour, eight constraints at a time; `RESET`: the multipliers read as zero.
+/// One chunk of a colour, eight constraints at a time; `RESET`: the multipliers read as zero;
+/// `STORE`: they are written.
 #[inline]
-fn solve_block_simd<const RESET: bool>(cons: &Cons<'_>, lambda: &mut [f32], windows: &[Window], p: &SharedVec3, w: &[f32], inv_h2: f32) {
+fn solve_block_simd<const RESET: bool, const STORE: bool>(
+    cons: &Cons<'_>,
+    lambda: &mut [f32],
+    windows: &[Window],
+    p: &SharedVec3,
+    w: &[f32],
+    inv_h2: f32,
+) {
     let inv_h2 = F32s::splat(inv_h2);
-    let zero = F32s::ZERO;
-    let min_len = F32s::splat(MIN_LENGTH);
     for (k, bl) in cons.blocks.iter().enumerate() {
         let i = k * LANES;
         let s = bl.first as usize;
@@ -266,18 +435,12 @@ fn solve_block_simd<const RESET: bool>(cons: &Cons<'_>, lambda: &mut [f32], wind
                 (pa, pb, pick16(wl, wh, &win.pos_a), pick16(wl, wh, &win.pos_b))
             }
         };
-        let d = pb - pa;
-        let len = d.length_sq().sqrt();
-        let c = len - load(cons.rest, i);
         let alpha = load(cons.comp, i) * inv_h2;
-        let denom = wa + wb + alpha;
-        let lam = if RESET { zero } else { load(lambda, i) };
-        let valid = len.simd_gt(min_len) & denom.simd_gt(zero);
-        let dl = valid.select((-c - alpha * lam) / denom, zero);
-        let sc = valid.select(dl / len, zero);
-        let pa = pa - d.scale(wa * sc);
-        let pb = pb + d.scale(wb * sc);
-        store(lambda, i, lam + dl);
+        let lam = if RESET { F32s::ZERO } else { load(lambda, i) };
+        let (pa, pb, lam) = project8(pa, pb, wa, wb, load(cons.rest, i), alpha, lam);
+        if STORE {
+            store(lambda, i, lam);
+        }
         write_back(bl, windows, p, cons, i, pa, pb);
     }
 }

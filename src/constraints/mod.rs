@@ -16,6 +16,7 @@
 pub mod blocks;
 pub mod colour;
 pub mod distance;
+pub mod grid;
 pub mod tethers;
 
 pub use distance::DistanceSet;

@@ -1,0 +1,161 @@
+//! Tests of the structured grid kernels: the classes partition a grid into colours, and the
+//! SIMD sweep equals the scalar twin bit for bit on any thread count.
+
+use super::*;
+use crate::constraints::distance::{DistanceInput, DistanceSet};
+use crate::data::lanes::round_up;
+use crate::model::cloth::ClothDesc;
+
+/// A cloth's constraints as world inputs, plus positions jittered off rest and masses, a few
+/// of them zero (pins; the builder's pins would drop the edges between two of them).
+fn cloth(rows: u32, cols: u32, seed: u64) -> (Vec<DistanceInput>, Vec<f32>, [Vec<f32>; 3]) {
+    let b = ClothDesc {
+        rows,
+        cols,
+        spacing: 0.01,
+        tethers: None,
+        pins: Vec::new(),
+        ..Default::default()
+    }
+    .build()
+    .unwrap();
+    let mut rnd = crate::test_rng::unit(seed);
+    let len = round_up(b.positions.len() + 1);
+    let mut pos = [vec![0.0; len], vec![0.0; len], vec![0.0; len]];
+    let mut w = vec![0.0; len];
+    for (i, q) in b.positions.iter().enumerate() {
+        for k in 0..3 {
+            pos[k][i] = q[k] + 0.003 * (rnd() - 0.5);
+        }
+        w[i] = if rnd() < 0.05 { 0.0 } else { b.inv_mass[i] * (0.5 + rnd()) };
+    }
+    let cons = b
+        .edges
+        .iter()
+        .map(|e| DistanceInput {
+            a: e.a,
+            b: e.b,
+            rest: e.rest,
+            compliance: e.compliance,
+        })
+        .collect();
+    (cons, w, pos)
+}
+
+#[test]
+fn classes_partition_the_grid_into_colours() {
+    for (rows, cols) in [(1, 1), (1, 5), (2, 2), (3, 7), (9, 4), (17, 33)] {
+        let mut seen = std::collections::HashSet::new();
+        for cl in &CLASSES {
+            let mut used = std::collections::HashSet::new();
+            for k in 0..cl.row_count(rows, cols) {
+                for j in 0..cl.per_row(cols) {
+                    let (a, b) = cl.pair(cols, k, j);
+                    assert!(a < rows * cols && b < rows * cols && a != b);
+                    assert!(used.insert(a) && used.insert(b), "{rows}x{cols}: a class shares a particle");
+                    assert!(seen.insert((a, b)), "{rows}x{cols}: a pair in two classes");
+                    assert_eq!(cl.locate(rows, cols, a, b), Some((k, j)));
+                }
+            }
+        }
+        // Every builder edge is in exactly one class.
+        let (cons, _, _) = cloth(rows, cols, 1);
+        let all: std::collections::HashSet<_> = cons.iter().map(|c| (c.a, c.b)).collect();
+        assert_eq!(all, seen, "{rows}x{cols}");
+    }
+}
+
+#[test]
+fn only_whole_uniform_classes_are_structured() {
+    let spec = GridSpec {
+        first: 0,
+        rows: 6,
+        cols: 6,
+    };
+    let (cons, _, _) = cloth(6, 6, 2);
+    let quad = |c: &DistanceInput| (c.a, c.b, c.rest, c.compliance);
+    assert!(classify(spec, cons.iter().map(quad)).is_some());
+    assert!(classify(spec, cons[1..].iter().map(quad)).is_none(), "a missing edge");
+    let mut odd = cons.clone();
+    odd[3].rest *= 1.5;
+    assert!(classify(spec, odd.iter().map(quad)).is_none(), "a rest length of its own");
+    let mut twice = cons.clone();
+    twice.push(cons[0]);
+    assert!(classify(spec, twice.iter().map(quad)).is_none(), "an edge twice");
+    let shifted = GridSpec { first: 1, ..spec };
+    assert!(classify(shifted, cons.iter().map(quad)).is_none(), "not this grid's edges");
+}
+
+/// SIMD (serial, parallel on 1, 2 and 3 threads) equals the scalar twin over the explicit
+/// arrays, bit for bit, in positions and multipliers, through kept and unkept resets.
+#[test]
+fn structured_sweep_matches_scalar_bitwise() {
+    for (rows, cols) in [(2, 3), (5, 17), (40, 37), (64, 64), (70, 100)] {
+        let (cons, w, pos) = cloth(rows, cols, 3 + rows as u64);
+        let n = (rows * cols) as usize;
+        let spec = GridSpec { first: 0, rows, cols };
+        let sink = (round_up(n + 1) - 1) as u32;
+        let set = DistanceSet::with_grids(&cons, n, sink, &[(spec, 0..cons.len())]);
+        assert!(set.colours.iter().all(|c| c.grid.is_some()), "{rows}x{cols}: all structured");
+        assert_eq!(set.len(), cons.len());
+        let run = |simd: bool, parallel: bool, threads: usize| {
+            let (mut s, mut p) = (set.clone(), pos.clone());
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| {
+                for sweep in 0..5 {
+                    match sweep {
+                        1 => s.reset_lambda_unkept(),
+                        2 | 4 => s.reset_lambda(),
+                        _ => {}
+                    }
+                    let [x, y, z] = &mut p;
+                    if simd {
+                        s.solve_simd(x, y, z, &w, 3.6e5, parallel);
+                    } else {
+                        s.solve_scalar(x, y, z, &w, 3.6e5);
+                    }
+                }
+            });
+            let bits = p.iter().flat_map(|a| a.iter().map(|f| f.to_bits())).collect::<Vec<_>>();
+            let lambda = s
+                .colours
+                .iter()
+                .flat_map(|c| c.lambda.iter().map(|l| l.to_bits()))
+                .collect::<Vec<_>>();
+            (bits, lambda)
+        };
+        let want = run(false, false, 1);
+        let start = pos.iter().flat_map(|a| a.iter().map(|f| f.to_bits())).collect::<Vec<_>>();
+        assert!(want.0 != start, "the sweeps moved the particles");
+        for (parallel, threads) in [(false, 1), (true, 1), (true, 2), (true, 3)] {
+            assert!(
+                want == run(true, parallel, threads),
+                "{rows}x{cols} parallel {parallel} threads {threads}"
+            );
+        }
+    }
+}
+
+/// The structured path gives the bits of the same colours run through their block plans.
+#[test]
+fn structured_sweep_equals_planned_colours() {
+    let (rows, cols) = (33, 50);
+    let (cons, w, pos) = cloth(rows, cols, 9);
+    let n = (rows * cols) as usize;
+    let spec = GridSpec { first: 0, rows, cols };
+    let sink = (round_up(n + 1) - 1) as u32;
+    let grid = DistanceSet::with_grids(&cons, n, sink, &[(spec, 0..cons.len())]);
+    let mut planned = grid.clone();
+    planned.colours.iter_mut().for_each(|c| c.grid = None);
+    planned.refresh_grids();
+    let mut out = Vec::new();
+    for mut s in [grid, planned] {
+        let mut p = pos.clone();
+        for _ in 0..3 {
+            let [x, y, z] = &mut p;
+            s.solve_simd(x, y, z, &w, 1e5, true);
+        }
+        out.push(p);
+    }
+    assert!(out[0] == out[1]);
+}
