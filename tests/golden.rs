@@ -92,9 +92,9 @@ fn force_based_methods_give_the_recorded_bits() {
             "method = \"symplectic-euler\"\nsubsteps = 400",
             "",
             5,
-            0x2e3ee03a582f7354,
+            0x2ecf12f154785637,
         ),
-        ("hanging-soft", "method = \"leapfrog\"\nsubsteps = 400", "", 5, 0x323e1305335d14e3),
+        ("hanging-soft", "method = \"leapfrog\"\nsubsteps = 400", "", 5, 0x5936a84aa28070e2),
         ("hanging-soft", "method = \"implicit-euler\"", "", 5, 0xa94d86a1eee772b5),
         (
             "drape-sphere",

@@ -30,6 +30,11 @@ use rayon::prelude::*;
 use crate::constraints::distance::{project1, project8, CHUNK};
 use crate::data::lanes::{load, merge16_vec, split16, split16_vec, store, F32s, SharedVec3, Split, LANES};
 
+/// Cloths of fewer particles are not handed to the structured kernels by the world: they keep
+/// the general colouring and with it the input-order Gauss–Seidel sweep small worlds always had
+/// (the same rule as the general colouring's [`FAMILY_MIN`](super::distance::FAMILY_MIN)).
+pub const GRID_MIN: u32 = 1024;
+
 /// Where a cloth grid lies in the particle arrays: particle `(r, c)` is `first + r cols + c`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct GridSpec {

@@ -22,7 +22,7 @@ pub mod strands;
 use std::sync::Arc;
 
 use crate::constraints::distance::DistanceInput;
-use crate::constraints::grid::GridSpec;
+use crate::constraints::grid::{GridSpec, GRID_MIN};
 use crate::constraints::{DistanceSet, TetherSet};
 use crate::data::particles::Particles;
 use crate::error::{Result, WeftError};
@@ -195,6 +195,7 @@ impl World {
         let sink = self.particles.sink();
         let len = self.particles.padded_len();
         let grids: Vec<_> = (self.cloths.iter().zip(&self.cloth_inputs))
+            .filter(|(c, _)| c.rows as u64 * c.cols as u64 >= GRID_MIN as u64)
             .map(|(c, r)| {
                 let spec = GridSpec {
                     first: c.first,
