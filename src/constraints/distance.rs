@@ -16,15 +16,17 @@
 //! by class instead, and its colours run the structured kernels, which read no index, rest
 //! length or compliance array; the arrays stay for the scalar twin and every other reader.
 //!
-//! Each pass (a colour, or a grid's row-local classes together) is a rayon fork and join, not
+//! Each pass (a colour, or a grid's band colours or seam colours together) is a rayon fork and join, not
 //! a spinning barrier between colours on a private pool: a barrier waits for a descheduled
 //! thread where work stealing does not.
 
 use rayon::prelude::*;
 
 use crate::constraints::blocks::{plan, Block, Window, GATHER, RUN, WINDOW};
-use crate::constraints::colour::colour_pairs;
-use crate::constraints::grid::{self, GridColour, GridSpec, Multipliers, Sweep};
+use crate::constraints::colour::colour_families;
+use crate::constraints::grid::{self, GridColour, GridSpec};
+use crate::constraints::grid_sweep::{self, Sweep};
+pub(crate) use crate::constraints::project::{project1, project8};
 use crate::data::lanes::{gather1, load, load_idx, pick16, pick16_vec, round_up, store, F32s, SharedVec3, Vec3x8, LANES};
 
 pub use crate::model::params::MIN_LENGTH;
@@ -123,14 +125,14 @@ impl DistanceSet {
             let Some(classes) = grid::classify(*spec, part.iter().map(|c| (c.a, c.b, c.rest, c.compliance))) else {
                 continue;
             };
-            for (class, slots) in classes.iter().enumerate() {
-                let Some(&first) = slots.first() else { continue };
-                let c0 = &part[first];
+            for (mut g, slots) in grid::layout(*spec, &classes) {
+                let c0 = &part[slots[0]];
+                (g.rest, g.compliance) = (c0.rest, c0.compliance);
                 let mut col = Colour {
-                    grid: Some(GridColour::new(*spec, class as u8, c0.rest, c0.compliance)),
+                    grid: Some(g),
                     ..Colour::default()
                 };
-                for &k in slots {
+                for &k in &slots {
                     let c = &part[k];
                     col.a.push(c.a);
                     col.b.push(c.b);
@@ -142,7 +144,7 @@ impl DistanceSet {
             taken[range.clone()].fill(true);
         }
         let rest: Vec<DistanceInput> = input.iter().zip(&taken).filter(|(_, &t)| !t).map(|(c, _)| *c).collect();
-        colours.extend(Self::coloured(&rest, particle_count));
+        colours.extend(colour_families(&rest, particle_count));
         for col in &mut colours {
             col.real = col.a.len();
             let len = round_up(col.real);
@@ -162,68 +164,19 @@ impl DistanceSet {
         set
     }
 
-    /// The general colouring of constraints that are not whole grid classes.
-    fn coloured(input: &[DistanceInput], particle_count: usize) -> Vec<Colour> {
-        // Large offset families (same `b − a`: on a grid, horizontal stretch, vertical bend, a
-        // shear diagonal...) are coloured greedily family after family, each in order of `a`,
-        // which gives mostly regular colours (alternate edges, alternate rows). The rest
-        // (irregular meshes, short pieces, any world below `FAMILY_MIN` per family) is coloured
-        // on its own in input order, as it always was, so small worlds keep their Gauss–Seidel
-        // order. Each colour is then laid out by offset and `a` (free within a colour), which
-        // the block plans turn into contiguous loads and stores.
-        let offset = |k: usize| input[k].b as i64 - input[k].a as i64;
-        let mut order: Vec<usize> = (0..input.len()).collect();
-        order.sort_by_key(|&k| (offset(k), input[k].a));
-        let (mut large, mut rest) = (Vec::new(), Vec::new());
-        for family in order.chunk_by(|&i, &j| offset(i) == offset(j)) {
-            if family.len() >= FAMILY_MIN {
-                large.extend_from_slice(family);
-            } else {
-                rest.extend_from_slice(family);
-            }
-        }
-        rest.sort_unstable();
-        let groups = [large, rest];
-        let (mut colour_of, mut count) = (vec![0u32; input.len()], 0u32);
-        for g in &groups {
-            let pairs: Vec<(u32, u32)> = g.iter().map(|&k| (input[k].a, input[k].b)).collect();
-            let (c, n) = colour_pairs(&pairs, particle_count);
-            for (&k, c) in g.iter().zip(c) {
-                colour_of[k] = c + count;
-            }
-            count += n;
-        }
-        // Stable: within a colour, the (offset, a) order from above.
-        order.sort_by_key(|&k| colour_of[k]);
-        let colour_of: Vec<u32> = order.iter().map(|&k| colour_of[k]).collect();
-        let mut colours = vec![Colour::default(); count as usize];
-        for (&k, &col) in order.iter().zip(&colour_of) {
-            let (c, col) = (&input[k], &mut colours[col as usize]);
-            col.a.push(c.a);
-            col.b.push(c.b);
-            col.rest.push(c.rest);
-            col.compliance.push(c.compliance);
-        }
-        colours
-    }
-
-    /// Groups the colours into passes: a grid's consecutive row-local colours share one.
+    /// Groups the colours into passes: a grid's band colours share one, its seam colours
+    /// another.
     fn plan_passes(&mut self) {
         self.passes.clear();
         let mut k = 0;
         while k < self.colours.len() {
-            let Some(g) = self.colours[k].grid else {
+            let Some(g) = &self.colours[k].grid else {
                 self.passes.push(Pass::Planned(k));
                 k += 1;
                 continue;
             };
-            let mut end = k + 1;
-            while g.row_local() && end < self.colours.len() && end - k < 4 {
-                match self.colours[end].grid {
-                    Some(h) if h.spec == g.spec && h.row_local() => end += 1,
-                    _ => break,
-                }
-            }
+            let same = |c: &Colour| c.grid.as_ref().is_some_and(|h| h.spec == g.spec && h.seam == g.seam);
+            let end = k + self.colours[k..].iter().take_while(|c| same(c)).count();
             self.passes.push(Pass::Grid(k..end));
             k = end;
         }
@@ -285,21 +238,14 @@ impl DistanceSet {
     pub fn solve_simd(&mut self, px: &mut [f32], py: &mut [f32], pz: &mut [f32], w: &[f32], inv_h2: f32, parallel: bool) {
         let p = SharedVec3::new(px, py, pz);
         let (solve, pass): (Solve, GridPass) = match self.take_reset() {
-            (true, true) => (solve_block_simd::<true, true>, grid::run_pass::<true, true>),
-            (true, false) => (solve_block_simd::<true, false>, grid::run_pass::<true, false>),
-            _ => (solve_block_simd::<false, true>, grid::run_pass::<false, true>),
+            (true, true) => (solve_block_simd::<true, true>, grid_sweep::run_pass::<true, true>),
+            (true, false) => (solve_block_simd::<true, false>, grid_sweep::run_pass::<true, false>),
+            _ => (solve_block_simd::<false, true>, grid_sweep::run_pass::<false, true>),
         };
         let sweep = Sweep { p, w, inv_h2 };
         for pass_k in 0..self.passes.len() {
             match &self.passes[pass_k] {
-                Pass::Grid(range) => {
-                    // At most the four row-local classes of a grid share a pass.
-                    let mut run = [None; 4];
-                    for (slot, col) in run.iter_mut().zip(&mut self.colours[range.clone()]) {
-                        *slot = col.grid.map(|g| (g, Multipliers::new(&mut col.lambda)));
-                    }
-                    pass(&run, &sweep, parallel);
-                }
+                Pass::Grid(range) => pass(&mut self.colours[range.clone()], &sweep, parallel),
                 &Pass::Planned(k) => {
                     let col = &mut self.colours[k];
                     if parallel && col.a.len() > CHUNK {
@@ -353,41 +299,8 @@ impl DistanceSet {
 
 /// The kernel of one colour chunk (see [`solve_block_simd`]).
 type Solve = fn(&Cons<'_>, &mut [f32], &[Window], &SharedVec3, &[f32], f32);
-/// The kernel of one grid pass (see [`grid::run_pass`]).
-type GridPass = fn(&[Option<(GridColour, Multipliers)>], &Sweep<'_>, bool);
-
-/// One XPBD distance constraint, scalar: new `p_a`, `p_b` and multiplier, from `alpha = α / h²`.
-/// The SIMD kernels' lanes ([`project8`]) do the same operations in the same order. One
-/// division: the correction per unit of `p_b - p_a` is `s = Δλ / len`, computed as
-/// `(-C - α̃ λ) / (denom len)`, and `Δλ = s len`.
-#[inline(always)]
-pub(crate) fn project1(pa: [f32; 3], pb: [f32; 3], wa: f32, wb: f32, rest: f32, alpha: f32, lam: f32) -> ([f32; 3], [f32; 3], f32) {
-    let (dx, dy, dz) = (pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]);
-    let len = (dx * dx + dy * dy + dz * dz).sqrt();
-    let c = len - rest;
-    let denom = wa + wb + alpha;
-    let valid = len > MIN_LENGTH && denom > 0.0;
-    let s = if valid { (-c - alpha * lam) / (denom * len) } else { 0.0 };
-    let dl = if valid { s * len } else { 0.0 };
-    let (sa, sb) = (wa * s, wb * s);
-    let pa = [pa[0] - dx * sa, pa[1] - dy * sa, pa[2] - dz * sa];
-    let pb = [pb[0] + dx * sb, pb[1] + dy * sb, pb[2] + dz * sb];
-    (pa, pb, lam + dl)
-}
-
-/// Eight constraints at once: [`project1`] lane by lane.
-#[inline(always)]
-pub(crate) fn project8(pa: Vec3x8, pb: Vec3x8, wa: F32s, wb: F32s, rest: F32s, alpha: F32s, lam: F32s) -> (Vec3x8, Vec3x8, F32s) {
-    let zero = F32s::ZERO;
-    let d = pb - pa;
-    let len = d.length_sq().sqrt();
-    let c = len - rest;
-    let denom = wa + wb + alpha;
-    let valid = len.simd_gt(F32s::splat(MIN_LENGTH)) & denom.simd_gt(zero);
-    let sc = valid.select((-c - alpha * lam) / (denom * len), zero);
-    let dl = valid.select(sc * len, zero);
-    (pa - d.scale(wa * sc), pb + d.scale(wb * sc), lam + dl)
-}
+/// The kernel of one grid pass (see [`grid_sweep::run_pass`]).
+type GridPass = fn(&mut [Colour], &Sweep<'_>, bool);
 
 /// One chunk of a colour's constraint arrays (a multiple of the lane width long).
 struct Cons<'a> {

@@ -17,18 +17,16 @@
 //! the scalar twin's arithmetic. Rest length and compliance are splatted once per row; the
 //! multipliers are read and written only when the sweep keeps them.
 //!
-//! The four horizontal classes couple no two rows, so they run in one pass over the rows,
-//! class after class on each row while it is in cache: the same bits as four passes.
+//! The grid is cut into bands of rows ([`layout`]): one parallel pass sweeps each band through
+//! all twelve classes while it is in cache, a second sweeps the constraints that cross band
+//! boundaries ([`grid_sweep`](super::grid_sweep)).
 //!
 //! The flat arrays of a grid colour ([`Colour`](super::distance::Colour)) list its
 //! constraints in the same order (rows, then slots), so the multipliers line up, the general scalar
 //! twin ([`DistanceSet::solve_scalar`](super::DistanceSet::solve_scalar)) reads the explicit
 //! indices, and the reference step and the other readers of the colours see every constraint.
 
-use rayon::prelude::*;
-
-use crate::constraints::distance::{project1, project8, CHUNK};
-use crate::data::lanes::{load, merge16_vec, split16, split16_vec, store, F32s, SharedVec3, Split, LANES};
+use crate::data::lanes::{Split, LANES};
 
 /// Cloths of fewer particles are not handed to the structured kernels by the world: they keep
 /// the general colouring and with it the input-order Gauss–Seidel sweep small worlds always had
@@ -136,12 +134,12 @@ impl Class {
     }
 
     /// The column `c` of a row's `j`-th constraint in column order.
-    fn col(&self, j: u32) -> u32 {
+    pub(crate) fn col(&self, j: u32) -> u32 {
         nth(j, self.col_mod, self.col_res, self.col_n)
     }
 
     /// How a horizontal class deals a window into lanes (`None`: a vertical or shear class).
-    fn split(&self) -> Option<Split> {
+    pub(crate) fn split(&self) -> Option<Split> {
         match self.col_mod {
             2 => Some(Split::Pairs),
             4 => Some(Split::Quads),
@@ -150,7 +148,7 @@ impl Class {
     }
 
     /// Whole sixteen-particle windows in a row of a horizontal class.
-    fn windows(&self, cols: u32) -> u32 {
+    pub(crate) fn windows(&self, cols: u32) -> u32 {
         cols.saturating_sub(self.col_res) / 16
     }
 
@@ -173,6 +171,21 @@ impl Class {
         (r * cols + c + self.a_dc, (r + self.dr) * cols + c + self.b_dc)
     }
 
+    /// Rows between a constraint's two particles.
+    pub(crate) fn dr(&self) -> u32 {
+        self.dr
+    }
+
+    /// Column offsets of a constraint's particles from its column `c`.
+    pub(crate) fn dc(&self) -> (u32, u32) {
+        (self.a_dc, self.b_dc)
+    }
+
+    /// The first column a row's constraints start from (residue), for windows.
+    pub(crate) fn col_res(&self) -> u32 {
+        self.col_res
+    }
+
     /// `(k, j)` of the grid-local pair `(a, b)` if it is a constraint of this class.
     fn locate(&self, rows: u32, cols: u32, a: u32, b: u32) -> Option<(u32, u32)> {
         let (r, ca) = (a / cols, a % cols);
@@ -185,44 +198,40 @@ impl Class {
         let j = rank(c, self.col_mod, self.col_res, self.col_n)?;
         Some((k, self.slot_rank(cols, j)))
     }
-
-    /// Whether the class couples no two rows (its rows are all rows, its pairs within one).
-    fn row_local(&self) -> bool {
-        self.dr == 0 && self.row_mod == 1
-    }
 }
 
+/// Rows per band of a grid with `cols` columns (see [`layout`]): at most 16 and about 16k
+/// particles, at least 4 so that the seams of two boundaries share no particle.
+pub fn band_rows(cols: u32) -> u32 {
+    (BAND_PARTICLES / cols.max(1)).clamp(4, 16)
+}
+
+/// About how many particles a band holds (256 KB of predictions and inverse masses: L2).
+const BAND_PARTICLES: u32 = 16_384;
+
 /// What a colour of grid constraints needs to run without reading its index arrays.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct GridColour {
     /// The grid.
     pub spec: GridSpec,
     /// Index into [`CLASSES`].
     pub class: u8,
+    /// The constraints that cross a band boundary (else those inside a band).
+    pub seam: bool,
     /// The class's rest length, m.
     pub rest: f32,
     /// The class's compliance, m/N.
     pub compliance: f32,
+    /// The grid rows this colour holds constraints of, ascending.
+    rows: Vec<u32>,
+    /// Group `g` (band `g`, or the seam below band `g`) holds rows `groups[g] .. groups[g + 1]`
+    /// of [`rows`](Self::rows).
+    groups: Vec<u32>,
 }
 
 impl GridColour {
-    /// The colour of `class` on grid `spec` with one rest length and compliance.
-    pub fn new(spec: GridSpec, class: u8, rest: f32, compliance: f32) -> Self {
-        GridColour {
-            spec,
-            class,
-            rest,
-            compliance,
-        }
-    }
-
-    fn cl(&self) -> &'static Class {
+    pub(crate) fn cl(&self) -> &'static Class {
         &CLASSES[self.class as usize]
-    }
-
-    /// Number of the class's rows.
-    pub fn rows(&self) -> u32 {
-        self.cl().row_count(self.spec.rows, self.spec.cols)
     }
 
     /// Constraints per row.
@@ -230,10 +239,70 @@ impl GridColour {
         self.cl().per_row(self.spec.cols)
     }
 
-    /// Whether the colour's class couples no two rows.
-    pub fn row_local(&self) -> bool {
-        self.cl().row_local()
+    /// Number of groups (bands or seams) the colour's rows fall in.
+    pub fn group_count(&self) -> usize {
+        self.groups.len() - 1
     }
+
+    /// The positions in [`rows`](Self::rows) of group `g`'s rows.
+    pub(crate) fn group(&self, g: usize) -> std::ops::Range<usize> {
+        self.groups[g] as usize..self.groups[g + 1] as usize
+    }
+
+    /// The grid row at position `i`.
+    pub(crate) fn row_at(&self, i: usize) -> u32 {
+        self.rows[i]
+    }
+}
+
+/// The colours of a grid whose constraints [`classify`] sorted into `classes`, in sweep order,
+/// each with the input positions of its constraints in its order (rows, then slots).
+///
+/// The grid is cut into bands of [`band_rows`] rows. First every class's constraints inside a
+/// band (one colour per class; a task sweeps one band through all twelve while it is in
+/// cache), then the vertical and shear classes' constraints that cross a band boundary (one
+/// colour per class; a task sweeps one boundary). Bands share no particle, nor do the seams of
+/// two boundaries, so running the colours one after the other gives the same bits as running
+/// bands (then seams) in parallel. Rest length and compliance are left at zero for the caller.
+pub fn layout(spec: GridSpec, classes: &[Vec<usize>]) -> Vec<(GridColour, Vec<usize>)> {
+    let GridSpec { rows, cols, .. } = spec;
+    let b = band_rows(cols);
+    let bands = rows.div_ceil(b) as usize;
+    let mut out = Vec::new();
+    for seam in [false, true] {
+        for (t, (cl, slots)) in CLASSES.iter().zip(classes).enumerate() {
+            if slots.is_empty() || (seam && cl.dr == 0) {
+                continue;
+            }
+            let per_row = cl.per_row(cols) as usize;
+            let mut g = GridColour {
+                spec,
+                class: t as u8,
+                seam,
+                rest: 0.0,
+                compliance: 0.0,
+                rows: Vec::new(),
+                groups: vec![0; if seam { bands } else { bands + 1 }],
+            };
+            let mut pos = Vec::new();
+            for k in 0..cl.row_count(rows, cols) {
+                let r = cl.row(k);
+                if (r / b != (r + cl.dr) / b) != seam {
+                    continue;
+                }
+                g.rows.push(r);
+                g.groups[(r / b) as usize + 1] += 1;
+                pos.extend_from_slice(&slots[k as usize * per_row..(k as usize + 1) * per_row]);
+            }
+            for q in 1..g.groups.len() {
+                g.groups[q] += g.groups[q - 1];
+            }
+            if !g.rows.is_empty() {
+                out.push((g, pos));
+            }
+        }
+    }
+    out
 }
 
 /// Sorts a grid's constraints (global indices) into classes: for each class, its constraints'
@@ -268,157 +337,6 @@ pub fn classify(spec: GridSpec, pairs: impl Iterator<Item = (u32, u32, f32, f32)
         *at = pos;
     }
     slots.iter().all(|s| s.iter().all(|&p| p != usize::MAX)).then_some(slots)
-}
-
-/// A colour's multipliers as a raw view: the tasks of a pass write disjoint rows of it.
-#[derive(Clone, Copy)]
-pub(crate) struct Multipliers {
-    ptr: *mut f32,
-    len: usize,
-}
-
-// SAFETY: a pointer and a length; rows are handed to one task each (see `row`).
-unsafe impl Send for Multipliers {}
-// SAFETY: as above.
-unsafe impl Sync for Multipliers {}
-
-impl Multipliers {
-    pub(crate) fn new(lambda: &mut [f32]) -> Self {
-        Multipliers {
-            ptr: lambda.as_mut_ptr(),
-            len: lambda.len(),
-        }
-    }
-
-    /// Row `k` of `per_row` multipliers.
-    ///
-    /// # Safety
-    /// No other live reference covers this row (each row belongs to one task of a pass), and
-    /// the slice is dropped before the pass ends (the colour outlives the pass).
-    unsafe fn row<'a>(self, k: u32, per_row: u32) -> &'a mut [f32] {
-        let (s, n) = (k as usize * per_row as usize, per_row as usize);
-        assert!(s + n <= self.len);
-        // SAFETY: in bounds (checked above) and exclusive by the caller's guarantee.
-        unsafe { std::slice::from_raw_parts_mut(self.ptr.add(s), n) }
-    }
-}
-
-/// Per-sweep settings shared by every row.
-#[derive(Clone, Copy)]
-pub(crate) struct Sweep<'a> {
-    pub p: SharedVec3,
-    pub w: &'a [f32],
-    pub inv_h2: f32,
-}
-
-/// One pass over the rows of one or more colours of one grid (all row-local, or a single
-/// colour; unused slots are `None`), `RESET`: the multipliers read as zero; `STORE`: they are written.
-pub(crate) fn run_pass<const RESET: bool, const STORE: bool>(colours: &[Option<(GridColour, Multipliers)>], s: &Sweep<'_>, parallel: bool) {
-    let rows = colours.iter().flatten().map(|(g, _)| g.rows()).max().unwrap_or(0);
-    let work: u32 = colours.iter().flatten().map(|(g, _)| g.per_row()).sum();
-    if rows == 0 || work == 0 {
-        return;
-    }
-    let task_rows = (CHUNK as u32 / work).max(1);
-    let rows_of = |t: u32| t * task_rows..((t + 1) * task_rows).min(rows);
-    // SAFETY (both arms): within one colour no particle repeats; a row-local pass's colours
-    // touch only their own row, and a pass of several colours is row-local, so tasks that
-    // own disjoint rows touch disjoint particles and multipliers.
-    let task = |t: u32| {
-        for k in rows_of(t) {
-            for (g, lambda) in colours.iter().flatten() {
-                unsafe { row::<RESET, STORE>(g, k, lambda, s) };
-            }
-        }
-    };
-    let tasks = rows.div_ceil(task_rows);
-    if parallel && tasks > 1 {
-        (0..tasks).into_par_iter().for_each(task);
-    } else {
-        (0..tasks).for_each(task);
-    }
-}
-
-/// Solves row `k` of a grid colour: whole blocks in SIMD, the rest one at a time.
-///
-/// # Safety
-/// No other task touches the row's particles or multipliers.
-#[inline(always)]
-unsafe fn row<const RESET: bool, const STORE: bool>(g: &GridColour, k: u32, lambda: &Multipliers, s: &Sweep<'_>) {
-    let cl = g.cl();
-    let (per_row, cols) = (g.per_row(), g.spec.cols);
-    if k >= g.rows() {
-        return;
-    }
-    // SAFETY: the caller owns row `k`.
-    let lam = unsafe { lambda.row(k, per_row) };
-    let r = cl.row(k);
-    let row_start = (g.spec.first + r * cols) as usize;
-    let off = (cl.dr * cols + cl.b_dc) as usize - cl.a_dc as usize;
-    let inv_h2 = F32s::splat(s.inv_h2);
-    let rest = F32s::splat(g.rest);
-    let alpha = F32s::splat(g.compliance) * inv_h2;
-    let (p, w) = (&s.p, s.w);
-    // SAFETY (loads and stores): every index is a particle of this row's constraints (inside
-    // the grid, so below the array length) and owned by the caller. A run block's `a` run is
-    // in row `r`, its `b` run in row `r + dr > r`: disjoint. A window block owns its sixteen
-    // particles.
-    let done = match cl.split() {
-        None => {
-            let blocks = per_row as usize / LANES;
-            for q in 0..blocks {
-                let i = row_start + cl.a_dc as usize + q * LANES;
-                let (pa, pb) = unsafe { (p.load_run(i), p.load_run(i + off)) };
-                let l0 = if RESET { F32s::ZERO } else { load(lam, q * LANES) };
-                let (pa, pb, l1) = project8(pa, pb, load(w, i), load(w, i + off), rest, alpha, l0);
-                unsafe {
-                    p.store_run(i, pa);
-                    p.store_run(i + off, pb);
-                }
-                if STORE {
-                    store(lam, q * LANES, l1);
-                }
-            }
-            blocks * LANES
-        }
-        Some(split) => {
-            let whole = cl.windows(cols) as usize;
-            for q in 0..whole {
-                let i = row_start + cl.col_res as usize + 16 * q;
-                let (lo, hi) = unsafe { (p.load_run(i), p.load_run(i + LANES)) };
-                let (pa, pb) = split16_vec(lo, hi, split);
-                let (wa, wb) = split16(load(w, i), load(w, i + LANES), split);
-                let l0 = if RESET { F32s::ZERO } else { load(lam, q * LANES) };
-                let (pa, pb, l1) = project8(pa, pb, wa, wb, rest, alpha, l0);
-                let (lo, hi) = merge16_vec(pa, pb, split);
-                unsafe {
-                    p.store_run(i, lo);
-                    p.store_run(i + LANES, hi);
-                }
-                if STORE {
-                    store(lam, q * LANES, l1);
-                }
-            }
-            whole * LANES
-        }
-    };
-    let alpha = g.compliance * s.inv_h2;
-    for (j, l) in lam.iter_mut().enumerate().skip(done) {
-        let c = cl.col(j as u32);
-        let a = row_start + (c + cl.a_dc) as usize;
-        let b = a + off;
-        let l0 = if RESET { 0.0 } else { *l };
-        // SAFETY: as above.
-        let (pa, pb) = unsafe { (p.get(a), p.get(b)) };
-        let (pa, pb, l1) = project1(pa, pb, w[a], w[b], g.rest, alpha, l0);
-        unsafe {
-            p.set(a, pa);
-            p.set(b, pb);
-        }
-        if STORE {
-            *l = l1;
-        }
-    }
 }
 
 #[cfg(test)]

@@ -159,3 +159,37 @@ fn structured_sweep_equals_planned_colours() {
     }
     assert!(out[0] == out[1]);
 }
+
+/// Each laid-out colour shares no particle between its constraints, and the groups a pass
+/// runs in parallel (bands, or seams) share no particle across all the pass's colours.
+#[test]
+fn bands_and_seams_share_no_particle() {
+    for (rows, cols) in [(40, 37), (70, 100), (9, 300), (33, 2000)] {
+        let (cons, _, _) = cloth(rows, cols, 5);
+        let spec = GridSpec { first: 0, rows, cols };
+        let classes = classify(spec, cons.iter().map(|c| (c.a, c.b, c.rest, c.compliance))).unwrap();
+        let colours = layout(spec, &classes);
+        assert_eq!(colours.iter().map(|(_, p)| p.len()).sum::<usize>(), cons.len());
+        for seam in [false, true] {
+            let pass: Vec<_> = colours.iter().filter(|(g, _)| g.seam == seam).collect();
+            let Some((first, _)) = pass.first() else { continue };
+            let mut owner = std::collections::HashMap::new();
+            for (g, pos) in &pass {
+                assert_eq!(g.group_count(), first.group_count());
+                let per_row = g.per_row() as usize;
+                let mut used = std::collections::HashSet::new();
+                for q in 0..g.group_count() {
+                    for at in g.group(q) {
+                        for &k in &pos[at * per_row..(at + 1) * per_row] {
+                            let (a, b) = (cons[k].a, cons[k].b);
+                            assert!(used.insert(a) && used.insert(b), "{rows}x{cols}: colour repeats a particle");
+                            for p in [a, b] {
+                                assert_eq!(*owner.entry(p).or_insert(q), q, "{rows}x{cols} seam {seam}: two groups share {p}");
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
