@@ -75,11 +75,11 @@ fn shipped_scenes_give_the_recorded_bits() {
         ("hanging", "backend = \"scalar\"", "", 10, 0x198fbe97b0944ffb),
         ("drape-sphere", "", "", 30, 0x37a630325144cd7a),
         ("drape-form", "", "", 20, 0x361d7929a003d765),
-        ("fold", "", "", 90, 0x3273be9ac2047f7f),
-        ("fold", "", "response = \"pbd\"\nbroadphase = \"aabb-tree\"", 90, 0xeda3f8f1cc28f6e0),
-        ("fold", "", "response = \"movement-speed\"", 90, 0x54ab9a6dabbca791),
-        ("fold", "backend = \"scalar\"", "", 60, 0x111ab1e837b2f935),
-        ("hair", "", "", 10, 0x161b3c6113963529),
+        ("fold", "", "", 90, 0x2438608dd2dcd8e9),
+        ("fold", "", "response = \"pbd\"\nbroadphase = \"aabb-tree\"", 90, 0x187551ee73b85985),
+        ("fold", "", "response = \"movement-speed\"", 90, 0x04a01863f1da50f8),
+        ("fold", "backend = \"scalar\"", "", 60, 0xe040d7a6e6fe9fe5),
+        ("hair", "", "", 10, 0xe0b04c2cf736067f),
         ("flag", "", "", 20, 0xd66ba75b97a44405),
     ]);
 }

@@ -276,7 +276,7 @@ impl DistanceSet {
     }
 
     /// The scalar f32 twin of [`solve_simd`](Self::solve_simd): one constraint at a time,
-    /// one thread, the same arithmetic.
+    /// one thread, the same arithmetic (a grid colour's projection with one division).
     pub fn solve_scalar(&mut self, px: &mut [f32], py: &mut [f32], pz: &mut [f32], w: &[f32], inv_h2: f32) {
         let (reset, keep) = self.take_reset();
         for col in &mut self.colours {
@@ -286,7 +286,8 @@ impl DistanceSet {
                 let pa = [px[a], py[a], pz[a]];
                 let pb = [px[b], py[b], pz[b]];
                 let alpha = col.compliance[k] * inv_h2;
-                let (pa, pb, lam) = project1(pa, pb, w[a], w[b], col.rest[k], alpha, lam);
+                let project = if col.grid.is_some() { project1::<true> } else { project1::<false> };
+                let (pa, pb, lam) = project(pa, pb, w[a], w[b], col.rest[k], alpha, lam);
                 [px[a], py[a], pz[a]] = pa;
                 [px[b], py[b], pz[b]] = pb;
                 if keep {
@@ -350,7 +351,7 @@ fn solve_block_simd<const RESET: bool, const STORE: bool>(
         };
         let alpha = load(cons.comp, i) * inv_h2;
         let lam = if RESET { F32s::ZERO } else { load(lambda, i) };
-        let (pa, pb, lam) = project8(pa, pb, wa, wb, load(cons.rest, i), alpha, lam);
+        let (pa, pb, lam) = project8::<false>(pa, pb, wa, wb, load(cons.rest, i), alpha, lam);
         if STORE {
             store(lambda, i, lam);
         }

@@ -122,7 +122,7 @@ unsafe fn row<const RESET: bool, const STORE: bool>(g: &GridColour, at: usize, l
                 let i = row_start + a_dc as usize + q * LANES;
                 let (pa, pb) = unsafe { (p.load_run(i), p.load_run(i + off)) };
                 let l0 = if RESET { F32s::ZERO } else { load(lam, q * LANES) };
-                let (pa, pb, l1) = project8(pa, pb, load(w, i), load(w, i + off), rest, alpha, l0);
+                let (pa, pb, l1) = project8::<true>(pa, pb, load(w, i), load(w, i + off), rest, alpha, l0);
                 unsafe {
                     p.store_run(i, pa);
                     p.store_run(i + off, pb);
@@ -141,7 +141,7 @@ unsafe fn row<const RESET: bool, const STORE: bool>(g: &GridColour, at: usize, l
                 let (pa, pb) = split16_vec(lo, hi, split);
                 let (wa, wb) = split16(load(w, i), load(w, i + LANES), split);
                 let l0 = if RESET { F32s::ZERO } else { load(lam, q * LANES) };
-                let (pa, pb, l1) = project8(pa, pb, wa, wb, rest, alpha, l0);
+                let (pa, pb, l1) = project8::<true>(pa, pb, wa, wb, rest, alpha, l0);
                 let (lo, hi) = merge16_vec(pa, pb, split);
                 unsafe {
                     p.store_run(i, lo);
@@ -162,7 +162,7 @@ unsafe fn row<const RESET: bool, const STORE: bool>(g: &GridColour, at: usize, l
         let l0 = if RESET { 0.0 } else { *l };
         // SAFETY: as above.
         let (pa, pb) = unsafe { (p.get(a), p.get(b)) };
-        let (pa, pb, l1) = project1(pa, pb, w[a], w[b], g.rest, alpha, l0);
+        let (pa, pb, l1) = project1::<true>(pa, pb, w[a], w[b], g.rest, alpha, l0);
         unsafe {
             p.set(a, pa);
             p.set(b, pb);
