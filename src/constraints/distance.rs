@@ -121,7 +121,10 @@ impl DistanceSet {
         let mut colours = Vec::new();
         let mut taken = vec![false; input.len()];
         for (spec, range) in grids {
-            let Some(part) = input.get(range.clone()) else { continue };
+            let end = spec.first as u64 + spec.rows as u64 * spec.cols as u64;
+            let Some(part) = input.get(range.clone()).filter(|_| end <= particle_count as u64) else {
+                continue;
+            };
             let Some(classes) = grid::classify(*spec, part.iter().map(|c| (c.a, c.b, c.rest, c.compliance))) else {
                 continue;
             };

@@ -310,11 +310,13 @@ pub fn layout(spec: GridSpec, classes: &[Vec<usize>]) -> Vec<(GridColour, Vec<us
 /// whole classes, each with one rest length and one compliance.
 pub fn classify(spec: GridSpec, pairs: impl Iterator<Item = (u32, u32, f32, f32)>) -> Option<Vec<Vec<usize>>> {
     let GridSpec { first, rows, cols } = spec;
+    let n = rows.checked_mul(cols).filter(|&n| n > 0)?;
+    first.checked_add(n)?;
     let mut slots: Vec<Vec<usize>> = CLASSES.iter().map(|_| Vec::new()).collect();
     let mut values: Vec<Option<(u32, u32)>> = vec![None; CLASSES.len()];
     for (pos, (a, b, rest, compliance)) in pairs.enumerate() {
         let (a, b) = (a.checked_sub(first)?, b.checked_sub(first)?);
-        if a >= rows * cols || b >= rows * cols {
+        if a >= n || b >= n {
             return None;
         }
         let (t, k, j) = CLASSES

@@ -84,6 +84,14 @@ fn only_whole_uniform_classes_are_structured() {
     assert!(classify(spec, twice.iter().map(quad)).is_none(), "an edge twice");
     let shifted = GridSpec { first: 1, ..spec };
     assert!(classify(shifted, cons.iter().map(quad)).is_none(), "not this grid's edges");
+    for bad in [(0, 6), (6, 0), (1 << 20, 1 << 20)] {
+        let spec = GridSpec {
+            first: 0,
+            rows: bad.0,
+            cols: bad.1,
+        };
+        assert!(classify(spec, cons.iter().map(quad)).is_none(), "{bad:?}");
+    }
 }
 
 /// SIMD (serial, parallel on 1, 2 and 3 threads) equals the scalar twin over the explicit
