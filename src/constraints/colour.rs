@@ -6,6 +6,8 @@
 //! (pathological inputs, e.g. one particle in many constraints) further constraints spill into
 //! extra colours found by a slower scan, so colouring never fails.
 
+use crate::constraints::distance::{Colour, DistanceInput, FAMILY_MIN};
+
 /// Assigns a colour to each pair `(a, b)`; returns the colour per pair and the colour count.
 pub fn colour_pairs(pairs: &[(u32, u32)], particle_count: usize) -> (Vec<u32>, u32) {
     let mut used = vec![0u64; particle_count];
@@ -47,6 +49,52 @@ pub fn colour_pairs(pairs: &[(u32, u32)], particle_count: usize) -> (Vec<u32>, u
         count = next;
     }
     (colours, count)
+}
+
+/// The general colouring of constraints that are not whole grid classes, laid out by colour
+/// (the caller pads and plans them).
+pub(crate) fn colour_families(input: &[DistanceInput], particle_count: usize) -> Vec<Colour> {
+    // Large offset families (same `b − a`: on a grid, horizontal stretch, vertical bend, a
+    // shear diagonal...) are coloured greedily family after family, each in order of `a`,
+    // which gives mostly regular colours (alternate edges, alternate rows). The rest
+    // (irregular meshes, short pieces, any world below `FAMILY_MIN` per family) is coloured
+    // on its own in input order, as it always was, so small worlds keep their Gauss–Seidel
+    // order. Each colour is then laid out by offset and `a` (free within a colour), which
+    // the block plans turn into contiguous loads and stores.
+    let offset = |k: usize| input[k].b as i64 - input[k].a as i64;
+    let mut order: Vec<usize> = (0..input.len()).collect();
+    order.sort_by_key(|&k| (offset(k), input[k].a));
+    let (mut large, mut rest) = (Vec::new(), Vec::new());
+    for family in order.chunk_by(|&i, &j| offset(i) == offset(j)) {
+        if family.len() >= FAMILY_MIN {
+            large.extend_from_slice(family);
+        } else {
+            rest.extend_from_slice(family);
+        }
+    }
+    rest.sort_unstable();
+    let groups = [large, rest];
+    let (mut colour_of, mut count) = (vec![0u32; input.len()], 0u32);
+    for g in &groups {
+        let pairs: Vec<(u32, u32)> = g.iter().map(|&k| (input[k].a, input[k].b)).collect();
+        let (c, n) = colour_pairs(&pairs, particle_count);
+        for (&k, c) in g.iter().zip(c) {
+            colour_of[k] = c + count;
+        }
+        count += n;
+    }
+    // Stable: within a colour, the (offset, a) order from above.
+    order.sort_by_key(|&k| colour_of[k]);
+    let colour_of: Vec<u32> = order.iter().map(|&k| colour_of[k]).collect();
+    let mut colours = vec![Colour::default(); count as usize];
+    for (&k, &col) in order.iter().zip(&colour_of) {
+        let (c, col) = (&input[k], &mut colours[col as usize]);
+        col.a.push(c.a);
+        col.b.push(c.b);
+        col.rest.push(c.rest);
+        col.compliance.push(c.compliance);
+    }
+    colours
 }
 
 #[cfg(test)]

@@ -12,13 +12,21 @@
 //! [block plan](super::blocks) lets the kernel use contiguous loads and stores (or a fixed
 //! permutation of a 16-particle window) instead of gathers and scatters.
 //!
-//! Each colour is a rayon fork and join, not a spinning barrier between colours on a private
-//! pool: a barrier waits for a descheduled thread where work stealing does not.
+//! A grid cloth whose constraints are whole classes (see [`grid`](super::grid)) is laid out
+//! by class instead, and its colours run the structured kernels, which read no index, rest
+//! length or compliance array; the arrays stay for the scalar twin and every other reader.
+//!
+//! Each pass (a colour, or a grid's band colours or seam colours together) is a rayon fork and join, not
+//! a spinning barrier between colours on a private pool: a barrier waits for a descheduled
+//! thread where work stealing does not.
 
 use rayon::prelude::*;
 
 use crate::constraints::blocks::{plan, Block, Window, GATHER, RUN, WINDOW};
-use crate::constraints::colour::colour_pairs;
+use crate::constraints::colour::colour_families;
+use crate::constraints::grid::{self, GridColour, GridSpec};
+use crate::constraints::grid_sweep::{self, Sweep};
+pub(crate) use crate::constraints::project::{project1, project8};
 use crate::data::lanes::{gather1, load, load_idx, pick16, pick16_vec, round_up, store, F32s, SharedVec3, Vec3x8, LANES};
 
 pub use crate::model::params::MIN_LENGTH;
@@ -52,6 +60,9 @@ pub struct Colour {
     pub blocks: Vec<Block>,
     /// The distinct window permutations the blocks name.
     pub windows: Vec<Window>,
+    /// A class of a grid cloth: the SIMD sweep runs the structured kernel instead of the
+    /// arrays above (which list the same constraints in the kernel's order).
+    pub grid: Option<GridColour>,
 }
 
 impl Colour {
@@ -66,8 +77,21 @@ impl Colour {
 pub struct DistanceSet {
     /// The colours, solved in order.
     pub colours: Vec<Colour>,
+    /// How the SIMD sweep runs the colours, in order.
+    passes: Vec<Pass>,
     /// Multipliers were reset and not yet written: the next sweep reads them as zero.
     lambda_reset: bool,
+    /// The next sweep does not write the multipliers (see [`DistanceSet::reset_lambda_unkept`]).
+    unkept: bool,
+}
+
+/// One pass of the SIMD sweep.
+#[derive(Clone, Debug, PartialEq)]
+enum Pass {
+    /// One colour through its block plan.
+    Planned(usize),
+    /// Grid colours of one grid, row by row: one colour, or several row-local ones.
+    Grid(std::ops::Range<usize>),
 }
 
 /// A distance constraint given to [`DistanceSet::new`] (global particle indices).
@@ -86,46 +110,44 @@ pub struct DistanceInput {
 impl DistanceSet {
     /// Colours the constraints and lays them out; `sink` is an inert padding particle.
     pub fn new(input: &[DistanceInput], particle_count: usize, sink: u32) -> Self {
-        // Large offset families (same `b − a`: on a grid, horizontal stretch, vertical bend, a
-        // shear diagonal...) are coloured greedily family after family, each in order of `a`,
-        // which gives mostly regular colours (alternate edges, alternate rows). The rest
-        // (irregular meshes, short pieces, any world below `FAMILY_MIN` per family) is coloured
-        // on its own in input order, as it always was, so small worlds keep their Gauss–Seidel
-        // order. Each colour is then laid out by offset and `a` (free within a colour), which
-        // the block plans turn into contiguous loads and stores.
-        let offset = |k: usize| input[k].b as i64 - input[k].a as i64;
-        let mut order: Vec<usize> = (0..input.len()).collect();
-        order.sort_by_key(|&k| (offset(k), input[k].a));
-        let (mut large, mut rest) = (Vec::new(), Vec::new());
-        for family in order.chunk_by(|&i, &j| offset(i) == offset(j)) {
-            if family.len() >= FAMILY_MIN {
-                large.extend_from_slice(family);
-            } else {
-                rest.extend_from_slice(family);
+        Self::with_grids(input, particle_count, sink, &[])
+    }
+
+    /// As [`new`](Self::new), where `grids` names cloth grids and the range of `input` that
+    /// holds each one's constraints: a grid whose constraints are whole classes of one rest
+    /// length and compliance each gets one colour per class and the structured kernels; the
+    /// others are coloured with the rest.
+    pub fn with_grids(input: &[DistanceInput], particle_count: usize, sink: u32, grids: &[(GridSpec, std::ops::Range<usize>)]) -> Self {
+        let mut colours = Vec::new();
+        let mut taken = vec![false; input.len()];
+        for (spec, range) in grids {
+            let end = spec.first as u64 + spec.rows as u64 * spec.cols as u64;
+            let Some(part) = input.get(range.clone()).filter(|_| end <= particle_count as u64) else {
+                continue;
+            };
+            let Some(classes) = grid::classify(*spec, part.iter().map(|c| (c.a, c.b, c.rest, c.compliance))) else {
+                continue;
+            };
+            for (mut g, slots) in grid::layout(*spec, &classes) {
+                let c0 = &part[slots[0]];
+                (g.rest, g.compliance) = (c0.rest, c0.compliance);
+                let mut col = Colour {
+                    grid: Some(g),
+                    ..Colour::default()
+                };
+                for &k in &slots {
+                    let c = &part[k];
+                    col.a.push(c.a);
+                    col.b.push(c.b);
+                    col.rest.push(c.rest);
+                    col.compliance.push(c.compliance);
+                }
+                colours.push(col);
             }
+            taken[range.clone()].fill(true);
         }
-        rest.sort_unstable();
-        let groups = [large, rest];
-        let (mut colour_of, mut count) = (vec![0u32; input.len()], 0u32);
-        for g in &groups {
-            let pairs: Vec<(u32, u32)> = g.iter().map(|&k| (input[k].a, input[k].b)).collect();
-            let (c, n) = colour_pairs(&pairs, particle_count);
-            for (&k, c) in g.iter().zip(c) {
-                colour_of[k] = c + count;
-            }
-            count += n;
-        }
-        // Stable: within a colour, the (offset, a) order from above.
-        order.sort_by_key(|&k| colour_of[k]);
-        let colour_of: Vec<u32> = order.iter().map(|&k| colour_of[k]).collect();
-        let mut colours = vec![Colour::default(); count as usize];
-        for (&k, &col) in order.iter().zip(&colour_of) {
-            let (c, col) = (&input[k], &mut colours[col as usize]);
-            col.a.push(c.a);
-            col.b.push(c.b);
-            col.rest.push(c.rest);
-            col.compliance.push(c.compliance);
-        }
+        let rest: Vec<DistanceInput> = input.iter().zip(&taken).filter(|(_, &t)| !t).map(|(c, _)| *c).collect();
+        colours.extend(colour_families(&rest, particle_count));
         for col in &mut colours {
             col.real = col.a.len();
             let len = round_up(col.real);
@@ -137,10 +159,47 @@ impl DistanceSet {
             col.replan();
         }
         colours.retain(|c| c.real > 0);
-        DistanceSet {
+        let mut set = DistanceSet {
             colours,
-            lambda_reset: false,
+            ..Default::default()
+        };
+        set.plan_passes();
+        set
+    }
+
+    /// Groups the colours into passes: a grid's band colours share one, its seam colours
+    /// another.
+    fn plan_passes(&mut self) {
+        self.passes.clear();
+        let mut k = 0;
+        while k < self.colours.len() {
+            let Some(g) = &self.colours[k].grid else {
+                self.passes.push(Pass::Planned(k));
+                k += 1;
+                continue;
+            };
+            let same = |c: &Colour| c.grid.as_ref().is_some_and(|h| h.spec == g.spec && h.seam == g.seam);
+            let end = k + self.colours[k..].iter().take_while(|c| same(c)).count();
+            self.passes.push(Pass::Grid(k..end));
+            k = end;
         }
+    }
+
+    /// Re-reads each grid colour's rest length and compliance from its arrays after they were
+    /// changed; a colour whose values are no longer uniform runs through its block plan.
+    pub fn refresh_grids(&mut self) {
+        for col in &mut self.colours {
+            if let Some(g) = &mut col.grid {
+                let (rest, comp) = (&col.rest[..col.real], &col.compliance[..col.real]);
+                let same = |v: &[f32]| v.iter().all(|x| x.to_bits() == v[0].to_bits());
+                if same(rest) && same(comp) {
+                    (g.rest, g.compliance) = (rest[0], comp[0]);
+                } else {
+                    col.grid = None;
+                }
+            }
+        }
+        self.plan_passes();
     }
 
     /// Number of real constraints.
@@ -159,72 +218,93 @@ impl DistanceSet {
     /// the multipliers are then only ever written).
     pub fn reset_lambda(&mut self) {
         self.lambda_reset = true;
+        self.unkept = false;
+    }
+
+    /// As [`reset_lambda`](Self::reset_lambda), for a substep of one sweep whose multipliers
+    /// nobody reads afterwards: that sweep reads them as zero and does not write them, which
+    /// saves a store per constraint. The stored values stay stale until a sweep that keeps them.
+    pub fn reset_lambda_unkept(&mut self) {
+        self.lambda_reset = true;
+        self.unkept = true;
+    }
+
+    /// Whether the next sweep reads the multipliers as zero and whether it writes them.
+    fn take_reset(&mut self) -> (bool, bool) {
+        let reset = std::mem::take(&mut self.lambda_reset);
+        let store = !(reset && std::mem::take(&mut self.unkept));
+        (reset, store)
     }
 
     /// One Gauss–Seidel sweep over all colours, SIMD, each colour in parallel chunks when
     /// `parallel` (on the current rayon pool).
     pub fn solve_simd(&mut self, px: &mut [f32], py: &mut [f32], pz: &mut [f32], w: &[f32], inv_h2: f32, parallel: bool) {
         let p = SharedVec3::new(px, py, pz);
-        let solve = if std::mem::take(&mut self.lambda_reset) {
-            solve_block_simd::<true>
-        } else {
-            solve_block_simd::<false>
+        let (solve, pass): (Solve, GridPass) = match self.take_reset() {
+            (true, true) => (solve_block_simd::<true, true>, grid_sweep::run_pass::<true, true>),
+            (true, false) => (solve_block_simd::<true, false>, grid_sweep::run_pass::<true, false>),
+            _ => (solve_block_simd::<false, true>, grid_sweep::run_pass::<false, true>),
         };
-        for col in &mut self.colours {
-            if parallel && col.a.len() > CHUNK {
-                col.a
-                    .par_chunks(CHUNK)
-                    .zip(col.b.par_chunks(CHUNK))
-                    .zip(col.rest.par_chunks(CHUNK))
-                    .zip(col.compliance.par_chunks(CHUNK))
-                    .zip(col.lambda.par_chunks_mut(CHUNK))
-                    .zip(col.blocks.par_chunks(CHUNK / LANES))
-                    .for_each(|(((((a, b), rest), comp), lambda), blocks)| {
-                        let cons = Cons { a, b, rest, comp, blocks };
-                        solve(&cons, lambda, &col.windows, &p, w, inv_h2)
-                    });
-            } else {
-                let cons = Cons {
-                    a: &col.a,
-                    b: &col.b,
-                    rest: &col.rest,
-                    comp: &col.compliance,
-                    blocks: &col.blocks,
-                };
-                solve(&cons, &mut col.lambda, &col.windows, &p, w, inv_h2);
+        let sweep = Sweep { p, w, inv_h2 };
+        for pass_k in 0..self.passes.len() {
+            match &self.passes[pass_k] {
+                Pass::Grid(range) => pass(&mut self.colours[range.clone()], &sweep, parallel),
+                &Pass::Planned(k) => {
+                    let col = &mut self.colours[k];
+                    if parallel && col.a.len() > CHUNK {
+                        col.a
+                            .par_chunks(CHUNK)
+                            .zip(col.b.par_chunks(CHUNK))
+                            .zip(col.rest.par_chunks(CHUNK))
+                            .zip(col.compliance.par_chunks(CHUNK))
+                            .zip(col.lambda.par_chunks_mut(CHUNK))
+                            .zip(col.blocks.par_chunks(CHUNK / LANES))
+                            .for_each(|(((((a, b), rest), comp), lambda), blocks)| {
+                                let cons = Cons { a, b, rest, comp, blocks };
+                                solve(&cons, lambda, &col.windows, &p, w, inv_h2)
+                            });
+                    } else {
+                        let cons = Cons {
+                            a: &col.a,
+                            b: &col.b,
+                            rest: &col.rest,
+                            comp: &col.compliance,
+                            blocks: &col.blocks,
+                        };
+                        solve(&cons, &mut col.lambda, &col.windows, &p, w, inv_h2);
+                    }
+                }
             }
         }
     }
 
     /// The scalar f32 twin of [`solve_simd`](Self::solve_simd): one constraint at a time,
-    /// one thread, the same arithmetic.
+    /// one thread, the same arithmetic (a grid colour's projection with one division).
     pub fn solve_scalar(&mut self, px: &mut [f32], py: &mut [f32], pz: &mut [f32], w: &[f32], inv_h2: f32) {
-        let reset = std::mem::take(&mut self.lambda_reset);
+        let (reset, keep) = self.take_reset();
         for col in &mut self.colours {
             for k in 0..col.a.len() {
                 let lam = if reset { 0.0 } else { col.lambda[k] };
                 let (a, b) = (col.a[k] as usize, col.b[k] as usize);
-                let (wa, wb) = (w[a], w[b]);
-                let (dx, dy, dz) = (px[b] - px[a], py[b] - py[a], pz[b] - pz[a]);
-                let len = (dx * dx + dy * dy + dz * dz).sqrt();
-                let c = len - col.rest[k];
+                let pa = [px[a], py[a], pz[a]];
+                let pb = [px[b], py[b], pz[b]];
                 let alpha = col.compliance[k] * inv_h2;
-                let denom = wa + wb + alpha;
-                let valid = len > MIN_LENGTH && denom > 0.0;
-                let dl = if valid { (-c - alpha * lam) / denom } else { 0.0 };
-                let s = if valid { dl / len } else { 0.0 };
-                let (sa, sb) = (wa * s, wb * s);
-                px[a] -= dx * sa;
-                py[a] -= dy * sa;
-                pz[a] -= dz * sa;
-                px[b] += dx * sb;
-                py[b] += dy * sb;
-                pz[b] += dz * sb;
-                col.lambda[k] = lam + dl;
+                let project = if col.grid.is_some() { project1::<true> } else { project1::<false> };
+                let (pa, pb, lam) = project(pa, pb, w[a], w[b], col.rest[k], alpha, lam);
+                [px[a], py[a], pz[a]] = pa;
+                [px[b], py[b], pz[b]] = pb;
+                if keep {
+                    col.lambda[k] = lam;
+                }
             }
         }
     }
 }
+
+/// The kernel of one colour chunk (see [`solve_block_simd`]).
+type Solve = fn(&Cons<'_>, &mut [f32], &[Window], &SharedVec3, &[f32], f32);
+/// The kernel of one grid pass (see [`grid_sweep::run_pass`]).
+type GridPass = fn(&mut [Colour], &Sweep<'_>, bool);
 
 /// One chunk of a colour's constraint arrays (a multiple of the lane width long).
 struct Cons<'a> {
@@ -235,12 +315,18 @@ struct Cons<'a> {
     blocks: &'a [Block],
 }
 
-/// One chunk of a colour, eight constraints at a time; `RESET`: the multipliers read as zero.
+/// One chunk of a colour, eight constraints at a time; `RESET`: the multipliers read as zero;
+/// `STORE`: they are written.
 #[inline]
-fn solve_block_simd<const RESET: bool>(cons: &Cons<'_>, lambda: &mut [f32], windows: &[Window], p: &SharedVec3, w: &[f32], inv_h2: f32) {
+fn solve_block_simd<const RESET: bool, const STORE: bool>(
+    cons: &Cons<'_>,
+    lambda: &mut [f32],
+    windows: &[Window],
+    p: &SharedVec3,
+    w: &[f32],
+    inv_h2: f32,
+) {
     let inv_h2 = F32s::splat(inv_h2);
-    let zero = F32s::ZERO;
-    let min_len = F32s::splat(MIN_LENGTH);
     for (k, bl) in cons.blocks.iter().enumerate() {
         let i = k * LANES;
         let s = bl.first as usize;
@@ -266,18 +352,12 @@ fn solve_block_simd<const RESET: bool>(cons: &Cons<'_>, lambda: &mut [f32], wind
                 (pa, pb, pick16(wl, wh, &win.pos_a), pick16(wl, wh, &win.pos_b))
             }
         };
-        let d = pb - pa;
-        let len = d.length_sq().sqrt();
-        let c = len - load(cons.rest, i);
         let alpha = load(cons.comp, i) * inv_h2;
-        let denom = wa + wb + alpha;
-        let lam = if RESET { zero } else { load(lambda, i) };
-        let valid = len.simd_gt(min_len) & denom.simd_gt(zero);
-        let dl = valid.select((-c - alpha * lam) / denom, zero);
-        let sc = valid.select(dl / len, zero);
-        let pa = pa - d.scale(wa * sc);
-        let pb = pb + d.scale(wb * sc);
-        store(lambda, i, lam + dl);
+        let lam = if RESET { F32s::ZERO } else { load(lambda, i) };
+        let (pa, pb, lam) = project8::<false>(pa, pb, wa, wb, load(cons.rest, i), alpha, lam);
+        if STORE {
+            store(lambda, i, lam);
+        }
         write_back(bl, windows, p, cons, i, pa, pb);
     }
 }

@@ -16,6 +16,9 @@
 pub mod blocks;
 pub mod colour;
 pub mod distance;
+pub mod grid;
+pub mod grid_sweep;
+pub mod project;
 pub mod tethers;
 
 pub use distance::DistanceSet;

@@ -71,3 +71,23 @@ fn gather_scatter_roundtrip() {
     assert_eq!(z[11], -10.0);
     assert_eq!(x[4], 4.0);
 }
+
+#[test]
+fn split16_deals_the_named_elements_and_merge16_inverts_it() {
+    let lo = F32s::from(std::array::from_fn::<f32, LANES, _>(|q| q as f32));
+    let hi = F32s::from(std::array::from_fn::<f32, LANES, _>(|q| (LANES + q) as f32));
+    for split in [Split::Pairs, Split::Quads] {
+        let (a, b) = split16(lo, hi, split);
+        let mut seen = [false; 2 * LANES];
+        for l in 0..LANES {
+            let q = split_a(split, l);
+            assert_eq!(a.to_array()[l], q as f32, "{split:?} a lane {l}");
+            assert_eq!(b.to_array()[l], (q + split_stride(split)) as f32, "{split:?} b lane {l}");
+            seen[q] = true;
+            seen[q + split_stride(split)] = true;
+        }
+        assert!(seen.iter().all(|&s| s), "{split:?} covers the window");
+        let (l2, h2) = merge16(a, b, split);
+        assert_eq!((l2.to_array(), h2.to_array()), (lo.to_array(), hi.to_array()));
+    }
+}

@@ -83,6 +83,7 @@ impl World {
                 c.compliance = values[t];
             }
         }
+        self.distance.refresh_grids();
         Ok(())
     }
 

@@ -22,6 +22,7 @@ pub mod strands;
 use std::sync::Arc;
 
 use crate::constraints::distance::DistanceInput;
+use crate::constraints::grid::{GridSpec, GRID_MIN};
 use crate::constraints::{DistanceSet, TetherSet};
 use crate::data::particles::Particles;
 use crate::error::{Result, WeftError};
@@ -41,6 +42,8 @@ pub struct World {
     pub(crate) tether_inputs: Vec<crate::model::cloth::Tether>,
     pub(crate) triangles: Vec<[u32; 3]>,
     pub(crate) cloths: Vec<ClothInfo>,
+    /// For each cloth, the range of `distance_inputs` that holds its constraints.
+    pub(crate) cloth_inputs: Vec<std::ops::Range<usize>>,
     pub(crate) damping_rate: Vec<f32>,
     pub(crate) has_damping: bool,
     /// Whether a substep's update pass also runs the next substep's predict, chunk by chunk
@@ -83,6 +86,7 @@ impl World {
             tether_inputs: Vec::new(),
             triangles: Vec::new(),
             cloths: Vec::new(),
+            cloth_inputs: Vec::new(),
             damping_rate: Vec::new(),
             has_damping: false,
             fuse_predict: true,
@@ -116,7 +120,9 @@ impl World {
         self.check_room_for(b.positions.len())?;
         let first = self.particles.extend(&b.positions, &b.inv_mass);
         let first_triangle = self.triangles.len() as u32;
+        let inputs = self.distance_inputs.len();
         self.push_edges(first, &b.edges);
+        self.cloth_inputs.push(inputs..self.distance_inputs.len());
         for t in &b.tethers {
             self.tether_inputs.push(crate::model::cloth::Tether {
                 particle: first + t.particle,
@@ -188,7 +194,18 @@ impl World {
     pub(crate) fn rebuild_topology(&mut self) {
         let sink = self.particles.sink();
         let len = self.particles.padded_len();
-        self.distance = DistanceSet::new(&self.distance_inputs, len, sink);
+        let grids: Vec<_> = (self.cloths.iter().zip(&self.cloth_inputs))
+            .filter(|(c, _)| c.rows as u64 * c.cols as u64 >= GRID_MIN as u64)
+            .map(|(c, r)| {
+                let spec = GridSpec {
+                    first: c.first,
+                    rows: c.rows,
+                    cols: c.cols,
+                };
+                (spec, r.clone())
+            })
+            .collect();
+        self.distance = DistanceSet::with_grids(&self.distance_inputs, len, sink, &grids);
         self.tethers = TetherSet::new(&self.tether_inputs, sink);
         self.wind = self.new_wind_state();
         self.damp_h = f32::NAN;

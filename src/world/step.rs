@@ -279,7 +279,13 @@ impl World {
                 checkpoint!("self-collision clamp", p.px, p.py, p.pz, p.vx, p.vy, p.vz);
                 self.clock.lap("self-collision clamp");
             }
-            self.distance.reset_lambda();
+            // With one sweep a substep, only the last substep's multipliers are read (the
+            // elastic energy of `metrics`), so the others are not stored.
+            if self.params.iterations == 1 && s + 1 < n_sub {
+                self.distance.reset_lambda_unkept();
+            } else {
+                self.distance.reset_lambda();
+            }
             for _ in 0..self.params.iterations {
                 self.distance_stage(inv_h2, exec);
                 let p = &self.particles;

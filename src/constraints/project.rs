@@ -1,0 +1,70 @@
+//! The XPBD projection of one distance constraint, scalar and eight lanes at a time: the one
+//! piece of arithmetic every distance kernel shares, so that SIMD kernels and their scalar
+//! twins agree bit for bit.
+//!
+//! `ONE_DIV` picks how the correction per unit of `p_b - p_a`, `s = Δλ / len`, is computed:
+//! with one division, `s = (-C - α̃ λ) / (denom len)` and `Δλ = s len` (the structured grid
+//! kernels, bound by the divider); or as `Δλ = (-C - α̃ λ) / denom`, `s = Δλ / len` (the
+//! general colours, whose rounding the small worlds and their recorded results keep).
+
+use crate::data::lanes::{F32s, Vec3x8};
+use crate::model::params::MIN_LENGTH;
+
+/// One XPBD distance constraint, scalar: new `p_a`, `p_b` and multiplier, from `alpha = α / h²`.
+/// The SIMD kernels' lanes ([`project8`]) do the same operations in the same order.
+#[inline(always)]
+pub(crate) fn project1<const ONE_DIV: bool>(
+    pa: [f32; 3],
+    pb: [f32; 3],
+    wa: f32,
+    wb: f32,
+    rest: f32,
+    alpha: f32,
+    lam: f32,
+) -> ([f32; 3], [f32; 3], f32) {
+    let (dx, dy, dz) = (pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]);
+    let len = (dx * dx + dy * dy + dz * dz).sqrt();
+    let c = len - rest;
+    let denom = wa + wb + alpha;
+    let valid = len > MIN_LENGTH && denom > 0.0;
+    let (s, dl) = if !valid {
+        (0.0, 0.0)
+    } else if ONE_DIV {
+        let s = (-c - alpha * lam) / (denom * len);
+        (s, s * len)
+    } else {
+        let dl = (-c - alpha * lam) / denom;
+        (dl / len, dl)
+    };
+    let (sa, sb) = (wa * s, wb * s);
+    let pa = [pa[0] - dx * sa, pa[1] - dy * sa, pa[2] - dz * sa];
+    let pb = [pb[0] + dx * sb, pb[1] + dy * sb, pb[2] + dz * sb];
+    (pa, pb, lam + dl)
+}
+
+/// Eight constraints at once: [`project1`] lane by lane.
+#[inline(always)]
+pub(crate) fn project8<const ONE_DIV: bool>(
+    pa: Vec3x8,
+    pb: Vec3x8,
+    wa: F32s,
+    wb: F32s,
+    rest: F32s,
+    alpha: F32s,
+    lam: F32s,
+) -> (Vec3x8, Vec3x8, F32s) {
+    let zero = F32s::ZERO;
+    let d = pb - pa;
+    let len = d.length_sq().sqrt();
+    let c = len - rest;
+    let denom = wa + wb + alpha;
+    let valid = len.simd_gt(F32s::splat(MIN_LENGTH)) & denom.simd_gt(zero);
+    let (sc, dl) = if ONE_DIV {
+        let sc = valid.select((-c - alpha * lam) / (denom * len), zero);
+        (sc, valid.select(sc * len, zero))
+    } else {
+        let dl = valid.select((-c - alpha * lam) / denom, zero);
+        (valid.select(dl / len, zero), dl)
+    };
+    (pa - d.scale(wa * sc), pb + d.scale(wb * sc), lam + dl)
+}
