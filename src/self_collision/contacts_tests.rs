@@ -317,13 +317,12 @@ fn consecutive_pair_passes_leave_no_stale_sums() {
     assert!(ended > 0 && kept > 0, "{ended} ended, {kept} kept contacts");
 }
 
-/// The correction pass over the touched blocks in parallel (1 and 2 threads, several groups
-/// of blocks) gives the bits of the serial runs (the step asks for it only from
-/// `APPLY_PARALLEL_BLOCKS` touched blocks).
-#[test]
-fn parallel_correction_equals_serial() {
-    let mut rng = signed(21);
-    let (rows, cols, s) = (70, 17, 0.02f32);
+/// A folded `rows x cols` cloth (spacing 2 cm, layers 1.02 spacings apart, jittered) with the
+/// default settings, and predictions within half a spacing of the start: `(data, x, p, w, n)`.
+#[allow(clippy::type_complexity)]
+fn jittered_fold(rows: usize, cols: usize, seed: u64) -> (SelfCollisionData, [Vec<f32>; 3], [Vec<f32>; 3], Vec<f32>, usize) {
+    let mut rng = signed(seed);
+    let s = 0.02f32;
     let (mut data, x0) = folded(rows, cols, s, 1.02 * s, 0.3 * s, &mut rng);
     data.config = Some(SelfCollision::default());
     let n = rows * cols;
@@ -335,6 +334,15 @@ fn parallel_correction_equals_serial() {
         }
     }
     let w = padded(&vec![1.0f32; n]);
+    (data, x, p, w, n)
+}
+
+/// The correction pass over the touched blocks in parallel (1 and 2 threads, several groups
+/// of blocks) gives the bits of the serial runs (the step asks for it only from
+/// `APPLY_PARALLEL_BLOCKS` touched blocks).
+#[test]
+fn parallel_correction_equals_serial() {
+    let (mut data, x, p, w, n) = jittered_fold(70, 17, 21);
     let (want, _) = compact(&mut data, &x, &p, &w, n, Exec::Simd);
     assert!(
         data.touched_blocks() > 2 * crate::self_collision::contacts::APPLY_BLOCKS,
@@ -447,19 +455,7 @@ proptest::proptest! {
 /// corrected positions equal the serial scalar pass's bit for bit, on 2 and 3 threads.
 #[test]
 fn contacts_added_in_parallel_parts_equal_the_serial_pass() {
-    let mut rng = signed(31);
-    let (rows, cols, s) = (160, 50, 0.02f32);
-    let (mut data, x0) = folded(rows, cols, s, 1.02 * s, 0.3 * s, &mut rng);
-    data.config = Some(SelfCollision::default());
-    let n = rows * cols;
-    let x = [padded(&x0[0]), padded(&x0[1]), padded(&x0[2])];
-    let mut p = x.clone();
-    for c in &mut p {
-        for v in &mut c[..n] {
-            *v += 0.5 * s * rng();
-        }
-    }
-    let w = padded(&vec![1.0f32; n]);
+    let (mut data, x, p, w, n) = jittered_fold(160, 50, 31);
     let (want_p, want) = compact(&mut data, &x, &p, &w, n, Exec::Scalar);
     let contacts: f32 = want.iter().map(|v| v[10]).sum::<f32>() / 2.0;
     assert!(
