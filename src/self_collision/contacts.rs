@@ -1,14 +1,15 @@
 //! The substep pass over the step's pair list (the method is described in
 //! [`crate::self_collision`]): the pairs in contact are found eight at a time, in parallel over
 //! fixed chunks of the list, each with its contact computed once for both particles
-//! ([`PairCtx::pair_contact`]); the contacts are then added, serially in list order, to both
-//! particles' sums, and the velocity-correction kernel
+//! ([`PairCtx::pair_contact`]); the contacts are then added in list order to both particles'
+//! sums (from [`PARALLEL_CONTACTS`] contacts by one part of the particles per thread, each
+//! part reading the whole contact list), and the velocity-correction kernel
 //! ([`crate::self_collision::response::apply_runs`]) runs on the blocks of [`LANES`] particles
 //! that received one.
 //!
 //! The list is ordered by `i` then `j`, so every particle receives its contacts in ascending
-//! partner order, as a loop over its own sorted list would; the chunks are fixed, so nothing
-//! depends on the thread count. The sums live in per-particle arrays that are zero outside the
+//! partner order, as a loop over its own sorted list would, however the particles are split;
+//! the chunks are fixed, so nothing depends on the thread count. The sums live in per-particle arrays that are zero outside the
 //! particles the last pass wrote, which the next pass zeroes first: a pass writes as many sums
 //! as it finds contacts, not as many as there are particles.
 
