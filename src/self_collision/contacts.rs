@@ -134,7 +134,7 @@ impl ContactPass {
 
     /// The pair pass: the contact sums of every particle from the predicted positions of
     /// `ctx` over the pairs of `list` (see the module docs).
-    pub(crate) fn pair_pass(&mut self, ctx: &PairCtx<'_>, list: &PairList, exec: Exec) {
+    pub(crate) fn pair_pass(&mut self, ctx: &PairCtx<'_>, list: PairList<'_>, exec: Exec) {
         let simd = exec.simd();
         let chunks = list.len().div_ceil(PAIR_CHUNK);
         if self.near.len() < chunks {

@@ -423,8 +423,9 @@ proptest::proptest! {
             first.push(ids.len() as u32);
         }
         first.push(ids.len() as u32);
-        let mut list = PairList::default();
-        list.fill(&first, &ids);
+        let mut rows = PairRows::default();
+        rows.fill(&first, &ids);
+        let list = rows.list(&ids);
         let (w, rest, cloth) = (vec![1.0; n], [vec![0.0; n], vec![0.0; n], vec![0.0; n]], vec![0u32; n]);
         let ctx = PairCtx {
             x: [&p[0], &p[1], &p[2]],
@@ -438,12 +439,12 @@ proptest::proptest! {
         let (mut lanes, mut scalar) = (Vec::new(), Vec::new());
         for start in (0..list.len()).step_by(1000) {
             let r = start..(start + 1000).min(list.len());
-            ctx.touching(&list, r.clone(), &xyzw, true, &mut lanes);
-            ctx.touching(&list, r, &xyzw, false, &mut scalar);
+            ctx.touching(list, r.clone(), &xyzw, true, &mut lanes);
+            ctx.touching(list, r, &xyzw, false, &mut scalar);
         }
         proptest::prop_assert_eq!(&lanes, &scalar);
         let lim = 0.03f32 * 0.03 * 1.0001;
-        let want: Vec<(u32, u32)> = list.i.iter().zip(&list.j).map(|(&i, &j)| (i, j)).filter(|&(i, j)| {
+        let want: Vec<(u32, u32)> = list.i.iter().zip(list.j).map(|(&i, &j)| (i, j)).filter(|&(i, j)| {
             let v: [f32; 3] = std::array::from_fn(|a| p[a][i as usize] - p[a][j as usize]);
             v[0] * v[0] + v[1] * v[1] + v[2] * v[2] < lim
         }).collect();

@@ -14,8 +14,8 @@
 //!   step. **Rest neighbours** are dropped as the list is written: pairs of one cloth whose
 //!   rest distance is at most `q` (`REST_SKIP_FACTOR`), held apart by the cloth's own
 //!   constraints (in a flat cloth every pair the query finds is one). Each pair is listed
-//!   once, `(i, j)` with `i < j`, ordered by `i` then `j`, and flattened into a
-//!   structure-of-arrays pair list (`pairs`). Both broadphases give the same list (tested
+//!   once, `(i, j)` with `i < j`, ordered by `i` then `j`, and read as a structure-of-arrays
+//!   pair list: the lists' ids are the `j`, and each entry's `i` is written out (`pairs`). Both broadphases give the same list (tested
 //!   equal to each other and to a brute force).
 //! * **After predict** (each substep): the speed clamp ([`crate::self_collision::response`])
 //!   limits a free particle's velocity relative to the mean velocity of the free particles to
@@ -83,7 +83,7 @@ pub(crate) use crate::self_collision::contacts::ApplyParams;
 use crate::self_collision::contacts::{ContactPass, PredictionSink};
 use crate::self_collision::hash::SpatialHash;
 use crate::self_collision::neighbours::Neighbours;
-use crate::self_collision::pairs::{PairCtx, PairList};
+use crate::self_collision::pairs::{PairCtx, PairRows};
 use crate::self_collision::reuse::Reuse;
 use crate::self_collision::tree::{ParticleTree, TreeShape};
 
@@ -123,8 +123,8 @@ struct State {
     reuse: Reuse,
     /// The step's pair lists (CSR, each pair under its smaller id).
     lists: Neighbours,
-    /// The same pairs, flat.
-    pairs: PairList,
+    /// The `i` of each entry of `lists`: the same pairs, flat.
+    rows: PairRows,
     /// The substep pass's buffers.
     pass: ContactPass,
     /// Metric lists: non-neighbours within the penetration limit (not timed).
@@ -253,10 +253,10 @@ impl SelfCollisionData {
         ph.rebuilds = st.reuse.builds;
         st.ready = r.is_ok();
         if r.is_ok() {
-            st.pairs.fill(&st.lists.first, &st.lists.ids);
+            st.rows.fill(&st.lists.first, &st.lists.ids);
         } else {
             st.lists.clear();
-            st.pairs.fill(&[0], &[]);
+            st.rows.fill(&[0], &[]);
         }
         self.state = Some(st);
         r.map(|_| true)
@@ -319,7 +319,7 @@ impl SelfCollisionData {
             d: a.d,
             response: a.response,
         };
-        st.pass.pair_pass(&ctx, &st.pairs, exec);
+        st.pass.pair_pass(&ctx, st.rows.list(&st.lists.ids), exec);
         self.stats.phases.pairs_s += t0.elapsed().as_secs_f64();
     }
 
@@ -337,7 +337,7 @@ impl SelfCollisionData {
 
     /// Number of pairs in the step's list.
     pub fn pair_count(&self) -> usize {
-        self.state.as_ref().filter(|s| s.ready).map_or(0, |s| s.pairs.len())
+        self.state.as_ref().filter(|s| s.ready).map_or(0, |s| s.lists.total())
     }
 
     /// Blocks of eight particles the last pair pass found a contact in.

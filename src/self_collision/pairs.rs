@@ -6,22 +6,19 @@ use crate::model::self_collision::Response;
 #[cfg(test)]
 use crate::self_collision::neighbours::Neighbours;
 
-/// The step's pairs in structure-of-arrays form: pair `k` is `(i[k], j[k])`, `i < j`, ordered
-/// by `i` then `j` (the CSR lists of the broadphase, flattened once a step).
+/// The `i` of every entry of the step's CSR lists, whose `ids` are the `j`: with them the
+/// lists read as a structure-of-arrays pair list ([`PairList`]), filled once a step.
 #[derive(Clone, Debug, Default)]
-pub(crate) struct PairList {
-    pub(crate) i: Vec<u32>,
-    pub(crate) j: Vec<u32>,
-    /// The largest id in the list (every gather below it is in bounds).
+pub(crate) struct PairRows {
+    i: Vec<u32>,
+    /// The largest id of the lists (every gather below it is in bounds).
     top: u32,
 }
 
-impl PairList {
-    /// Flattens CSR lists whose entries are the upper partners `j > i` of each `i`.
+impl PairRows {
+    /// The rows of CSR lists whose entries are the upper partners `j > i` of each `i`.
     pub(crate) fn fill(&mut self, first: &[u32], ids: &[u32]) {
         self.i.clear();
-        self.j.clear();
-        self.j.extend_from_slice(ids);
         for (i, w) in first.windows(2).enumerate() {
             let len = w[1].saturating_sub(w[0]) as usize;
             self.i.extend(std::iter::repeat_n(i as u32, len));
@@ -30,6 +27,28 @@ impl PairList {
         self.top = ids.iter().copied().max().unwrap_or(0);
     }
 
+    /// The pair list of these rows and the lists' `ids` they were filled with.
+    pub(crate) fn list<'a>(&'a self, ids: &'a [u32]) -> PairList<'a> {
+        let len = self.i.len().min(ids.len());
+        PairList {
+            i: &self.i[..len],
+            j: &ids[..len],
+            top: self.top,
+        }
+    }
+}
+
+/// The step's pairs in structure-of-arrays form: pair `k` is `(i[k], j[k])`, `i < j`, ordered
+/// by `i` then `j`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct PairList<'a> {
+    pub(crate) i: &'a [u32],
+    pub(crate) j: &'a [u32],
+    /// The largest id in the list (every gather below it is in bounds).
+    top: u32,
+}
+
+impl PairList<'_> {
     /// Number of pairs.
     pub(crate) fn len(&self) -> usize {
         self.j.len()
@@ -59,7 +78,7 @@ impl PairCtx<'_> {
     /// operations either way.
     pub(crate) fn touching(
         &self,
-        list: &PairList,
+        list: PairList<'_>,
         range: std::ops::Range<usize>,
         xyzw: &[[f32; 4]],
         simd: bool,
