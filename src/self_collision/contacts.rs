@@ -9,9 +9,10 @@
 //!
 //! The list is ordered by `i` then `j`, so every particle receives its contacts in ascending
 //! partner order, as a loop over its own sorted list would, however the particles are split;
-//! the chunks are fixed, so nothing depends on the thread count. The sums live in per-particle arrays that are zero outside the
-//! particles the last pass wrote, which the next pass zeroes first: a pass writes as many sums
-//! as it finds contacts, not as many as there are particles.
+//! the chunks are fixed, so nothing depends on the thread count. The sums live in per-particle
+//! arrays that are zero outside the blocks the last pass touched, which the next pass zeroes
+//! first: a pass writes whole blocks (a run of each of the eleven arrays), only those it
+//! touches, each part its own.
 
 use crate::data::exec::Exec;
 use rayon::prelude::*;
@@ -19,7 +20,7 @@ use rayon::prelude::*;
 use crate::data::lanes::{SharedVec3, Vec3x8, LANES};
 use crate::model::self_collision::Response;
 use crate::self_collision::pairs::{PairContact, PairCtx, PairList};
-use crate::self_collision::response::{apply_runs, ApplyInput, ContactSums};
+use crate::self_collision::response::{apply_runs, ApplyInput, ContactSums, SumRows};
 
 /// Pairs one parallel task tests in the pair pass.
 pub(crate) const PAIR_CHUNK: usize = 4096;
@@ -29,6 +30,12 @@ pub(crate) const APPLY_BLOCKS: usize = 64;
 
 /// Contacts from which the pair pass adds them in parallel (fewer cost more to fork).
 pub(crate) const PARALLEL_CONTACTS: usize = 2048;
+
+/// Most parts the contacts are added in (one a thread).
+const MAX_PARTS: usize = 8;
+
+/// Particles a parallel task copies into the position records.
+const XYZW_CHUNK: usize = 16 * 1024;
 
 /// Touched blocks from which the correction runs in parallel (fewer cost more to fork than to
 /// correct).
@@ -85,10 +92,9 @@ pub(crate) struct ContactPass {
     /// Sums and approaching counts of one particle while its contacts are added (zero
     /// between passes).
     acc: Vec<([f32; 11], f32)>,
-    /// Particles the last pass added a contact to, by part (see [`ContactPass::pair_pass`]),
-    /// in first-contact order.
-    written: Vec<Vec<u32>>,
-    /// Blocks holding them, ascending.
+    /// Blocks the last pass added a contact to, by part (see [`ContactPass::pair_pass`]).
+    touched_parts: Vec<Vec<u32>>,
+    /// All of them, ascending: their sums are the only non-zero ones.
     touched: Vec<u32>,
     /// Whether each block is in `touched`.
     hit: Vec<bool>,
@@ -145,7 +151,17 @@ impl ContactPass {
         let n = p[0].len().min(p[1].len()).min(p[2].len());
         self.xyzw.clear();
         if list.len() > 0 {
-            self.xyzw.extend((0..n).map(|i| [p[0][i], p[1][i], p[2][i], 0.0]));
+            self.xyzw.resize(n, [0.0; 4]);
+            let copy = |(c, out): (usize, &mut [[f32; 4]])| {
+                for (k, o) in (c * XYZW_CHUNK..).zip(out) {
+                    *o = [p[0][k], p[1][k], p[2][k], 0.0];
+                }
+            };
+            if exec.parallel() && n > XYZW_CHUNK {
+                self.xyzw.par_chunks_mut(XYZW_CHUNK).enumerate().for_each(copy);
+            } else {
+                self.xyzw.chunks_mut(XYZW_CHUNK).enumerate().for_each(copy);
+            }
         }
         let xyzw = &self.xyzw[..];
         let find = |c: usize, (near, found): (&mut Vec<(u32, u32)>, &mut Vec<Option<PairContact>>)| {
@@ -160,63 +176,78 @@ impl ContactPass {
         } else {
             bufs.0.iter_mut().zip(bufs.1.iter_mut()).enumerate().for_each(|(c, b)| find(c, b));
         }
-        let mut rows = self.sums.rows();
-        for &k in self.written.iter().flatten() {
-            rows.set(k as usize, &[0.0; 11]);
-        }
-        for &b in &self.touched {
-            self.hit[b as usize] = false;
-        }
-        self.touched.clear();
-        self.written.iter_mut().for_each(Vec::clear);
-        // The particles are split into parts, each adding the contacts of its own particles
-        // in list order (every part reads the whole contact list): the same sums whatever the
-        // split, so it follows the threads.
+        // The particles are split into parts of whole blocks, each (on its own thread) zeroing
+        // the sums the last pass left in its blocks, adding the contacts of its own particles
+        // in list order (every part reads the whole contact list) and storing the sums of the
+        // blocks it touched: the same sums whatever the split, so it follows the threads.
         let contacts: usize = self.near[..chunks].iter().map(Vec::len).sum();
         let parts = if exec.parallel() && contacts >= PARALLEL_CONTACTS {
-            rayon::current_num_threads().clamp(1, 8)
+            rayon::current_num_threads().clamp(1, MAX_PARTS)
         } else {
             1
         };
         let blocks = self.hit.len().div_ceil(parts).max(1);
-        self.written.resize_with(parts.max(self.written.len()), Vec::new);
         let (near, found) = (&self.near[..chunks], &self.found[..chunks]);
-        let add = |part: usize, acc: &mut [([f32; 11], f32)], hit: &mut [bool], written: &mut Vec<u32>| {
-            let first_id = part * blocks * LANES;
+        let old = std::mem::take(&mut self.touched);
+        let part = |part: usize, acc: &mut [([f32; 11], f32)], hit: &mut [bool], mut rows: SumRows<'_>, touched: &mut Vec<u32>| {
+            let b0 = part * blocks;
+            let mine = old.partition_point(|&b| (b as usize) < b0)..old.partition_point(|&b| (b as usize) < b0 + hit.len());
+            for &b in &old[mine] {
+                rows.set_block(b as usize - b0, |_| [0.0; 11]);
+                hit[b as usize - b0] = false;
+            }
+            let first_id = b0 * LANES;
             for (&(i, j), contact) in near.iter().flatten().zip(found.iter().flatten()) {
                 let Some(c) = contact else { continue };
                 for (side, a) in [(0, i as usize), (1, j as usize)] {
                     let Some((out, approaching)) = a.checked_sub(first_id).and_then(|k| acc.get_mut(k)) else {
                         continue;
                     };
-                    let first = out[10] == 0.0;
-                    if c.add_to(side, out, approaching) && first {
-                        written.push(a as u32);
+                    if c.add_to(side, out, approaching) {
                         hit[(a - first_id) / LANES] = true;
                     }
                 }
             }
+            touched.clear();
+            for (b, _) in hit.iter().enumerate().filter(|(_, h)| **h) {
+                let run = &mut acc[b * LANES..(b + 1) * LANES];
+                rows.set_block(b, |l| {
+                    let (mut out, approaching) = run[l];
+                    PairCtx::finish(&mut out, approaching);
+                    out
+                });
+                run.fill(([0.0; 11], 0.0));
+                touched.push((b0 + b) as u32);
+            }
         };
-        let written = &mut self.written[..parts];
+        self.touched_parts.resize_with(parts.max(self.touched_parts.len()), Vec::new);
+        let touched_parts = &mut self.touched_parts[..parts];
+        let mut rows = self.sums.rows();
         if parts > 1 {
+            let mut split: [Option<SumRows<'_>>; MAX_PARTS] = Default::default();
+            for s in split.iter_mut().take(parts) {
+                let (lo, hi) = rows.split_at(blocks * LANES);
+                *s = Some(lo);
+                rows = hi;
+            }
             self.acc
                 .par_chunks_mut(blocks * LANES)
                 .zip(self.hit.par_chunks_mut(blocks))
-                .zip(written.par_iter_mut())
+                .zip(split.par_iter_mut())
+                .zip(touched_parts.par_iter_mut())
                 .enumerate()
-                .for_each(|(p, ((acc, hit), w))| add(p, acc, hit, w));
+                .for_each(|(p, (((acc, hit), rows), t))| {
+                    if let Some(rows) = rows.take() {
+                        part(p, acc, hit, rows, t);
+                    }
+                });
         } else {
-            add(0, &mut self.acc, &mut self.hit, &mut written[0]);
+            part(0, &mut self.acc, &mut self.hit, rows, &mut touched_parts[0]);
         }
-        self.touched.extend(written.iter().flatten().map(|&k| k / LANES as u32));
-        self.touched.sort_unstable();
-        self.touched.dedup();
-        for &k in written.iter().flatten() {
-            let (out, approaching) = &mut self.acc[k as usize];
-            PairCtx::finish(out, *approaching);
-            rows.set(k as usize, out);
-            self.acc[k as usize] = ([0.0; 11], 0.0);
-        }
+        let mut touched = old;
+        touched.clear();
+        touched.extend(touched_parts.iter().flatten());
+        self.touched = touched;
     }
 
     /// The velocity-correction kernel on the touched blocks of the predicted positions `p`

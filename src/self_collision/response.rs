@@ -79,13 +79,29 @@ pub(crate) struct SumRows<'a> {
     a: [&'a mut [f32]; 11],
 }
 
-impl SumRows<'_> {
-    /// [`ContactSums::set`]; an index past the arrays is ignored.
+impl<'a> SumRows<'a> {
+    /// The rows `..at` and `at..` (`at` clamped to the length), for parts written in parallel.
+    pub(crate) fn split_at(self, at: usize) -> (SumRows<'a>, SumRows<'a>) {
+        let at = at.min(self.len);
+        let mut lo: [&'a mut [f32]; 11] = Default::default();
+        let mut hi: [&'a mut [f32]; 11] = Default::default();
+        for ((a, l), h) in self.a.into_iter().zip(&mut lo).zip(&mut hi) {
+            (*l, *h) = a.split_at_mut(at);
+        }
+        (SumRows { len: at, a: lo }, SumRows { len: self.len - at, a: hi })
+    }
+
+    /// Stores the rows of block `b` (particles `b * LANES ..`, local to these rows) from
+    /// `v(l)` for lane `l`; a block past the arrays is ignored.
     #[inline]
-    pub(crate) fn set(&mut self, k: usize, v: &[f32; 11]) {
-        if k < self.len {
-            for (a, &x) in self.a.iter_mut().zip(v) {
-                a[k] = x;
+    pub(crate) fn set_block(&mut self, b: usize, v: impl Fn(usize) -> [f32; 11]) {
+        let k = b * LANES;
+        if k + LANES <= self.len {
+            let rows: [[f32; 11]; LANES] = std::array::from_fn(v);
+            for (c, a) in self.a.iter_mut().enumerate() {
+                for (l, r) in rows.iter().enumerate() {
+                    a[k + l] = r[c];
+                }
             }
         }
     }
