@@ -384,8 +384,10 @@ impl World {
     }
 }
 
+/// The world's own pool for `threads` workers: none for 0 (the global pool) and for 1 (the
+/// caller's thread, see [`World::on_caller_thread`]).
 fn make_pool(threads: usize) -> Result<Option<Arc<rayon::ThreadPool>>> {
-    if threads == 0 {
+    if threads <= 1 {
         return Ok(None);
     }
     rayon::ThreadPoolBuilder::new()
