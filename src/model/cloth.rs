@@ -260,9 +260,10 @@ impl ClothDesc {
                 }
             }
         }
-        // Edges between two pinned particles can never move anything: drop them.
-        let w = &out.inv_mass;
-        out.edges.retain(|e| w[e.a as usize] > 0.0 || w[e.b as usize] > 0.0);
+        // Edges between two pinned particles move nothing (the projection skips a constraint
+        // whose inverse masses and compliance sum to zero, and scales by zero masses
+        // otherwise) but are kept: the grid stays complete for the structured kernels
+        // (`constraints::grid`), which a pinned row would otherwise lock out.
         for r in 0..rows.saturating_sub(1) {
             for c in 0..cols.saturating_sub(1) {
                 out.triangles.push([id(r, c), id(r, c + 1), id(r + 1, c + 1)]);

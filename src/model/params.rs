@@ -65,10 +65,8 @@ pub struct SolverParams {
     /// Spring stiffness, N/m, that the force-based methods give constraints of zero compliance
     /// (rigid in XPBD); a constraint of compliance `α > 0` becomes a spring of stiffness `1/α`.
     pub stiffness: f32,
-    /// Worker threads: 0 = automatic (the global rayon pool, or the caller's thread for worlds
-    /// of fewer than [`SMALL_WORLD`](crate::world::SMALL_WORLD) particles, where two threads
-    /// measured slower than one), 1 = the caller's thread (no pool), k > 1 = a pool of k
-    /// threads owned by the world. Results are identical for every value.
+    /// Worker threads: 0 = the global rayon pool, 1 = the caller's thread (no pool), k > 1 = a
+    /// pool of k threads owned by the world. Results are identical for every value.
     pub threads: usize,
     /// Kernel implementation.
     pub backend: Backend,

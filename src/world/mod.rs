@@ -17,7 +17,6 @@ pub(crate) mod self_collision;
 pub mod stage_clock;
 pub(crate) mod stages;
 pub mod step;
-pub use step::SMALL_WORLD;
 pub mod strands;
 
 use std::sync::Arc;

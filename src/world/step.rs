@@ -57,10 +57,6 @@ enum Ran {
     Found(usize, &'static str),
 }
 
-/// Particles below which `threads = 0` steps on the caller's thread: there two threads
-/// measured slower than one (`weft bench --scaling`, whose table shows the crossover).
-pub const SMALL_WORLD: usize = 3_000;
-
 impl World {
     /// Advances the world by `dt` seconds.
     ///
@@ -119,13 +115,13 @@ impl World {
     }
 
     /// Whether the step runs on the caller's thread alone: when asked
-    /// ([`World::set_caller_thread_only`]); without a pool of the caller's, for `threads = 1`,
-    /// and for `threads = 0` below [`SMALL_WORLD`] particles. A pool of one worker would only
-    /// add a hand-off to another thread and back each step (about 60 µs here, as much as a
-    /// 100 x 100 cloth's whole step).
+    /// ([`World::set_caller_thread_only`]), and for `threads = 1` without a pool of the
+    /// caller's. A pool of one worker would only add a hand-off to another thread and back each
+    /// step (about 60 µs here, as much as a 100 x 100 cloth's whole step). Small worlds with
+    /// `threads = 0` keep the pool: plain cloths under about 3 000 particles ran faster on one
+    /// thread, but self-collision (which parallelises well) ran faster on two even at 1 640.
     pub(crate) fn on_caller_thread(&self) -> bool {
-        let automatic = self.params.threads == 0 && self.particles.count() < SMALL_WORLD;
-        self.embed.caller_thread_only || (self.pool.is_none() && (self.params.threads == 1 || automatic))
+        self.embed.caller_thread_only || (self.pool.is_none() && self.params.threads == 1)
     }
 
     fn in_pool<R: Send>(&mut self, f: impl FnOnce(&mut World) -> R + Send) -> R {
