@@ -285,7 +285,7 @@ impl ParticleTree {
         let md2 = check_max_dist(max_dist)?;
         Self::check_unchanged((0..n).into_par_iter().all(|i| self.unchanged(x, y, z, i)))?;
         let r = search_radius(max_dist);
-        out.fill_parallel(n, |i, buf| self.scan::<true>(x, y, z, i, md2, r, buf))
+        out.fill_parallel(n, |i, buf| self.scan::<true>(x, y, z, i, md2, r, false, buf))
     }
 
     /// [`ParticleTree::query_all`] when `exec` is parallel, else a serial walk with the
@@ -308,6 +308,36 @@ impl ParticleTree {
         }
     }
 
+    /// The upper lists (each pair within `max_dist` once, in the list of its smaller id): half
+    /// the candidates of [`ParticleTree::query_all_exec`], the same pairs. In parallel when
+    /// `exec` is, with the lanes of `exec`; identical lists either way.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn query_upper_exec(
+        &self,
+        x: &[f32],
+        y: &[f32],
+        z: &[f32],
+        n: usize,
+        max_dist: f32,
+        out: &mut Neighbours,
+        exec: Exec,
+    ) -> Result<()> {
+        self.check_n(x, y, z, n)?;
+        let md2 = check_max_dist(max_dist)?;
+        let r = search_radius(max_dist);
+        if exec.parallel() {
+            Self::check_unchanged((0..n).into_par_iter().all(|i| self.unchanged(x, y, z, i)))?;
+            out.fill_parallel(n, |i, buf| self.scan::<true>(x, y, z, i, md2, r, true, buf))
+        } else {
+            Self::check_unchanged((0..n).all(|i| self.unchanged(x, y, z, i)))?;
+            if exec.simd() {
+                out.fill_serial(n, |i, buf| self.scan::<true>(x, y, z, i, md2, r, true, buf))
+            } else {
+                out.fill_serial(n, |i, buf| self.scan::<false>(x, y, z, i, md2, r, true, buf))
+            }
+        }
+    }
+
     /// Serial, scalar twin of [`ParticleTree::query_all`] (no threads, no lanes); produces
     /// identical lists.
     pub fn query_all_serial(&self, x: &[f32], y: &[f32], z: &[f32], n: usize, max_dist: f32, out: &mut Neighbours) -> Result<()> {
@@ -320,13 +350,14 @@ impl ParticleTree {
         let md2 = check_max_dist(max_dist)?;
         Self::check_unchanged((0..n).all(|i| self.unchanged(x, y, z, i)))?;
         let r = search_radius(max_dist);
-        out.fill_serial(n, |i, buf| self.scan::<SIMD>(x, y, z, i, md2, r, buf))
+        out.fill_serial(n, |i, buf| self.scan::<SIMD>(x, y, z, i, md2, r, false, buf))
     }
 
     /// Appends the sorted neighbours of particle `i` to `buf`.
     #[allow(clippy::too_many_arguments)]
     #[inline]
-    fn scan<const SIMD: bool>(&self, x: &[f32], y: &[f32], z: &[f32], i: usize, md2: f32, r: f32, buf: &mut Vec<u32>) {
+    #[allow(clippy::too_many_arguments)]
+    fn scan<const SIMD: bool>(&self, x: &[f32], y: &[f32], z: &[f32], i: usize, md2: f32, r: f32, above: bool, buf: &mut Vec<u32>) {
         let (xi, yi, zi) = (x[i], y[i], z[i]);
         if !(xi.is_finite() && yi.is_finite() && zi.is_finite()) {
             return;
@@ -349,7 +380,7 @@ impl ParticleTree {
                 let l = k - fl;
                 let range = self.leaf_start[l] as usize..self.leaf_start[l + 1] as usize;
                 let c = Candidates {
-                    above: false,
+                    above,
                     ids: &self.order,
                     x: &self.lx,
                     y: &self.ly,
@@ -402,7 +433,7 @@ mod tests {
     use crate::data::exec::Exec;
 
     /// The query with each `Exec` (parallel, serial with and without lanes) gives the brute
-    /// force's lists.
+    /// force's lists, and the upper query their upper halves.
     #[test]
     fn every_exec_gives_the_brute_force_lists() {
         let mut r = crate::test_rng::unit(5);
@@ -413,10 +444,19 @@ mod tests {
         want.fill_brute_force(&p[0], &p[1], &p[2], n, d).unwrap();
         let tree = ParticleTree::build(&p[0], &p[1], &p[2], n, TreeShape::LeafSize(8)).unwrap();
         let mut got = Neighbours::new();
+        let mut upper = want.clone();
+        upper.retain(|i, j| j as usize > i);
         for exec in [Exec::Scalar, Exec::Simd, Exec::Parallel, Exec::ScalarParallel] {
             tree.query_all_exec(&p[0], &p[1], &p[2], n, d, &mut got, exec).unwrap();
             assert_eq!(got, want, "{exec:?}");
+            tree.query_upper_exec(&p[0], &p[1], &p[2], n, d, &mut got, exec).unwrap();
+            assert_eq!(got, upper, "upper, {exec:?}");
         }
-        assert!(want.total() > 100, "{}", want.total());
+        assert!(
+            want.total() > 100 && upper.total() * 2 == want.total(),
+            "{} {}",
+            want.total(),
+            upper.total()
+        );
     }
 }
