@@ -235,7 +235,7 @@ impl SelfCollisionData {
                 (Some(t), SelfBroadphase::AabbTree) => {
                     let (rest, cloth_of, d) = (&self.rest, &self.cloth_of, a.d);
                     let keep = |i: usize, j: u32| !rest_skipped(rest, cloth_of, i, j as usize, d);
-                    t.query_upper_exec(x[0], x[1], x[2], n, reach, out, exec).map(|_| out.retain(keep))
+                    t.query_exec(x[0], x[1], x[2], n, reach, out, exec, true).map(|_| out.retain(keep))
                 }
                 _ => st.hash.query_upper_unskipped_cells_exec(reach, REST_SKIP_FACTOR * a.d, out, exec),
             });

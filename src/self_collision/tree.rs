@@ -281,80 +281,52 @@ impl ParticleTree {
     /// leaf scans read the leaf-ordered copy the refit made). Errors if they are not, if `n`
     /// differs from the build, an array is short, or `max_dist` is negative or non-finite.
     pub fn query_all(&self, x: &[f32], y: &[f32], z: &[f32], n: usize, max_dist: f32, out: &mut Neighbours) -> Result<()> {
-        self.check_n(x, y, z, n)?;
-        let md2 = check_max_dist(max_dist)?;
-        Self::check_unchanged((0..n).into_par_iter().all(|i| self.unchanged(x, y, z, i)))?;
-        let r = search_radius(max_dist);
-        out.fill_parallel(n, |i, buf| self.scan::<true>(x, y, z, i, md2, r, false, buf))
-    }
-
-    /// [`ParticleTree::query_all`] when `exec` is parallel, else a serial walk with the
-    /// lanes of `exec` (never entering rayon); identical lists.
-    #[allow(clippy::too_many_arguments)]
-    pub(crate) fn query_all_exec(
-        &self,
-        x: &[f32],
-        y: &[f32],
-        z: &[f32],
-        n: usize,
-        max_dist: f32,
-        out: &mut Neighbours,
-        exec: Exec,
-    ) -> Result<()> {
-        match (exec.parallel(), exec.simd()) {
-            (true, _) => self.query_all(x, y, z, n, max_dist, out),
-            (false, true) => self.query_serial::<true>(x, y, z, n, max_dist, out),
-            (false, false) => self.query_serial::<false>(x, y, z, n, max_dist, out),
-        }
-    }
-
-    /// The upper lists (each pair within `max_dist` once, in the list of its smaller id): half
-    /// the candidates of [`ParticleTree::query_all_exec`], the same pairs. In parallel when
-    /// `exec` is, with the lanes of `exec`; identical lists either way.
-    #[allow(clippy::too_many_arguments)]
-    pub(crate) fn query_upper_exec(
-        &self,
-        x: &[f32],
-        y: &[f32],
-        z: &[f32],
-        n: usize,
-        max_dist: f32,
-        out: &mut Neighbours,
-        exec: Exec,
-    ) -> Result<()> {
-        self.check_n(x, y, z, n)?;
-        let md2 = check_max_dist(max_dist)?;
-        let r = search_radius(max_dist);
-        if exec.parallel() {
-            Self::check_unchanged((0..n).into_par_iter().all(|i| self.unchanged(x, y, z, i)))?;
-            out.fill_parallel(n, |i, buf| self.scan::<true>(x, y, z, i, md2, r, true, buf))
-        } else {
-            Self::check_unchanged((0..n).all(|i| self.unchanged(x, y, z, i)))?;
-            if exec.simd() {
-                out.fill_serial(n, |i, buf| self.scan::<true>(x, y, z, i, md2, r, true, buf))
-            } else {
-                out.fill_serial(n, |i, buf| self.scan::<false>(x, y, z, i, md2, r, true, buf))
-            }
-        }
+        self.query_exec(x, y, z, n, max_dist, out, Exec::Parallel, false)
     }
 
     /// Serial, scalar twin of [`ParticleTree::query_all`] (no threads, no lanes); produces
     /// identical lists.
     pub fn query_all_serial(&self, x: &[f32], y: &[f32], z: &[f32], n: usize, max_dist: f32, out: &mut Neighbours) -> Result<()> {
-        self.query_serial::<false>(x, y, z, n, max_dist, out)
+        self.query_exec(x, y, z, n, max_dist, out, Exec::Scalar, false)
     }
 
-    /// The serial query of every particle, with or without lanes.
-    fn query_serial<const SIMD: bool>(&self, x: &[f32], y: &[f32], z: &[f32], n: usize, max_dist: f32, out: &mut Neighbours) -> Result<()> {
+    /// [`ParticleTree::query_all`] when `exec` is parallel, else a serial walk with the lanes of
+    /// `exec` (never entering rayon); identical lists. With `upper`, each pair is listed once,
+    /// in the list of its smaller id (half the candidates, the same pairs).
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn query_exec(
+        &self,
+        x: &[f32],
+        y: &[f32],
+        z: &[f32],
+        n: usize,
+        max_dist: f32,
+        out: &mut Neighbours,
+        exec: Exec,
+        upper: bool,
+    ) -> Result<()> {
         self.check_n(x, y, z, n)?;
         let md2 = check_max_dist(max_dist)?;
-        Self::check_unchanged((0..n).all(|i| self.unchanged(x, y, z, i)))?;
         let r = search_radius(max_dist);
-        out.fill_serial(n, |i, buf| self.scan::<SIMD>(x, y, z, i, md2, r, false, buf))
+        // The parallel query scans with lanes whatever `exec.simd()` says: the lists are the same.
+        let (parallel, lanes) = (exec.parallel(), exec.parallel() || exec.simd());
+        let scan = |i: usize, buf: &mut Vec<u32>| {
+            if lanes {
+                self.scan::<true>(x, y, z, i, md2, r, upper, buf)
+            } else {
+                self.scan::<false>(x, y, z, i, md2, r, upper, buf)
+            }
+        };
+        if parallel {
+            Self::check_unchanged((0..n).into_par_iter().all(|i| self.unchanged(x, y, z, i)))?;
+            out.fill_parallel(n, scan)
+        } else {
+            Self::check_unchanged((0..n).all(|i| self.unchanged(x, y, z, i)))?;
+            out.fill_serial(n, scan)
+        }
     }
 
-    /// Appends the sorted neighbours of particle `i` to `buf`.
-    #[allow(clippy::too_many_arguments)]
+    /// Appends the sorted neighbours of particle `i` to `buf` (those above `i` with `above`).
     #[inline]
     #[allow(clippy::too_many_arguments)]
     fn scan<const SIMD: bool>(&self, x: &[f32], y: &[f32], z: &[f32], i: usize, md2: f32, r: f32, above: bool, buf: &mut Vec<u32>) {
@@ -447,9 +419,9 @@ mod tests {
         let mut upper = want.clone();
         upper.retain(|i, j| j as usize > i);
         for exec in [Exec::Scalar, Exec::Simd, Exec::Parallel, Exec::ScalarParallel] {
-            tree.query_all_exec(&p[0], &p[1], &p[2], n, d, &mut got, exec).unwrap();
+            tree.query_exec(&p[0], &p[1], &p[2], n, d, &mut got, exec, false).unwrap();
             assert_eq!(got, want, "{exec:?}");
-            tree.query_upper_exec(&p[0], &p[1], &p[2], n, d, &mut got, exec).unwrap();
+            tree.query_exec(&p[0], &p[1], &p[2], n, d, &mut got, exec, true).unwrap();
             assert_eq!(got, upper, "upper, {exec:?}");
         }
         assert!(
