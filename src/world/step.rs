@@ -117,9 +117,9 @@ impl World {
     /// Whether the step runs on the caller's thread alone: when asked
     /// ([`World::set_caller_thread_only`]), and for `threads = 1` without a pool of the
     /// caller's. A pool of one worker would only add a hand-off to another thread and back each
-    /// step (about 60 µs here, as much as a 100 x 100 cloth's whole step). Small worlds with
-    /// `threads = 0` keep the pool: plain cloths under about 3 000 particles ran faster on one
-    /// thread, but self-collision (which parallelises well) ran faster on two even at 1 640.
+    /// step (about 60 µs here, as much as a 100 x 100 cloth's whole step). `threads = 0` keeps
+    /// the pool at every size: whether two threads pay on a small world depends on its effects
+    /// (self-collision parallelises well), not on the particle count alone.
     pub(crate) fn on_caller_thread(&self) -> bool {
         self.embed.caller_thread_only || (self.pool.is_none() && self.params.threads == 1)
     }
