@@ -75,6 +75,22 @@ fn compact(
     (out, by_particle)
 }
 
+/// Particle positions, one array a coordinate.
+type Positions = [Vec<f32>; 3];
+
+/// Asserts two passes' results equal bit for bit: every particle's sums and, when given, its
+/// positions after the correction (`(got, want)`).
+fn assert_same_bits(got: &[[f32; 11]], want: &[[f32; 11]], p: Option<(&Positions, &Positions)>, n: usize, what: &str) {
+    for i in 0..n {
+        assert_eq!(got[i].map(f32::to_bits), want[i].map(f32::to_bits), "{what}: sums of {i}");
+        if let Some((gp, wp)) = p {
+            for a in 0..3 {
+                assert_eq!(gp[a][i].to_bits(), wp[a][i].to_bits(), "{what}: p of {i}");
+            }
+        }
+    }
+}
+
 /// The reference: every pair tested (no broadphase, rest rule applied), the kernel run on all
 /// particles.
 #[allow(clippy::type_complexity)]
@@ -151,16 +167,8 @@ fn compact_step_equals_recomputation_from_scratch() {
             for threads in [1, 2] {
                 let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
                 let (got_p, got_sums) = pool.install(|| compact(&mut data, &x, &p, &w, n, Exec::new(simd, parallel)));
-                for i in 0..n {
-                    assert_eq!(
-                        got_sums[i].map(f32::to_bits),
-                        want_sums[i].map(f32::to_bits),
-                        "case {case} particle {i} ({parallel}, {simd}, {threads})"
-                    );
-                    for a in 0..3 {
-                        assert_eq!(got_p[a][i].to_bits(), want_p[a][i].to_bits(), "case {case} p of {i}");
-                    }
-                }
+                let what = format!("case {case} ({parallel}, {simd}, {threads})");
+                assert_same_bits(&got_sums, &want_sums, Some((&got_p, &want_p)), n, &what);
             }
         }
         assert!(data.pair_count() > 0);
@@ -300,13 +308,7 @@ fn consecutive_pair_passes_leave_no_stale_sums() {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
         for (parallel, simd) in [(false, false), (true, true), (false, true), (true, false)] {
             let (_, got) = pool.install(|| compact(&mut data, &x, &p, &w, n, Exec::new(simd, parallel)));
-            for i in 0..n {
-                assert_eq!(
-                    got[i].map(f32::to_bits),
-                    want[i].map(f32::to_bits),
-                    "pass {pass} particle {i} ({parallel}, {simd})"
-                );
-            }
+            assert_same_bits(&got, &want, None, n, &format!("pass {pass} ({parallel}, {simd})"));
         }
         if let Some(prev) = &last {
             ended += (0..n).filter(|&i| prev[i][10] > 0.0 && want[i][10] == 0.0).count();
@@ -466,15 +468,6 @@ fn contacts_added_in_parallel_parts_equal_the_serial_pass() {
     for threads in [2, 3] {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         let (got_p, got) = pool.install(|| compact(&mut data, &x, &p, &w, n, Exec::Parallel));
-        for i in 0..n {
-            assert_eq!(
-                got[i].map(f32::to_bits),
-                want[i].map(f32::to_bits),
-                "{threads} threads, particle {i}"
-            );
-            for a in 0..3 {
-                assert_eq!(got_p[a][i].to_bits(), want_p[a][i].to_bits(), "{threads} threads, p of {i}");
-            }
-        }
+        assert_same_bits(&got, &want, Some((&got_p, &want_p)), n, &format!("{threads} threads"));
     }
 }

@@ -120,9 +120,8 @@ impl ContactSums {
         }
     }
 
-    /// The eleven arrays cut to their common length, for many stores ([`SumRows::set`]):
-    /// one bounds check a store instead of one an array (the pair pass stores many, and
-    /// [`ContactSums::set`] checks all eleven arrays each time).
+    /// The eleven arrays cut to their common length, for the pair pass's block stores
+    /// ([`SumRows::set_block`]), split into parts with [`SumRows::split_at`].
     pub(crate) fn rows(&mut self) -> SumRows<'_> {
         let len = self
             .c
