@@ -110,7 +110,8 @@ typedef struct WeftSolverParams {
   uint32_t substeps;
   // Solver sweeps per substep.
   uint32_t iterations;
-  // Worker threads: 0 = all cores (global pool), k = own pool of k threads.
+  // Worker threads: 0 = all cores (global pool) or the calling thread, whichever the world
+  // measures faster; 1 = the calling thread; k = own pool of k threads.
   uint32_t threads;
 } WeftSolverParams;
 

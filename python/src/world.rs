@@ -512,7 +512,8 @@ impl PyWorld {
         self.world.params().dt
     }
 
-    /// Worker threads (0 = the global pool on all cores).
+    /// Worker threads (0 = the global pool on all cores or the calling thread, whichever
+    /// the world measures faster).
     #[getter]
     fn threads(&self) -> usize {
         self.world.params().threads

@@ -110,7 +110,8 @@ pub struct WeftSolverParams {
     pub substeps: u32,
     /// Solver sweeps per substep.
     pub iterations: u32,
-    /// Worker threads: 0 = all cores (global pool), k = own pool of k threads.
+    /// Worker threads: 0 = all cores (global pool) or the calling thread, whichever the world
+    /// measures faster; 1 = the calling thread; k = own pool of k threads.
     pub threads: u32,
 }
 

@@ -15,7 +15,8 @@
 //!   (Fiedler, "Fix your timestep!"), so uneven frames never change the physics, and
 //!   [`World::interpolated_positions`] blends the last two states for display.
 //! - [`runtime`]: change stiffness at run time in place, snapshot and roll back, reset.
-//! - Threads: global rayon pool (`threads = 0`), the calling thread (`threads = 1`), an own
+//! - Threads: global rayon pool or the calling thread, whichever measures faster
+//!   (`threads = 0`, [`crate::world::threads`]), the calling thread (`threads = 1`), an own
 //!   pool (`threads = k > 1`), a pool the caller gives ([`World::set_thread_pool`]) or the
 //!   calling thread only whatever `threads` says ([`World::set_caller_thread_only`]); the
 //!   results are the same bits in every case.

@@ -65,8 +65,9 @@ pub struct SolverParams {
     /// Spring stiffness, N/m, that the force-based methods give constraints of zero compliance
     /// (rigid in XPBD); a constraint of compliance `α > 0` becomes a spring of stiffness `1/α`.
     pub stiffness: f32,
-    /// Worker threads: 0 = the global rayon pool, 1 = the caller's thread (no pool), k > 1 = a
-    /// pool of k threads owned by the world. Results are identical for every value.
+    /// Worker threads: 0 = the global rayon pool or the caller's thread, whichever the world
+    /// measures faster ([`crate::world::threads`]), 1 = the caller's thread (no pool), k > 1 =
+    /// a pool of k threads owned by the world. Results are identical for every value.
     pub threads: usize,
     /// Kernel implementation.
     pub backend: Backend,

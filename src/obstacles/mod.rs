@@ -81,6 +81,11 @@ impl ObstacleSet {
         self.list.is_empty()
     }
 
+    /// Number of obstacles.
+    pub fn len(&self) -> usize {
+        self.list.len()
+    }
+
     /// Adds an obstacle (its shape validated); returns its index.
     pub fn add(&mut self, obstacle: Obstacle) -> Result<usize> {
         if let Geometry::Shape(s) = &obstacle.geometry {

@@ -104,7 +104,8 @@ pub fn peak_gflops(threads: usize, reps: usize) -> Result<f64> {
 }
 
 /// The small case: a 100 x 100 cloth of 1 cm spacing hanging from its two first-row
-/// corners, no tethers, `substeps x iterations`, on `threads` threads (0: the global pool).
+/// corners, no tethers, `substeps x iterations`, on `threads` threads (0: the global pool or the
+/// caller's thread, measured).
 pub fn hanging_world(substeps: u32, iterations: u32, threads: usize) -> Result<World> {
     use crate::model::cloth::{ClothDesc, PinSpec};
     let desc = ClothDesc {
@@ -127,7 +128,7 @@ pub fn hanging_world(substeps: u32, iterations: u32, threads: usize) -> Result<W
 }
 
 /// The headline cases of `weft bench` (JSON `roofline`): the 100 x 100 hanging cloth at 1 x 1,
-/// 5 x 1 and 10 x 10 (global pool), a 100k-particle cloth at 5 x 1 and the 1M-particle drape
+/// 5 x 1 and 10 x 10 (`threads = 0`), a 100k-particle cloth at 5 x 1 and the 1M-particle drape
 /// over a sphere at 5 x 1 (two threads each). Also returns the arithmetic peak used: one
 /// thread's measured FMA peak times the machine's threads.
 pub fn headline_cases() -> Result<(f64, Vec<RooflineCase>)> {

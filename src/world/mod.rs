@@ -10,7 +10,6 @@ pub mod checkpoint;
 pub(crate) mod contacts;
 pub(crate) mod describe;
 pub(crate) mod forces;
-pub(crate) mod keep_awake;
 pub mod metrics;
 pub(crate) mod obstacles;
 pub(crate) mod self_collision;
@@ -18,6 +17,7 @@ pub mod stage_clock;
 pub(crate) mod stages;
 pub mod step;
 pub mod strands;
+pub mod threads;
 
 use std::sync::Arc;
 
@@ -69,6 +69,8 @@ pub struct World {
     pub(crate) ms: crate::integrate::mass_spring::MassSpringState,
     /// Per-stage wall time of the step, when on.
     pub(crate) clock: crate::world::stage_clock::StageClock,
+    /// The measured thread choice of `threads = 0` ([`threads`]).
+    pub(crate) thread_choice: threads::ThreadChoice,
 }
 
 impl World {
@@ -108,6 +110,7 @@ impl World {
             selfcol: Default::default(),
             ms: Default::default(),
             clock: Default::default(),
+            thread_choice: Default::default(),
         })
     }
 
@@ -240,6 +243,7 @@ impl World {
         params.validate()?;
         if params.threads != self.params.threads {
             self.pool = make_pool(params.threads)?;
+            self.thread_choice = Default::default();
         }
         self.params = params;
         Ok(())
@@ -385,7 +389,7 @@ impl World {
 }
 
 /// The world's own pool for `threads` workers: none for 0 (the global pool) and for 1 (the
-/// caller's thread, see [`World::on_caller_thread`]).
+/// caller's thread, see [`threads`]).
 fn make_pool(threads: usize) -> Result<Option<Arc<rayon::ThreadPool>>> {
     if threads <= 1 {
         return Ok(None);

@@ -31,15 +31,13 @@
 //!   kinematic pins land exactly on their targets                     [embed::kinematic]
 //! ```
 
-use crate::data::exec::Exec;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use crate::data::particles::chunk_finite_simd;
 use crate::error::{positive, Result, WeftError};
 use crate::integrate::{predict, update, PredictParams};
-use crate::model::params::{Backend, Method};
+use crate::model::params::Method;
 use crate::self_collision::response::MeanParts;
-use crate::world::keep_awake;
 use crate::world::World;
 
 /// Index of the first entry below `n` that is not finite in any of `arrays`.
@@ -74,6 +72,7 @@ impl World {
         if guard && method != Method::Xpbd {
             self.save_backup();
         }
+        self.begin_thread_choice();
         self.clock.lap("pins, guard backup");
         let ran = match method {
             Method::Xpbd => Ok(self.in_pool(|w| w.run_substeps(dt, false))),
@@ -103,37 +102,9 @@ impl World {
         self.finish_kinematic();
         self.time += dt as f64;
         self.steps += 1;
+        self.end_thread_choice();
         self.clock.stop("step end");
         Ok(())
-    }
-
-    /// How this world's stages run: the SIMD kernels unless the scalar backend is chosen, in
-    /// parallel chunks unless the world runs on its caller's thread only.
-    pub(crate) fn exec(&self) -> Exec {
-        let simd = self.params.backend == Backend::Simd;
-        Exec::new(simd, simd && !self.on_caller_thread())
-    }
-
-    /// Whether the step runs on the caller's thread alone: when asked
-    /// ([`World::set_caller_thread_only`]), and for `threads = 1` without a pool of the
-    /// caller's. A pool of one worker would only add a hand-off to another thread and back each
-    /// step (about 60 µs here, as much as a 100 x 100 cloth's whole step). `threads = 0` keeps
-    /// the pool at every size: whether two threads pay on a small world depends on its effects
-    /// (self-collision parallelises well), not on the particle count alone.
-    pub(crate) fn on_caller_thread(&self) -> bool {
-        self.embed.caller_thread_only || (self.pool.is_none() && self.params.threads == 1)
-    }
-
-    fn in_pool<R: Send>(&mut self, f: impl FnOnce(&mut World) -> R + Send) -> R {
-        match self.pool.clone() {
-            // The scalar backend is single-threaded: no pool to enter.
-            _ if self.on_caller_thread() || self.params.backend == Backend::Scalar => f(self),
-            // The pool's other workers poll for work through the step's serial parts instead
-            // of sleeping between the passes (`keep_awake`).
-            Some(pool) => pool.install(|| keep_awake::run(|| f(self))),
-            // Enter the global pool once per step (one injected job instead of one per kernel).
-            None => rayon::scope(|_| keep_awake::run(|| f(self))),
-        }
     }
 
     fn save_backup(&mut self) {

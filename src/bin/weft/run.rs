@@ -82,6 +82,8 @@ struct Summary {
     /// Present when self-collision is on: the paper's average collision and its time.
     #[serde(skip_serializing_if = "Option::is_none")]
     self_collision: Option<SelfCollisionSummary>,
+    /// With `threads = 0`: where the last trial chose to run the steps, and its step times.
+    thread_choice: Option<weft::world::threads::ThreadChoiceReport>,
     interrupted: bool,
     warnings: Vec<String>,
     files: Vec<String>,
@@ -320,6 +322,7 @@ pub fn run(args: RunArgs) -> weft::Result<ExitCode> {
         mean_strain: m.mean_strain,
         final_energy: m,
         self_collision,
+        thread_choice: world.thread_choice(),
         interrupted,
         warnings,
         files,
@@ -349,6 +352,20 @@ pub fn run(args: RunArgs) -> weft::Result<ExitCode> {
                 "self-collision ({}, {}): {avg}, {:.3} ms/step",
                 c.response, c.broadphase, c.collision_ms_per_step
             );
+        }
+        if let Some(t) = &summary.thread_choice {
+            let (on, other) = if t.caller_thread {
+                (
+                    "the caller's thread",
+                    format!("{:.3} ms/step against {:.3} in the pool", t.caller_ms, t.pool_ms),
+                )
+            } else {
+                (
+                    "the global pool",
+                    format!("{:.3} ms/step against {:.3} on the caller's thread", t.pool_ms, t.caller_ms),
+                )
+            };
+            println!("threads = 0: steps run on {on} (shortest trial step {other})");
         }
         for w in &summary.warnings {
             println!("warning: {w}");
