@@ -6,5 +6,5 @@ fn main() {
     for _ in 0..g(3, 2000) {
         w.step(1.0 / 60.0).unwrap();
     }
-    println!("{:?}", w.particle_count());
+    println!("{} particles, thread choice {:?}", w.particle_count(), w.thread_choice());
 }

@@ -175,6 +175,10 @@ pub struct RooflineCase {
     pub limit_ms: f64,
     /// `limit_ms / ms`.
     pub fraction: f64,
+    /// With `threads = 0`: whether the world's trial chose the caller's thread (else the
+    /// pool); absent for a fixed thread count.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub caller_thread: Option<bool>,
 }
 
 /// The roofline of `world`'s step: `steps` steps timed (median), the stream bandwidth
@@ -196,6 +200,7 @@ pub fn roofline_case(case: &str, world: &mut World, steps: usize, threads: usize
         arithmetic_ms,
         limit_ms,
         fraction: limit_ms / ms,
+        caller_thread: world.thread_choice().map(|c| c.caller_thread),
     })
 }
 

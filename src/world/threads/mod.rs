@@ -11,9 +11,10 @@
 //!   cores), so the world times its own steps: a *trial* of [`TRIAL_STEPS`] steps runs blocks of
 //!   [`TRIAL_BLOCK`] steps in the pool and on the caller's thread in turn, the first step of
 //!   each block not counted (the pool's workers wake up in it, caches fill), and the side
-//!   with the shortest counted step runs until [`RETRY_AFTER`] steps have passed or the world's
-//!   shape changes (particles, substeps, iterations, method, self-collision, obstacles); then
-//!   a new trial.
+//!   with the shortest counted step runs until the next trial: [`CONFIRM_AFTER`] steps after
+//!   the first trial of a shape (a trial can catch the machine busy, an idle pool slow to
+//!   wake), then every [`RETRY_AFTER`] steps, and at once when the world's shape changes
+//!   (particles, substeps, iterations, method, self-collision, obstacles).
 //!
 //! Every choice gives the same bits (the kernels split their work into fixed chunks), so the
 //! choice changes the time of a step, never its result. A pool's other workers poll for work
@@ -34,7 +35,10 @@ pub const TRIAL_BLOCK: u32 = 3;
 /// Steps of one trial: two blocks on each side, the pool first.
 pub const TRIAL_STEPS: u32 = 4 * TRIAL_BLOCK;
 
-/// Steps after a trial's choice before the next trial.
+/// Steps after the first trial of a shape before the second.
+pub const CONFIRM_AFTER: u64 = 50;
+
+/// Steps after any later trial before the next.
 pub const RETRY_AFTER: u64 = 500;
 
 /// What makes a choice stale when it changes.
@@ -60,6 +64,8 @@ pub(crate) struct ThreadChoice {
     caller: bool,
     /// The world's step count when the choice was made.
     chosen_at: u64,
+    /// Trials finished for this shape.
+    trials: u32,
     /// Start of the step being timed.
     start: Option<Instant>,
 }
@@ -72,6 +78,7 @@ impl Default for ThreadChoice {
             best: [f64::INFINITY; 2],
             caller: false,
             chosen_at: 0,
+            trials: 0,
             start: None,
         }
     }
@@ -100,14 +107,18 @@ impl ThreadChoice {
     }
 
     /// Starts timing a step of a world of `shape` that has taken `steps` steps; starts a new
-    /// trial when the shape changed or the choice is [`RETRY_AFTER`] steps old.
+    /// trial when the shape changed or the choice is old (module docs).
     fn begin(&mut self, shape: Shape, steps: u64) {
-        let stale = self.trial >= TRIAL_STEPS && steps.saturating_sub(self.chosen_at) >= RETRY_AFTER;
-        if self.shape != Some(shape) || stale {
+        if self.shape != Some(shape) {
             *self = ThreadChoice {
                 shape: Some(shape),
                 ..ThreadChoice::default()
             };
+        } else if self.trial >= TRIAL_STEPS {
+            let life = if self.trials <= 1 { CONFIRM_AFTER } else { RETRY_AFTER };
+            if steps.saturating_sub(self.chosen_at) >= life {
+                (self.trial, self.best) = (0, [f64::INFINITY; 2]);
+            }
         }
         self.start = Some(Instant::now());
     }
@@ -125,6 +136,7 @@ impl ThreadChoice {
         if self.trial == TRIAL_STEPS {
             self.caller = self.best[1] < self.best[0];
             self.chosen_at = steps;
+            self.trials += 1;
         }
     }
 

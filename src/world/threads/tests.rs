@@ -76,19 +76,23 @@ fn the_choice_holds_until_it_is_stale_or_the_shape_changes() {
     let mut c = ThreadChoice::default();
     let s = shape(100);
     let mut steps = 0;
-    trial(&mut c, s, &mut steps, 2e-3, 1e-3);
-    let chosen = steps;
-    // Chosen steps do not change the choice, whatever they take.
-    while steps < chosen + RETRY_AFTER {
+    // The first choice is confirmed by a second trial after CONFIRM_AFTER steps, later ones
+    // last RETRY_AFTER steps.
+    for life in [CONFIRM_AFTER, RETRY_AFTER, RETRY_AFTER] {
+        trial(&mut c, s, &mut steps, 2e-3, 1e-3);
+        let chosen = steps;
+        // Chosen steps do not change the choice, whatever they take.
+        while steps < chosen + life {
+            c.begin(s, steps);
+            assert!(c.caller_next(), "step {steps}");
+            steps += 1;
+            c.record(1.0, steps);
+        }
+        // Stale: a new trial starts with the pool.
         c.begin(s, steps);
-        assert!(c.caller_next(), "step {steps}");
-        steps += 1;
-        c.record(1.0, steps);
+        assert!(!c.caller_next());
+        assert_eq!(c.report(), None);
     }
-    // Stale: a new trial starts with the pool.
-    c.begin(s, steps);
-    assert!(!c.caller_next());
-    assert_eq!(c.report(), None);
     // A shape change mid-choice starts one too.
     let mut c = ThreadChoice::default();
     let mut steps = 0;

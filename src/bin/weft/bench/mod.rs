@@ -235,10 +235,15 @@ pub fn bench(json: bool, scenes_dir: &Path) -> weft::Result<ExitCode> {
         "roofline: compulsory bytes and flops per step against the stream bandwidth and the FMA peak ({:.0} GFLOP/s) measured now",
         report.peak_gflops
     );
-    println!("  case                  particles      ms/step   memory ms   arith ms   limit ms  fraction");
+    println!("  case                  particles      ms/step   memory ms   arith ms   limit ms  fraction  threads");
     for r in &report.roofline {
+        let threads = match r.caller_thread {
+            Some(true) => "0: caller",
+            Some(false) => "0: pool",
+            None => "2",
+        };
         println!(
-            "  {:<20} {:>10} {:>12.3} {:>11.3} {:>10.3} {:>10.3} {:>8.2}",
+            "  {:<20} {:>10} {:>12.3} {:>11.3} {:>10.3} {:>10.3} {:>8.2}  {threads}",
             r.case, r.particles, r.ms, r.memory_ms, r.arithmetic_ms, r.limit_ms, r.fraction
         );
     }
