@@ -128,6 +128,19 @@ typedef struct WeftAdvanceReport {
   float alpha;
 } WeftAdvanceReport;
 
+// Where a `threads = 0` world's steps run ([`weft_world_thread_choice`]).
+typedef struct WeftThreadChoice {
+  // Whether a trial has chosen (false for other thread settings and before the first
+  // trial ends; the other fields are then zero).
+  bool chosen;
+  // The steps run on the calling thread (else in the global pool).
+  bool caller_thread;
+  // Shortest trial step in the pool, ms.
+  double pool_ms;
+  // Shortest trial step on the calling thread, ms.
+  double caller_ms;
+} WeftThreadChoice;
+
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
@@ -339,6 +352,14 @@ enum WeftStatus weft_world_set_max_steps_per_advance(struct WeftWorld *world, ui
 // # Safety
 // `out` must point at a writable `uint64_t`.
 enum WeftStatus weft_world_steps(struct WeftWorld *world, uint64_t *out);
+
+// Writes where the steps of a `threads = 0` world run to `*out`: the global pool or the
+// calling thread, whichever the world's last trial measured faster (`chosen` false for other
+// thread settings and before the first trial of twelve steps has ended).
+//
+// # Safety
+// `out` must point at a writable `WeftThreadChoice`.
+enum WeftStatus weft_world_thread_choice(struct WeftWorld *world, struct WeftThreadChoice *out);
 
 // Moves pinned particle `index` to `(x, y, z)` over the next step (kinematic pin).
 //

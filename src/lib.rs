@@ -33,4 +33,5 @@ pub use model::effects::{Effects, Wind};
 pub use model::fabric::Fabric;
 pub use model::params::{Backend, Method, SolverParams};
 pub use world::metrics::Metrics;
+pub use world::threads::ThreadChoiceReport;
 pub use world::World;

@@ -249,6 +249,25 @@ unsafe fn scene_world() -> *mut WeftWorld {
     w
 }
 
+/// A `threads = 0` world reports no choice before its trial's twelve steps have run, one after.
+#[test]
+fn thread_choice_after_the_trial() {
+    unsafe {
+        let w = scene_world();
+        let mut tc = WeftThreadChoice::default();
+        assert_eq!(weft_world_thread_choice(w, &mut tc), WeftStatus::Ok);
+        assert!(!tc.chosen && tc.pool_ms == 0.0 && tc.caller_ms == 0.0, "{tc:?}");
+        for _ in 0..weft::world::threads::TRIAL_STEPS {
+            assert_eq!(weft_world_step(w, 0.01), WeftStatus::Ok);
+        }
+        assert_eq!(weft_world_thread_choice(w, &mut tc), WeftStatus::Ok);
+        assert!(tc.chosen && tc.pool_ms > 0.0 && tc.caller_ms > 0.0, "{tc:?}");
+        assert_eq!(weft_world_thread_choice(w, null_mut()), WeftStatus::NullPointer);
+        assert_eq!(weft_world_thread_choice(0x20 as *mut WeftWorld, &mut tc), WeftStatus::InvalidHandle);
+        assert_eq!(weft_world_destroy(w), WeftStatus::Ok);
+    }
+}
+
 #[test]
 fn scene_text_is_checked_and_bounded() {
     unsafe {

@@ -519,6 +519,22 @@ impl PyWorld {
         self.world.params().threads
     }
 
+    /// With `threads = 0`: where the last trial chose to run the steps, as a dict
+    /// (`caller_thread`, and the shortest trial step in ms of each side, `pool_ms` and
+    /// `caller_ms`); None for other thread settings and before the first trial of twelve steps
+    /// has ended.
+    #[getter]
+    fn thread_choice<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
+        let Some(c) = self.world.thread_choice() else {
+            return Ok(None);
+        };
+        let d = PyDict::new(py);
+        d.set_item("caller_thread", c.caller_thread)?;
+        d.set_item("pool_ms", c.pool_ms)?;
+        d.set_item("caller_ms", c.caller_ms)?;
+        Ok(Some(d))
+    }
+
     fn __len__(&self) -> usize {
         self.world.particle_count()
     }

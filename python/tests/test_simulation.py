@@ -37,7 +37,8 @@ def test_hanging_cloth_settles_and_pins_stay():
 
 @pytest.mark.parametrize("steps", [40])
 def test_same_bits_on_any_thread_count_and_backend(steps):
-    worlds = [hanging_world(threads=1), hanging_world(threads=2), hanging_world(backend="scalar")]
+    # threads=0 runs its first steps in the pool and on the calling thread in turn.
+    worlds = [hanging_world(threads=1), hanging_world(threads=2), hanging_world(threads=0), hanging_world(backend="scalar")]
     for w in worlds:
         w.add_sphere((0.4, 0.3, 0.1), 0.2)
         w.set_self_collision(weft.SelfCollision())
@@ -48,6 +49,18 @@ def test_same_bits_on_any_thread_count_and_backend(steps):
     for w in worlds[1:]:
         np.testing.assert_array_equal(w.positions(), ref.positions())
         np.testing.assert_array_equal(w.velocities(), ref.velocities())
+
+
+def test_thread_choice_after_the_trial():
+    w, one = hanging_world(threads=0), hanging_world(threads=1)
+    for k in range(12):
+        assert w.thread_choice is None, k
+        w.step()
+        one.step()
+    c = w.thread_choice
+    assert set(c) == {"caller_thread", "pool_ms", "caller_ms"}
+    assert isinstance(c["caller_thread"], bool) and c["pool_ms"] > 0 and c["caller_ms"] > 0
+    assert one.thread_choice is None
 
 
 def test_step_releases_the_gil():

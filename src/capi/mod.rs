@@ -196,6 +196,21 @@ pub struct WeftAdvanceReport {
     pub alpha: f32,
 }
 
+/// Where a `threads = 0` world's steps run ([`weft_world_thread_choice`]).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct WeftThreadChoice {
+    /// Whether a trial has chosen (false for other thread settings and before the first
+    /// trial ends; the other fields are then zero).
+    pub chosen: bool,
+    /// The steps run on the calling thread (else in the global pool).
+    pub caller_thread: bool,
+    /// Shortest trial step in the pool, ms.
+    pub pool_ms: f64,
+    /// Shortest trial step on the calling thread, ms.
+    pub caller_ms: f64,
+}
+
 /// An opaque simulated world.
 pub struct WeftWorld {
     world: World,

@@ -179,6 +179,27 @@ pub unsafe extern "C" fn weft_world_steps(world: *mut WeftWorld, out: *mut u64) 
     })
 }
 
+/// Writes where the steps of a `threads = 0` world run to `*out`: the global pool or the
+/// calling thread, whichever the world's last trial measured faster (`chosen` false for other
+/// thread settings and before the first trial of twelve steps has ended).
+///
+/// # Safety
+/// `out` must point at a writable `WeftThreadChoice`.
+#[no_mangle]
+pub unsafe extern "C" fn weft_world_thread_choice(world: *mut WeftWorld, out: *mut WeftThreadChoice) -> WeftStatus {
+    boundary(|| {
+        let w = world_mut(world)?;
+        let c = w.thread_choice().map_or(WeftThreadChoice::default(), |c| WeftThreadChoice {
+            chosen: true,
+            caller_thread: c.caller_thread,
+            pool_ms: c.pool_ms,
+            caller_ms: c.caller_ms,
+        });
+        // SAFETY: writable by the contract.
+        unsafe { put(out, c, "out") }
+    })
+}
+
 /// Moves pinned particle `index` to `(x, y, z)` over the next step (kinematic pin).
 ///
 /// # Safety
