@@ -1,10 +1,5 @@
 //! `weft bench --self-collision`: the self-collision suite (`weft::suite`) on one and two
 //! threads, with and without self-collision, audited for violations and crossings.
-//!
-//! The four runs of a scene (1 and 2 threads, with and without self-collision) take turns, a
-//! block of [`BLOCK`] steps each, so that the machine's drift (a virtual CPU slow for seconds
-//! at a time) falls on all four alike; the ratios between them are also taken block by block
-//! and their median reported (`*_paired`).
 
 use std::path::Path;
 use std::process::ExitCode;
@@ -40,16 +35,7 @@ struct SelfCollisionFigure {
     stages_ms: Vec<(&'static str, f64)>,
     /// The same without self-collision.
     stages_ms_without: Vec<(&'static str, f64)>,
-    /// Median over the blocks of the block's median step with self-collision over the same
-    /// block's without (this thread count).
-    with_without_paired: f64,
-    /// Median over the blocks of the 1-thread block median over the 2-thread one, with
-    /// self-collision (on both rows of the scene).
-    two_threads_speedup_paired: f64,
 }
-
-/// Steps each run takes in its turn (module docs).
-const BLOCK: u32 = 12;
 
 fn stages_ms(w: &weft::World) -> Vec<(&'static str, f64)> {
     let steps = w.stage_clock().steps().max(1) as f64;
@@ -104,73 +90,31 @@ fn audit_states(run: &weft::suite::SuiteRun, states: &[[Vec<f32>; 3]]) -> weft::
     Ok((deepest, crossings))
 }
 
-/// One of a scene's four runs: its step times so far (ms, the measure's stage subtracted), the
-/// median of each block, and with `audit` the deepest violation and the crossings of every
-/// step (found outside the timed steps).
-struct Lane {
-    run: weft::suite::SuiteRun,
-    ms: Vec<f64>,
-    blocks: Vec<f64>,
-    audit: bool,
-    states: Vec<[Vec<f32>; 3]>,
-    deepest: f64,
-    crossings: u64,
-}
-
-impl Lane {
-    fn new(run: weft::suite::SuiteRun, audit: bool) -> Lane {
-        let states = if audit {
-            vec![run.world.positions().map(|a| a.to_vec())]
-        } else {
-            Vec::new()
-        };
-        Lane {
-            run,
-            ms: Vec::new(),
-            blocks: Vec::new(),
-            audit,
-            states,
-            deepest: 0.0,
-            crossings: 0,
-        }
-    }
-
-    /// Takes `steps` timed steps (a block); `last` audits what is left.
-    fn block(&mut self, steps: u32, last: bool) -> weft::Result<()> {
-        let first = self.ms.len();
-        for k in 0..steps {
-            let run = &mut self.run;
-            run.prepare_step()?;
-            let m0 = stage_s(&run.world, MEASURE_STAGE);
-            let t0 = std::time::Instant::now();
-            run.world_step()?;
-            let wall = t0.elapsed().as_secs_f64();
-            self.ms.push((wall - (stage_s(&run.world, MEASURE_STAGE) - m0)) * 1e3);
-            if self.audit {
-                self.states.push(run.world.positions().map(|a| a.to_vec()));
-                if self.states.len() > AUDIT_CHUNK || (last && k + 1 == steps) {
-                    let (dv, c) = audit_states(run, &self.states)?;
-                    self.deepest = self.deepest.max(dv);
-                    self.crossings += c;
-                    self.states.drain(..self.states.len() - 1);
-                }
+/// Step times (ms, the measure's stage subtracted) of `steps` steps; with `audit`, also the
+/// deepest violation and the crossings of every step (outside the timed steps).
+fn timed_run(run: &mut weft::suite::SuiteRun, steps: u32, audit: bool) -> weft::Result<(Vec<f64>, f64, u64)> {
+    let mut ms = Vec::with_capacity(steps as usize);
+    let (mut deepest, mut crossings) = (0.0f64, 0u64);
+    let copy = |run: &weft::suite::SuiteRun| run.world.positions().map(|a| a.to_vec());
+    let mut states = if audit { vec![copy(run)] } else { Vec::new() };
+    for k in 0..steps {
+        run.prepare_step()?;
+        let m0 = stage_s(&run.world, MEASURE_STAGE);
+        let t0 = std::time::Instant::now();
+        run.world_step()?;
+        let wall = t0.elapsed().as_secs_f64();
+        ms.push((wall - (stage_s(&run.world, MEASURE_STAGE) - m0)) * 1e3);
+        if audit {
+            states.push(copy(run));
+            if states.len() > AUDIT_CHUNK || k + 1 == steps {
+                let (dv, c) = audit_states(run, &states)?;
+                deepest = deepest.max(dv);
+                crossings += c;
+                states.drain(..states.len() - 1);
             }
         }
-        self.blocks.push(median_p95(self.ms[first..].to_vec()).0);
-        Ok(())
     }
-}
-
-/// Median over the blocks of `a`'s block median over `b`'s.
-fn paired(a: &Lane, b: &Lane) -> f64 {
-    let r: Vec<f64> = a
-        .blocks
-        .iter()
-        .zip(&b.blocks)
-        .filter(|(_, y)| **y > 0.0)
-        .map(|(x, y)| x / y)
-        .collect();
-    median_p95(r).0
+    Ok((ms, deepest, crossings))
 }
 
 /// `weft bench --self-collision`: each suite scene on 1 and 2 threads, with and without
@@ -193,37 +137,28 @@ pub fn bench_self_collision(json: bool, dir: &Path, steps: u32, pictures: Option
     }
     let mut rows = Vec::new();
     for name in SCENES.into_iter().filter(|s| only.is_empty() || only.iter().any(|o| o == s)) {
-        // with self-collision on 1 and 2 threads, then without; the audits on the first only
-        // (the runs are the same bits on any thread count).
-        let mut lanes = Vec::new();
-        for (threads, on) in [(1usize, true), (2, true), (1, false), (2, false)] {
-            let mut run = SuiteRun::load(dir, name, threads, on)?;
+        let mut audit = (0.0, 0);
+        for threads in [1usize, 2] {
+            let mut run = SuiteRun::load(dir, name, threads, true)?;
             if let Some(mut sc) = run.world.self_collision().cloned() {
                 sc.measure = true;
                 run.world.set_self_collision(Some(sc))?;
             }
+            let span = crate::pictures::plane_span(&run.world);
             run.world.set_stage_clock(true);
-            lanes.push(Lane::new(run, on && threads == 1));
-        }
-        let span = crate::pictures::plane_span(&lanes[0].run.world);
-        let mut done = 0;
-        while done < steps {
-            let k = BLOCK.min(steps - done);
-            done += k;
-            for lane in &mut lanes {
-                lane.block(k, done == steps)?;
+            let (ms, deepest, crossings) = timed_run(&mut run, steps, threads == 1)?;
+            if threads == 1 {
+                audit = (deepest, crossings);
             }
-        }
-        let speedup = paired(&lanes[0], &lanes[1]);
-        let audit = (lanes[0].deepest, lanes[0].crossings);
-        for threads in [1usize, 2] {
-            let (on, off) = (&lanes[threads - 1], &lanes[threads + 1]);
-            let (run, w) = (&on.run, &on.run.world);
+            let w = &run.world;
             let collision_s: f64 = COLLISION_STAGES.iter().map(|s| stage_s(w, s)).sum();
             let clock_s = w.stage_clock().total().as_secs_f64() - stage_s(w, MEASURE_STAGE);
             let (n, substeps) = (w.particle_count(), w.params().substeps);
-            let (median, p95) = median_p95(on.ms.clone());
-            let (median_off, p95_off) = median_p95(off.ms.clone());
+            let (median, p95) = median_p95(ms);
+            let mut off = SuiteRun::load(dir, name, threads, false)?;
+            off.world.set_stage_clock(true);
+            let (ms_off, _, _) = timed_run(&mut off, steps, false)?;
+            let (median_off, p95_off) = median_p95(ms_off);
             rows.push(SelfCollisionFigure {
                 scene: name.to_string(),
                 particles: n,
@@ -239,9 +174,7 @@ pub fn bench_self_collision(json: bool, dir: &Path, steps: u32, pictures: Option
                 max_violation_m: audit.0,
                 crossings: audit.1,
                 stages_ms: stages_ms(w),
-                stages_ms_without: stages_ms(&off.run.world),
-                with_without_paired: paired(on, off),
-                two_threads_speedup_paired: speedup,
+                stages_ms_without: stages_ms(&off.world),
             });
             if let (Some(dir), 1) = (pictures, threads) {
                 let mut positions = Vec::new();
@@ -270,28 +203,14 @@ pub fn bench_self_collision(json: bool, dir: &Path, steps: u32, pictures: Option
     if json {
         return Ok(ExitCode::SUCCESS);
     }
-    println!("self-collision suite, {steps} steps a run; step ms with self-collision (median, p95) and without (median);");
-    println!("with/without and 2t speed-up: medians of the ratios of blocks of {BLOCK} steps run in turn");
+    println!("self-collision suite, {steps} steps a run; step ms with self-collision (median, p95) and without (median)");
     println!(
-        "{:<8} {:>7} {:>3} {:>3} {:>9} {:>6} {:>8} {:>8} {:>8} {:>6} {:>6} {:>9} {:>10} {:>9}",
-        "scene",
-        "parts",
-        "sub",
-        "thr",
-        "coll ns",
-        "share",
-        "median",
-        "p95",
-        "without",
-        "ratio",
-        "2t",
-        "avg coll%",
-        "violation",
-        "crossings"
+        "{:<8} {:>7} {:>3} {:>3} {:>9} {:>6} {:>8} {:>8} {:>8} {:>6} {:>9} {:>10} {:>9}",
+        "scene", "parts", "sub", "thr", "coll ns", "share", "median", "p95", "without", "ratio", "avg coll%", "violation", "crossings"
     );
     for r in &rows {
         println!(
-            "{:<8} {:>7} {:>3} {:>3} {:>9.1} {:>5.0}% {:>8.3} {:>8.3} {:>8.3} {:>5.2}x {:>5.2}x {:>9.4} {:>10.2e} {:>9}",
+            "{:<8} {:>7} {:>3} {:>3} {:>9.1} {:>5.0}% {:>8.3} {:>8.3} {:>8.3} {:>5.2}x {:>9.4} {:>10.2e} {:>9}",
             r.scene,
             r.particles,
             r.substeps,
@@ -301,8 +220,7 @@ pub fn bench_self_collision(json: bool, dir: &Path, steps: u32, pictures: Option
             r.step_ms_median,
             r.step_ms_p95,
             r.step_ms_median_without,
-            r.with_without_paired,
-            r.two_threads_speedup_paired,
+            r.step_ms_median / r.step_ms_median_without,
             r.avg_collision_pct,
             r.max_violation_m,
             r.crossings
