@@ -355,7 +355,7 @@ enum WeftStatus weft_world_steps(struct WeftWorld *world, uint64_t *out);
 
 // Writes where the steps of a `threads = 0` world run to `*out`: the global pool or the
 // calling thread, whichever the world's last trial measured faster (`chosen` false for other
-// thread settings and before the first trial of twelve steps has ended).
+// thread settings and before the first trial has ended).
 //
 // # Safety
 // `out` must point at a writable `WeftThreadChoice`.

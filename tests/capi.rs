@@ -249,7 +249,7 @@ unsafe fn scene_world() -> *mut WeftWorld {
     w
 }
 
-/// A `threads = 0` world reports no choice before its trial's twelve steps have run, one after.
+/// A `threads = 0` world reports no choice before its trial's steps have run, one after.
 #[test]
 fn thread_choice_after_the_trial() {
     unsafe {

@@ -521,8 +521,8 @@ impl PyWorld {
 
     /// With `threads = 0`: where the last trial chose to run the steps, as a dict
     /// (`caller_thread`, and the shortest trial step in ms of each side, `pool_ms` and
-    /// `caller_ms`); None for other thread settings and before the first trial of twelve steps
-    /// has ended.
+    /// `caller_ms`); None for other thread settings and before the first trial has
+    /// ended.
     #[getter]
     fn thread_choice<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
         let Some(c) = self.world.thread_choice() else {

@@ -181,7 +181,7 @@ pub unsafe extern "C" fn weft_world_steps(world: *mut WeftWorld, out: *mut u64) 
 
 /// Writes where the steps of a `threads = 0` world run to `*out`: the global pool or the
 /// calling thread, whichever the world's last trial measured faster (`chosen` false for other
-/// thread settings and before the first trial of twelve steps has ended).
+/// thread settings and before the first trial has ended).
 ///
 /// # Safety
 /// `out` must point at a writable `WeftThreadChoice`.

@@ -9,8 +9,10 @@
 //!   world measures faster. Whether a second core pays depends on the size and on the effects
 //!   (a plain 32 x 32 cloth steps faster alone, the same cloth with self-collision on two
 //!   cores), so the world times its own steps: a *trial* of [`TRIAL_STEPS`] steps runs blocks of
-//!   [`TRIAL_BLOCK`] steps in the pool and on the caller's thread in turn, the first step of
-//!   each block not counted (the pool's workers wake up in it, caches fill), and the side
+//!   [`TRIAL_BLOCK`] steps in the pool and on the caller's thread in turn, the first
+//!   [`TRIAL_WARM_UP`] of each block not counted (after a turn on the caller's thread the
+//!   pool's second worker can take milliseconds to join in: on a 2-core virtual machine an
+//!   idle CPU is slow to come back), and the side
 //!   with the shortest counted step runs until the next trial: [`CONFIRM_AFTER`] steps after
 //!   the first trial of a shape (a trial can catch the machine busy, an idle pool slow to
 //!   wake), then every [`RETRY_AFTER`] steps, and at once when the world's shape changes
@@ -29,8 +31,11 @@ use crate::model::params::{Backend, Method};
 use crate::world::World;
 
 /// Steps of one block of a trial of `threads = 0` (all in the pool or all on the caller's
-/// thread); the first is not counted.
-pub const TRIAL_BLOCK: u32 = 3;
+/// thread).
+pub const TRIAL_BLOCK: u32 = 8;
+
+/// Steps at the start of a block that are not counted.
+pub const TRIAL_WARM_UP: u32 = TRIAL_BLOCK / 2;
 
 /// Steps of one trial: two blocks on each side, the pool first.
 pub const TRIAL_STEPS: u32 = 4 * TRIAL_BLOCK;
@@ -128,7 +133,7 @@ impl ThreadChoice {
         if self.trial >= TRIAL_STEPS {
             return;
         }
-        if !self.trial.is_multiple_of(TRIAL_BLOCK) {
+        if self.trial % TRIAL_BLOCK >= TRIAL_WARM_UP {
             let side = usize::from(self.caller_next());
             self.best[side] = self.best[side].min(secs);
         }

@@ -51,7 +51,7 @@ fn a_trial_alternates_and_keeps_the_faster_side() {
 }
 
 #[test]
-fn the_first_step_of_a_block_is_not_counted() {
+fn the_warm_up_steps_of_a_block_are_not_counted() {
     let mut c = ThreadChoice::default();
     let s = shape(100);
     let mut steps = 0;
@@ -60,9 +60,9 @@ fn the_first_step_of_a_block_is_not_counted() {
     for k in 0..TRIAL_STEPS {
         c.begin(s, steps);
         steps += 1;
-        let t = match (k % TRIAL_BLOCK, c.caller_next()) {
-            (0, false) => 1.0,
-            (0, true) => 1e-6,
+        let t = match (k % TRIAL_BLOCK < TRIAL_WARM_UP, c.caller_next()) {
+            (true, false) => 1.0,
+            (true, true) => 1e-6,
             (_, true) => 2e-3,
             (_, false) => 1e-3,
         };
