@@ -159,8 +159,9 @@ pub fn headline_cases() -> Result<(f64, Vec<RooflineCase>)> {
 }
 
 /// Steps a `threads = 0` world through its first two thread trials
-/// ([`crate::world::threads`]), so that the timed steps all run where the world chose.
-fn past_thread_trials(w: &mut World) -> Result<()> {
+/// ([`crate::world::threads`]), so that the timed steps all run where the world chose (a
+/// world of another thread setting takes the same steps: its timed state is as late).
+pub fn past_thread_trials(w: &mut World) -> Result<()> {
     use crate::world::threads::{CONFIRM_AFTER, TRIAL_STEPS};
     let dt = w.params().dt;
     while w.steps() < 2 * u64::from(TRIAL_STEPS) + CONFIRM_AFTER {

@@ -161,6 +161,7 @@ pub fn bench(json: bool, scenes_dir: &Path) -> weft::Result<ExitCode> {
     for p in paths.into_iter().filter(|p| p.extension().is_some_and(|e| e == "toml")) {
         let (scene, _) = Scene::load(&p)?;
         let mut w = scene.world()?;
+        perf::roofline::past_thread_trials(&mut w)?;
         scenes.push(SceneFigure {
             scene: p.display().to_string(),
             particles: w.particle_count(),
