@@ -121,7 +121,7 @@ impl SolverParams {
             return Err(WeftError::param(
                 "solver.threads",
                 self.threads,
-                "must be at most 1024 (0 = all cores)",
+                "must be at most 1024 (0 = all cores or one, measured)",
             ));
         }
         Ok(())

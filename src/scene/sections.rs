@@ -23,7 +23,7 @@ pub struct SolverSection {
     /// Solver sweeps per substep.
     #[serde(default = "default_iterations")]
     pub iterations: Count,
-    /// Threads (0 = all cores).
+    /// Threads (0 = all cores or the calling thread, whichever the world measures faster).
     #[serde(default)]
     pub threads: u16,
     /// Integrator: `"xpbd"` (default), `"symplectic-euler"`, `"leapfrog"`, `"implicit-euler"`.

@@ -11,7 +11,7 @@
 //! paper's "average collision" (percentage of particles in penetration after each step).
 //! The paper's machine was a Core 2 Duo at 1.5 GHz running C#/XNA; ours is whatever runs this.
 //!
-//! Threads: the table runs on one thread by default (`--threads 2` or `0` for more), because
+//! Threads: the table runs on one thread by default (`--threads 2` for more), because
 //! the paper's program was single-threaded and the table should compare like with like. The
 //! results are the same bits on any thread count.
 //!
@@ -56,8 +56,8 @@ pub struct VccpbdArgs {
     /// Steps per row (default 150, or 30 with --quick).
     #[arg(long)]
     steps: Option<u32>,
-    /// Solver threads (default 1, like the paper's program; `2` or `0` = all cores is faster
-    /// here, see the module docs).
+    /// Solver threads (default 1, like the paper's program; `2` is faster here, `0` measures
+    /// which of all cores and one thread is, see the module docs).
     #[arg(long, default_value_t = 1)]
     threads: usize,
     /// Substeps a step (a modelling choice: fewer is faster but the cloth stretches more;
