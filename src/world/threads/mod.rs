@@ -12,11 +12,11 @@
 //!   [`TRIAL_BLOCK`] steps in the pool and on the caller's thread in turn, the first
 //!   [`TRIAL_WARM_UP`] of each block not counted (after a turn on the caller's thread the
 //!   pool's second worker can take milliseconds to join in: on a 2-core virtual machine an
-//!   idle CPU is slow to come back), and the side
-//!   with the shortest counted step runs until the next trial: [`CONFIRM_AFTER`] steps after
-//!   the first trial of a shape (a trial can catch the machine busy, an idle pool slow to
-//!   wake), then every [`RETRY_AFTER`] steps, and at once when the world's shape changes
-//!   (particles, substeps, iterations, method, self-collision, obstacles).
+//!   idle CPU is slow to come back), and the side with the shortest counted step runs until
+//!   the next trial: [`CONFIRM_AFTER`] steps after the first trial of a shape and after a
+//!   close call (a trial can catch the machine busy, an idle pool slow to wake), else
+//!   [`RETRY_AFTER`] steps, and at once when the world's shape changes (particles, substeps,
+//!   iterations, method, self-collision, obstacles).
 //!
 //! Every choice gives the same bits (the kernels split their work into fixed chunks), so the
 //! choice changes the time of a step, never its result. A pool's other workers poll for work
@@ -43,8 +43,14 @@ pub const TRIAL_STEPS: u32 = 4 * TRIAL_BLOCK;
 /// Steps after the first trial of a shape before the second.
 pub const CONFIRM_AFTER: u64 = 50;
 
-/// Steps after any later trial before the next.
+/// Steps after any later trial before the next, when it chose by at least [`CLEAR_MARGIN`].
 pub const RETRY_AFTER: u64 = 500;
+
+/// How much slower the other side's shortest trial step must be for a choice to last
+/// [`RETRY_AFTER`] steps; a closer choice is tried again after [`CONFIRM_AFTER`] (a close call
+/// can flip with the machine's state, and its trials cost little: both sides are about as
+/// fast).
+pub const CLEAR_MARGIN: f64 = 1.25;
 
 /// What makes a choice stale when it changes.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -71,6 +77,8 @@ pub(crate) struct ThreadChoice {
     chosen_at: u64,
     /// Trials finished for this shape.
     trials: u32,
+    /// The outcome of the last finished trial of this shape.
+    last: Option<ThreadChoiceReport>,
     /// Start of the step being timed.
     start: Option<Instant>,
 }
@@ -84,6 +92,7 @@ impl Default for ThreadChoice {
             caller: false,
             chosen_at: 0,
             trials: 0,
+            last: None,
             start: None,
         }
     }
@@ -120,7 +129,9 @@ impl ThreadChoice {
                 ..ThreadChoice::default()
             };
         } else if self.trial >= TRIAL_STEPS {
-            let life = if self.trials <= 1 { CONFIRM_AFTER } else { RETRY_AFTER };
+            let (fast, slow) = (self.best[0].min(self.best[1]), self.best[0].max(self.best[1]));
+            let close = slow < CLEAR_MARGIN * fast;
+            let life = if self.trials <= 1 || close { CONFIRM_AFTER } else { RETRY_AFTER };
             if steps.saturating_sub(self.chosen_at) >= life {
                 (self.trial, self.best) = (0, [f64::INFINITY; 2]);
             }
@@ -142,6 +153,11 @@ impl ThreadChoice {
             self.caller = self.best[1] < self.best[0];
             self.chosen_at = steps;
             self.trials += 1;
+            self.last = Some(ThreadChoiceReport {
+                caller_thread: self.caller,
+                pool_ms: self.best[0] * 1e3,
+                caller_ms: self.best[1] * 1e3,
+            });
         }
     }
 
@@ -152,12 +168,9 @@ impl ThreadChoice {
         }
     }
 
+    /// The last finished trial's outcome (kept while a later trial runs).
     fn report(&self) -> Option<ThreadChoiceReport> {
-        (self.trial >= TRIAL_STEPS).then(|| ThreadChoiceReport {
-            caller_thread: self.caller,
-            pool_ms: self.best[0] * 1e3,
-            caller_ms: self.best[1] * 1e3,
-        })
+        self.last
     }
 }
 
@@ -184,8 +197,8 @@ impl World {
         self.pool.is_none() && self.params.threads == 0 && self.params.backend == Backend::Simd && !self.embed.caller_thread_only
     }
 
-    /// The outcome of the last `threads = 0` trial (module docs): `None` for other settings
-    /// and before the first trial has finished.
+    /// The outcome of the last finished `threads = 0` trial (module docs): `None` for other
+    /// settings and before the first trial of the world's current shape has finished.
     pub fn thread_choice(&self) -> Option<ThreadChoiceReport> {
         if self.measures_threads() {
             self.thread_choice.report()

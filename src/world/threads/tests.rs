@@ -76,10 +76,16 @@ fn the_choice_holds_until_it_is_stale_or_the_shape_changes() {
     let mut c = ThreadChoice::default();
     let s = shape(100);
     let mut steps = 0;
-    // The first choice is confirmed by a second trial after CONFIRM_AFTER steps, later ones
-    // last RETRY_AFTER steps.
-    for life in [CONFIRM_AFTER, RETRY_AFTER, RETRY_AFTER] {
-        trial(&mut c, s, &mut steps, 2e-3, 1e-3);
+    // The first choice is confirmed by a second trial after CONFIRM_AFTER steps, later clear
+    // ones last RETRY_AFTER steps, close ones CONFIRM_AFTER again.
+    let close = 1e-3 * (CLEAR_MARGIN - 0.01);
+    for (life, pool) in [
+        (CONFIRM_AFTER, 2e-3),
+        (RETRY_AFTER, 2e-3),
+        (CONFIRM_AFTER, close),
+        (RETRY_AFTER, 2e-3),
+    ] {
+        trial(&mut c, s, &mut steps, pool, 1e-3);
         let chosen = steps;
         // Chosen steps do not change the choice, whatever they take.
         while steps < chosen + life {
@@ -88,12 +94,14 @@ fn the_choice_holds_until_it_is_stale_or_the_shape_changes() {
             steps += 1;
             c.record(1.0, steps);
         }
-        // Stale: a new trial starts with the pool.
+        // Stale: a new trial starts with the pool; the last outcome is still reported.
+        let last = c.report().expect("a trial has finished");
+        assert_eq!(last.pool_ms, pool * 1e3);
         c.begin(s, steps);
         assert!(!c.caller_next());
-        assert_eq!(c.report(), None);
+        assert_eq!(c.report(), Some(last));
     }
-    // A shape change mid-choice starts one too.
+    // A shape change mid-choice starts one too, and forgets the old shape's outcome.
     let mut c = ThreadChoice::default();
     let mut steps = 0;
     trial(&mut c, s, &mut steps, 2e-3, 1e-3);
