@@ -110,7 +110,7 @@ fn the_choice_holds_until_it_is_stale_or_the_shape_changes() {
     assert_eq!(c.report(), None);
 }
 
-/// A 40 x 40 cloth falling onto itself over a rod-like pin row, self-collision on.
+/// A 40 x 40 cloth held by its middle row, its halves falling and folding, self-collision on.
 fn world(threads: usize) -> World {
     let params = SolverParams {
         threads,
