@@ -71,13 +71,11 @@ pub(crate) struct ThreadChoice {
     trial: u32,
     /// Shortest counted step of the trial, s: pool, caller's thread.
     best: [f64; 2],
-    /// The choice: the caller's thread.
-    caller: bool,
     /// The world's step count when the choice was made.
     chosen_at: u64,
     /// Trials finished for this shape.
     trials: u32,
-    /// The outcome of the last finished trial of this shape.
+    /// The outcome of the last finished trial of this shape: the choice.
     last: Option<ThreadChoiceReport>,
     /// Start of the step being timed.
     start: Option<Instant>,
@@ -89,7 +87,6 @@ impl Default for ThreadChoice {
             shape: None,
             trial: 0,
             best: [f64::INFINITY; 2],
-            caller: false,
             chosen_at: 0,
             trials: 0,
             last: None,
@@ -116,7 +113,7 @@ impl ThreadChoice {
         if self.trial < TRIAL_STEPS {
             (self.trial / TRIAL_BLOCK) % 2 == 1
         } else {
-            self.caller
+            self.last.is_some_and(|l| l.caller_thread)
         }
     }
 
@@ -150,11 +147,10 @@ impl ThreadChoice {
         }
         self.trial += 1;
         if self.trial == TRIAL_STEPS {
-            self.caller = self.best[1] < self.best[0];
             self.chosen_at = steps;
             self.trials += 1;
             self.last = Some(ThreadChoiceReport {
-                caller_thread: self.caller,
+                caller_thread: self.best[1] < self.best[0],
                 pool_ms: self.best[0] * 1e3,
                 caller_ms: self.best[1] * 1e3,
             });
