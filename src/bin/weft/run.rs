@@ -354,18 +354,12 @@ pub fn run(args: RunArgs) -> weft::Result<ExitCode> {
             );
         }
         if let Some(t) = &summary.thread_choice {
-            let (on, other) = if t.caller_thread {
-                (
-                    "the caller's thread",
-                    format!("{:.3} ms/step against {:.3} in the pool", t.caller_ms, t.pool_ms),
-                )
+            let ((on, mine), (other, theirs)) = if t.caller_thread {
+                (("the caller's thread", t.caller_ms), ("in the pool", t.pool_ms))
             } else {
-                (
-                    "the global pool",
-                    format!("{:.3} ms/step against {:.3} on the caller's thread", t.pool_ms, t.caller_ms),
-                )
+                (("the global pool", t.pool_ms), ("on the caller's thread", t.caller_ms))
             };
-            println!("threads = 0: steps run on {on} (shortest trial step {other})");
+            println!("threads = 0: steps run on {on} (shortest trial step {mine:.3} ms/step against {theirs:.3} {other})");
         }
         for w in &summary.warnings {
             println!("warning: {w}");
