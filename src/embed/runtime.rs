@@ -154,14 +154,6 @@ mod tests {
         w
     }
 
-    fn bits(w: &World) -> Vec<u32> {
-        w.positions()
-            .iter()
-            .chain(w.velocities().iter())
-            .flat_map(|a| a.iter().map(|f| f.to_bits()))
-            .collect()
-    }
-
     #[test]
     fn compliance_change_equals_a_world_built_with_it() {
         let soft = Fabric::preset("wool").unwrap();
@@ -191,7 +183,7 @@ mod tests {
             a.step(1.0 / 60.0).unwrap();
             b.step(1.0 / 60.0).unwrap();
         }
-        assert_eq!(bits(&a), bits(&b));
+        assert_eq!(a.state_bits(), b.state_bits());
         assert!(a.set_cloth_compliance(1, 0.0, 0.0, 0.0).is_err());
         assert!(a.set_cloth_compliance(0, -1.0, 0.0, 0.0).is_err());
         assert!(a.set_cloth_compliance(0, 0.0, f32::NAN, 0.0).is_err());
@@ -200,7 +192,7 @@ mod tests {
     #[test]
     fn rollback_and_reset_replay_bitwise() {
         let mut w = world(Fabric::default());
-        let start = bits(&w);
+        let start = w.state_bits();
         for _ in 0..5 {
             w.step(1.0 / 60.0).unwrap();
         }
@@ -208,15 +200,15 @@ mod tests {
         for _ in 0..7 {
             w.step(1.0 / 60.0).unwrap();
         }
-        let after = bits(&w);
+        let after = w.state_bits();
         w.restore_snapshot(&snap).unwrap();
         assert_eq!(w.steps(), 5);
         for _ in 0..7 {
             w.step(1.0 / 60.0).unwrap();
         }
-        assert_eq!(bits(&w), after);
+        assert_eq!(w.state_bits(), after);
         w.reset().unwrap();
-        assert_eq!(bits(&w), start);
+        assert_eq!(w.state_bits(), start);
         assert_eq!((w.steps(), w.time()), (0, 0.0));
         let mut other = World::new(SolverParams::default(), Effects::gravity()).unwrap();
         assert!(other.restore_snapshot(&snap).is_err());

@@ -150,14 +150,6 @@ fn cloth_world(method: Method, threads: usize, backend: Backend) -> World {
     w
 }
 
-fn state_bits(w: &World) -> Vec<u32> {
-    w.positions()
-        .iter()
-        .chain(w.velocities().iter())
-        .flat_map(|a| a.iter().map(|f| f.to_bits()))
-        .collect()
-}
-
 #[test]
 fn every_method_gives_the_same_bits_on_1_and_2_threads_and_pins_stay_fixed() {
     for method in Method::ALL {
@@ -176,7 +168,7 @@ fn every_method_gives_the_same_bits_on_1_and_2_threads_and_pins_stay_fixed() {
                 .collect();
             assert_eq!(pinned.len(), 2);
             assert_eq!(pinned, after, "{}: pinned particles moved", method.name());
-            state_bits(&w)
+            w.state_bits()
         };
         let one = run(1, Backend::Simd);
         assert_eq!(one, run(2, Backend::Simd), "{}: 1 vs 2 threads", method.name());

@@ -388,6 +388,16 @@ impl World {
     }
 }
 
+#[cfg(test)]
+impl World {
+    /// Bit patterns of every position and velocity: what the unit tests compare when two runs
+    /// must agree bit for bit (`tests/common::state_bits` is the integration tests' twin).
+    pub(crate) fn state_bits(&self) -> Vec<u32> {
+        let (p, v) = (self.positions(), self.velocities());
+        p.iter().chain(v.iter()).flat_map(|a| a.iter().map(|f| f.to_bits())).collect()
+    }
+}
+
 /// The world's own pool for `threads` workers: none for 0 (the global pool) and for 1 (the
 /// caller's thread, see [`threads`]).
 fn make_pool(threads: usize) -> Result<Option<Arc<rayon::ThreadPool>>> {

@@ -44,11 +44,6 @@ fn world(threads: usize, backend: Backend, fuse: bool) -> World {
     w
 }
 
-fn bits(w: &World) -> Vec<u32> {
-    let (p, v) = (w.positions(), w.velocities());
-    p.iter().chain(v.iter()).flat_map(|a| a.iter().map(|f| f.to_bits())).collect()
-}
-
 #[test]
 fn fused_next_predict_equals_separate_passes_bitwise() {
     for (threads, backend) in [(1, Backend::Simd), (2, Backend::Simd), (1, Backend::Scalar)] {
@@ -57,7 +52,11 @@ fn fused_next_predict_equals_separate_passes_bitwise() {
         for step in 0..12 {
             fused.step(1.0 / 60.0).unwrap();
             split.step(1.0 / 60.0).unwrap();
-            assert_eq!(bits(&fused), bits(&split), "{threads} thread(s), {backend:?}, step {step}");
+            assert_eq!(
+                fused.state_bits(),
+                split.state_bits(),
+                "{threads} thread(s), {backend:?}, step {step}"
+            );
         }
         assert!(fused.obstacle_contacts() > 0, "the sheet reached the sphere");
     }
@@ -94,7 +93,11 @@ fn self_collision_mean_summed_in_predict_equals_separate_pass_bitwise() {
         for step in 0..40 {
             fused.step(dt).unwrap();
             split.step(dt).unwrap();
-            assert_eq!(bits(&fused), bits(&split), "{threads} thread(s), {backend:?}, step {step}");
+            assert_eq!(
+                fused.state_bits(),
+                split.state_bits(),
+                "{threads} thread(s), {backend:?}, step {step}"
+            );
         }
         assert!(
             fused.selfcol.touched_blocks() + fused.selfcol.pair_count() > 0,

@@ -133,11 +133,6 @@ fn world(threads: usize) -> World {
     w
 }
 
-fn bits(w: &World) -> Vec<u32> {
-    let (p, v) = (w.positions(), w.velocities());
-    p.iter().chain(v.iter()).flat_map(|a| a.iter().map(|f| f.to_bits())).collect()
-}
-
 #[test]
 fn threads_zero_switches_sides_and_keeps_the_bits_of_one_thread() {
     let mut auto = world(0);
@@ -149,7 +144,7 @@ fn threads_zero_switches_sides_and_keeps_the_bits_of_one_thread() {
         auto.thread_choice.start = None;
         auto.step(1.0 / 60.0).unwrap();
         one.step(1.0 / 60.0).unwrap();
-        assert_eq!(bits(&auto), bits(&one), "step {step}");
+        assert_eq!(auto.state_bits(), one.state_bits(), "step {step}");
     }
     // The trial ran steps on both sides, then chose one.
     let trial = &sides[..TRIAL_STEPS as usize];
