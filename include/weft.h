@@ -99,6 +99,10 @@ typedef struct WeftSelfCollision {
   float friction;
   // Measure the percentage of particles in penetration after every step (costs time).
   bool measure;
+  // The travel bound over the collision distance, above 0 and at most 2 (default 1): how
+  // far a particle may move in a step relative to the mean motion. Lower is cheaper and
+  // clamps harder.
+  float travel;
 } WeftSelfCollision;
 
 // Solver parameters for [`weft_world_create`]; get defaults from
@@ -224,7 +228,7 @@ enum WeftStatus weft_world_add_mesh(struct WeftWorld *world,
 enum WeftStatus weft_world_set_friction(struct WeftWorld *world, float mu);
 
 // The default self-collision settings (VcCPBD response, hash broadphase, automatic distance,
-// friction 0.3, no measuring).
+// friction 0.3, no measuring, travel 1).
 struct WeftSelfCollision weft_self_collision_default(void);
 
 // Turns self-collision on with the settings at `config`, or off if `config` is null.

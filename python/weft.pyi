@@ -69,6 +69,7 @@ class SelfCollision:
         response: str = "vccpbd",
         broadphase: str = "hash",
         measure: bool = False,
+        travel: float = 1.0,
     ) -> None: ...
 
 class AdvanceReport:

@@ -195,6 +195,7 @@ pub fn step_bytes(data: &[u8]) {
                 SelfBroadphase::AabbTree
             },
             measure: b.one_in(2),
+            travel: if b.one_in(2) { b.f32() } else { 1.0 },
         };
         let _ = world.set_self_collision(Some(config));
     }

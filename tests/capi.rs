@@ -448,8 +448,8 @@ fn self_collision_advance_readback_and_snapshots() {
         let w = scene_world();
         let d = weft_self_collision_default();
         assert_eq!(
-            (d.response, d.broadphase, d.distance),
-            (WeftResponse::Vccpbd as u32, WeftSelfBroadphase::Hash as u32, 0.0)
+            (d.response, d.broadphase, d.distance, d.travel),
+            (WeftResponse::Vccpbd as u32, WeftSelfBroadphase::Hash as u32, 0.0, 1.0)
         );
         for (r, b) in [(0, 0), (1, 1), (2, 1)] {
             let c = WeftSelfCollision {
@@ -466,6 +466,8 @@ fn self_collision_advance_readback_and_snapshots() {
             WeftSelfCollision { distance: -0.1, ..d },
             WeftSelfCollision { friction: 1.5, ..d },
             WeftSelfCollision { friction: f32::NAN, ..d },
+            WeftSelfCollision { travel: 0.0, ..d },
+            WeftSelfCollision { travel: 2.5, ..d },
         ] {
             assert_eq!(weft_world_set_self_collision(w, &bad), WeftStatus::InvalidArgument);
         }

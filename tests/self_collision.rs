@@ -8,7 +8,7 @@ use proptest::prelude::*;
 use weft::model::self_collision::{Response, SelfBroadphase, SelfCollision};
 use weft::scene::Scene;
 use weft::self_collision::neighbours::Neighbours;
-use weft::self_collision::REST_SKIP_FACTOR;
+use weft::self_collision::QUERY_FACTOR;
 use weft::{Backend, ClothDesc, Effects, Fabric, SolverParams, World};
 
 /// Largest penetration the step may leave, as a fraction of the collision distance: a pair of
@@ -122,17 +122,26 @@ proptest! {
     }
 }
 
-/// The lists the step used are the brute-force pairs within `3 d` of the step's start
-/// positions minus the rest neighbours (rest distance at most `3 d`), each pair once (in the
-/// list of its smaller id), for both broadphases.
+/// The lists the step used are the brute-force pairs within `q = (1 + 2 travel) d` of the
+/// step's start positions minus the rest neighbours (rest distance at most `q`), each pair
+/// once (in the list of its smaller id), for both broadphases and three travel bounds: a
+/// lower travel lists fewer pairs.
 #[test]
 fn step_pairs_equal_brute_force() {
     let (rows, cols, s) = (16u32, 12u32, 0.02f32);
-    for bp in [SelfBroadphase::Hash, SelfBroadphase::AabbTree] {
+    let mut counts = Vec::new();
+    for (bp, travel) in [SelfBroadphase::Hash, SelfBroadphase::AabbTree]
+        .into_iter()
+        .flat_map(|bp| [(bp, 1.0), (bp, 0.5), (bp, 2.0)])
+    {
         let sc = SelfCollision {
             broadphase: bp,
+            travel,
             ..SelfCollision::default()
         };
+        let (q, skip) = (sc.query_factor(), sc.rest_skip_factor());
+        assert_eq!(q, if travel == 1.0 { QUERY_FACTOR } else { 1.0 + 2.0 * travel });
+        let mut total = 0;
         let mut w = folded(rows, cols, s, 0.03, 0.007, sc, params(4));
         for _ in 0..3 {
             let [x, y, z] = w.positions();
@@ -140,10 +149,10 @@ fn step_pairs_equal_brute_force() {
             w.step(1.0 / 60.0).unwrap();
             let mut brute = Neighbours::new();
             let d = w.self_collision_distance();
-            brute.fill_brute_force(&x, &y, &z, x.len(), 3.0 * d).unwrap();
+            brute.fill_brute_force(&x, &y, &z, x.len(), q * d).unwrap();
             // Rest positions on the grid, computed like the library (f32 differences).
             let rest = |i: u32| [(i % cols) as f32 * s, 0.0f32, (i / cols) as f32 * s];
-            let skip = REST_SKIP_FACTOR * d;
+            let skip = skip * d;
             brute.retain(|i, j| {
                 let (a, b) = (rest(i as u32), rest(j));
                 let r2 = (a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]);
@@ -151,9 +160,14 @@ fn step_pairs_equal_brute_force() {
             });
             let got = w.self_collision_pairs().expect("pairs after a step");
             assert!(got.total() > 0);
-            assert_eq!(got, &brute, "{bp:?}");
+            assert_eq!(got, &brute, "{bp:?}, travel {travel}");
             assert!(w.self_collision_pair_count() > 0);
+            total += got.total();
         }
+        counts.push(total);
+    }
+    for c in counts.chunks(3) {
+        assert!(c[1] < c[0] && c[0] < c[2], "pairs at travel 1, 0.5, 2: {c:?}");
     }
 }
 
@@ -270,6 +284,8 @@ fn bad_self_collision_keys_are_errors_with_line_and_column() {
         ("friction = 1.5", "out of range"),
         ("distance = -0.01", "out of range"),
         ("distance = nan", "out of range"),
+        ("travel = 0", "out of range"),
+        ("travel = 2.5", "out of range"),
         ("stiffness = 3", "stiffness"),
     ] {
         let e = scene_error(extra);
@@ -277,16 +293,25 @@ fn bad_self_collision_keys_are_errors_with_line_and_column() {
         assert!(e.contains(what), "{extra}: {e}");
     }
     let ok = Scene::parse(
-        "[effects.self_collision]\nresponse = \"movement-speed\"\nbroadphase = \"aabb-tree\"\n\n[[cloth]]\nrows = 4\ncols = 4\nspacing = 0.05\n",
+        "[effects.self_collision]\nresponse = \"movement-speed\"\nbroadphase = \"aabb-tree\"\ntravel = 0.5\n\n[[cloth]]\nrows = 4\ncols = 4\nspacing = 0.05\n",
         "ok.toml",
     )
     .unwrap();
-    let w = ok.world().unwrap();
-    let c = w.self_collision().unwrap();
+    let mut w = ok.world().unwrap();
+    let c = w.self_collision().unwrap().clone();
     assert_eq!(
-        (c.response, c.broadphase, c.friction),
-        (Response::MovementSpeed, SelfBroadphase::AabbTree, 0.3)
+        (c.response, c.broadphase, c.friction, c.travel),
+        (Response::MovementSpeed, SelfBroadphase::AabbTree, 0.3, 0.5)
     );
+    // The library checks the travel bound too (the API has no scene parser in front of it).
+    for bad in [0.0, -1.0, 2.01, f32::NAN, f32::INFINITY] {
+        let e = w
+            .set_self_collision(Some(SelfCollision { travel: bad, ..c.clone() }))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("self_collision.travel"), "{bad}: {e}");
+    }
+    assert_eq!(w.self_collision().unwrap().travel, 0.5, "a bad setting changes nothing");
 }
 
 /// Off costs nothing: a world without self-collision steps exactly as before, and its

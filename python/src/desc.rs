@@ -241,8 +241,10 @@ impl PyWind {
 
 /// Self-collision settings: collision `distance` in m (`None` = the smallest thickness or
 /// spacing of the cloths), `friction` in [0, 1], `response` (`"vccpbd"`, `"pbd"` or
-/// `"movement-speed"`), `broadphase` (`"hash"` or `"aabb-tree"`; both find the same pairs) and
-/// `measure` (record the percentage of particles in penetration after every step).
+/// `"movement-speed"`), `broadphase` (`"hash"` or `"aabb-tree"`; both find the same pairs),
+/// `measure` (record the percentage of particles in penetration after every step) and `travel`
+/// (how far a particle may move in a step relative to the mean motion, in collision distances,
+/// above 0 and at most 2: lower is cheaper and clamps harder).
 #[pyclass(module = "weft", name = "SelfCollision", frozen)]
 #[derive(Clone)]
 pub struct PySelfCollision {
@@ -252,8 +254,8 @@ pub struct PySelfCollision {
 #[pymethods]
 impl PySelfCollision {
     #[new]
-    #[pyo3(signature = (*, distance = None, friction = 0.3, response = "vccpbd", broadphase = "hash", measure = false))]
-    fn new(distance: Option<f32>, friction: f32, response: &str, broadphase: &str, measure: bool) -> PyResult<Self> {
+    #[pyo3(signature = (*, distance = None, friction = 0.3, response = "vccpbd", broadphase = "hash", measure = false, travel = 1.0))]
+    fn new(distance: Option<f32>, friction: f32, response: &str, broadphase: &str, measure: bool, travel: f32) -> PyResult<Self> {
         let responses = [Response::Vccpbd, Response::Pbd, Response::MovementSpeed];
         let response = responses
             .into_iter()
@@ -270,6 +272,7 @@ impl PySelfCollision {
             response,
             broadphase,
             measure,
+            travel,
         };
         // Checked now by the library's own check, on an empty world (which allocates nothing),
         // so a bad setting fails where it is written.
@@ -281,12 +284,13 @@ impl PySelfCollision {
     fn __repr__(&self) -> String {
         let c = &self.config;
         format!(
-            "SelfCollision(distance={}, friction={}, response={:?}, broadphase={:?}, measure={})",
+            "SelfCollision(distance={}, friction={}, response={:?}, broadphase={:?}, measure={}, travel={})",
             c.distance.map_or("None".to_string(), |d| d.to_string()),
             c.friction,
             c.response.name(),
             c.broadphase.name(),
-            if c.measure { "True" } else { "False" }
+            if c.measure { "True" } else { "False" },
+            c.travel
         )
     }
 }

@@ -81,6 +81,10 @@ def test_bad_effects():
         weft.SelfCollision(response="soft")
     with pytest.raises(weft.WeftError, match=r"friction"):
         weft.SelfCollision(friction=2.0)
+    for travel in (0.0, 2.5, math.nan):
+        with pytest.raises(weft.WeftError, match=r"`self_collision.travel`"):
+            weft.SelfCollision(travel=travel)
+    assert "travel=0.5" in repr(weft.SelfCollision(travel=0.5))
 
 
 def test_bad_step_and_advance():

@@ -46,6 +46,15 @@ def test_same_bits_on_any_thread_count_and_backend(steps):
             w.step()
     ref = worlds[0]
     assert np.abs(ref.positions() - hanging_world().positions()).max() > 0.1  # it moved
+    # A tighter travel bound clamps the swing: other positions, still the same on any thread count.
+    tight = [hanging_world(threads=t) for t in (1, 2)]
+    for w in tight:
+        w.add_sphere((0.4, 0.3, 0.1), 0.2)
+        w.set_self_collision(weft.SelfCollision(travel=0.1))
+        for _ in range(steps):
+            w.step()
+    np.testing.assert_array_equal(tight[0].positions(), tight[1].positions())
+    assert np.abs(tight[0].positions() - ref.positions()).max() > 1e-4
     for w in worlds[1:]:
         np.testing.assert_array_equal(w.positions(), ref.positions())
         np.testing.assert_array_equal(w.velocities(), ref.velocities())

@@ -166,6 +166,10 @@ pub struct WeftSelfCollision {
     pub friction: f32,
     /// Measure the percentage of particles in penetration after every step (costs time).
     pub measure: bool,
+    /// The travel bound over the collision distance, above 0 and at most 2 (default 1): how
+    /// far a particle may move in a step relative to the mean motion. Lower is cheaper and
+    /// clamps harder.
+    pub travel: f32,
 }
 
 /// Per-obstacle options for the `weft_world_add_*` obstacle functions (null = static, with the

@@ -199,7 +199,7 @@ pub unsafe extern "C" fn weft_world_set_friction(world: *mut WeftWorld, mu: f32)
 }
 
 /// The default self-collision settings (VcCPBD response, hash broadphase, automatic distance,
-/// friction 0.3, no measuring).
+/// friction 0.3, no measuring, travel 1).
 #[no_mangle]
 pub extern "C" fn weft_self_collision_default() -> WeftSelfCollision {
     let d = SelfCollision::default();
@@ -216,6 +216,7 @@ pub extern "C" fn weft_self_collision_default() -> WeftSelfCollision {
         distance: d.distance.unwrap_or(0.0),
         friction: d.friction,
         measure: d.measure,
+        travel: d.travel,
     }
 }
 
@@ -250,6 +251,7 @@ pub unsafe extern "C" fn weft_world_set_self_collision(world: *mut WeftWorld, co
             response,
             broadphase,
             measure: c.measure,
+            travel: c.travel,
         };
         Ok(w.set_self_collision(Some(sc))?)
     })

@@ -1,22 +1,28 @@
 //! Self-collision settings (scene table `[effects.self_collision]`) and the method's constants,
 //! shared by the world's stage (`crate::self_collision`) and the f64 reference.
 
-/// Query radius over collision distance: `q = d + 2 T` with the step's relative travel `T = d`.
+/// Query radius over collision distance at the default travel: `q = d + 2 T` with the step's
+/// relative travel `T = d` ([`SelfCollision::query_factor`] for another travel).
 pub const QUERY_FACTOR: f32 = 3.0;
 
 /// Hash cell side over the query radius (Müller's hash uses 1; wider cells were no faster).
 pub const CELL_FACTOR: f32 = 1.0;
 
-/// Rest-neighbour skip radius over the collision distance: pairs of one cloth whose rest
-/// distance is at most this are never contacts (the query reach `QUERY_FACTOR`, plus 0.1% so
-/// that lattice pairs lying exactly at the reach are skipped whatever the rounding).
+/// Rest-neighbour skip radius over the collision distance at the default travel: pairs of one
+/// cloth whose rest distance is at most this are never contacts (the query reach
+/// `QUERY_FACTOR`, plus 0.1% so that lattice pairs lying exactly at the reach are skipped
+/// whatever the rounding; [`SelfCollision::rest_skip_factor`] for another travel).
 pub const REST_SKIP_FACTOR: f32 = QUERY_FACTOR * 1.001;
 
 /// VcCPBD box radius over the collision distance (`r / d`).
 pub const BOX_RADIUS: f32 = 1.0;
 
-/// Relative travel allowed in one step over the collision distance (`T / d`).
+/// Relative travel allowed in one step over the collision distance (`T / d`), by default
+/// ([`SelfCollision::travel`]).
 pub const TRAVEL_FACTOR: f32 = 1.0;
+
+/// Largest [`SelfCollision::travel`]: the pair lists grow with the cube of the query radius.
+pub const MAX_TRAVEL: f32 = 2.0;
 
 /// Collision response (the VcCPBD paper, Shapri, Sulaiman & Bade 2016, compares the three).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -82,6 +88,30 @@ pub struct SelfCollision {
     /// `World::measure_self_collision` measures the current state on demand either way.
     #[serde(default)]
     pub measure: bool,
+    /// The travel bound `T / d`, in `(0, MAX_TRAVEL]` (default [`TRAVEL_FACTOR`], 1): the speed
+    /// clamp lets a particle move at most `travel d` a step relative to the mean velocity of
+    /// the free particles, and the step's pair lists reach `(1 + 2 travel) d`. Lower is
+    /// cheaper (the lists shrink with the cube of the reach) and clamps relative motion harder;
+    /// docs/performance.md measures what it costs and what it saves on the suite.
+    #[serde(default = "default_travel")]
+    pub travel: f32,
+}
+
+fn default_travel() -> f32 {
+    TRAVEL_FACTOR
+}
+
+impl SelfCollision {
+    /// Query radius over collision distance, `1 + 2 travel` (the default's is [`QUERY_FACTOR`]).
+    pub fn query_factor(&self) -> f32 {
+        1.0 + 2.0 * self.travel
+    }
+
+    /// Rest-neighbour skip radius over collision distance: the query factor plus 0.1% (see
+    /// [`REST_SKIP_FACTOR`]).
+    pub fn rest_skip_factor(&self) -> f32 {
+        self.query_factor() * 1.001
+    }
 }
 
 impl Default for SelfCollision {
@@ -92,6 +122,7 @@ impl Default for SelfCollision {
             response: Response::default(),
             broadphase: SelfBroadphase::default(),
             measure: false,
+            travel: TRAVEL_FACTOR,
         }
     }
 }

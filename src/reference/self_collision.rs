@@ -31,7 +31,7 @@
 
 use crate::model::description::WorldDescription;
 use crate::model::self_collision::Response;
-use crate::model::self_collision::{BOX_RADIUS, QUERY_FACTOR, REST_SKIP_FACTOR, TRAVEL_FACTOR};
+use crate::model::self_collision::BOX_RADIUS;
 use std::collections::HashMap;
 
 type V3 = [f64; 3];
@@ -52,6 +52,11 @@ pub(super) struct SelfCollision64 {
     d: f64,
     response: Response,
     friction: f64,
+    /// The travel bound `T / d`, and the query and rest-skip radii over `d` (the world's
+    /// settings, read as the world reads them).
+    travel: f64,
+    query: f64,
+    skip: f64,
     /// Rest positions and cloth of every particle.
     rest: Vec<V3>,
     cloth_of: Vec<usize>,
@@ -97,6 +102,9 @@ impl SelfCollision64 {
             d,
             response: cfg.response,
             friction: cfg.friction as f64,
+            travel: cfg.travel as f64,
+            query: cfg.query_factor() as f64,
+            skip: cfg.rest_skip_factor() as f64,
             rest: desc.positions.iter().map(|p| p.map(f64::from)).collect(),
             cloth_of,
             lists: vec![Vec::new(); n],
@@ -106,8 +114,8 @@ impl SelfCollision64 {
 
     /// Builds the pair lists from the positions `x` at the start of a step.
     pub(super) fn begin_step(&mut self, x: &[V3]) {
-        let reach = QUERY_FACTOR as f64 * self.d;
-        let skip = REST_SKIP_FACTOR as f64 * self.d;
+        let reach = self.query * self.d;
+        let skip = self.skip * self.d;
         let cell = |p: V3| p.map(|c| (c / reach).floor() as i64);
         let mut grid: HashMap<[i64; 3], Vec<usize>> = HashMap::new();
         for (i, &p) in x.iter().enumerate() {
@@ -150,7 +158,7 @@ impl SelfCollision64 {
         if free > 0.0 {
             m = m.map(|c| c / free);
         }
-        let limit = TRAVEL_FACTOR as f64 * self.d / (substeps as f64 * h);
+        let limit = self.travel * self.d / (substeps as f64 * h);
         for i in 0..v.len() {
             let u = sub(v[i], m);
             let s = dot(u, u).sqrt();

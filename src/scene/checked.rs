@@ -44,6 +44,12 @@ checked_f32!(
     "must be a number from 0 to 1"
 );
 checked_f32!(Finite, "A finite number.", |f| f.is_finite(), "must be a finite number");
+checked_f32!(
+    Travel,
+    "A self-collision travel bound: above 0, at most 2 (`MAX_TRAVEL`).",
+    |f| f > 0.0 && f <= crate::model::self_collision::MAX_TRAVEL,
+    "must be above 0 and at most 2"
+);
 
 /// A 3-vector of finite numbers.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]

@@ -26,6 +26,7 @@
 //! broadphase = "hash"         # or "aabb-tree"
 //! friction = 0.3
 //! measure = false             # true: average collision over the steps (a query a step)
+//! travel = 1.0                # T / d in (0, 2]: lower is cheaper, clamps relative motion harder
 //!
 //! [output]
 //! steps = 300

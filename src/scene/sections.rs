@@ -2,7 +2,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::checked::{Count, Fraction, NonNegative, Positive, Vec3};
+use super::checked::{Count, Fraction, NonNegative, Positive, Travel, Vec3};
 use crate::error::Result;
 use crate::model::cloth::{ClothDesc, PinSpec};
 use crate::model::effects::{Effects, Wind};
@@ -124,6 +124,9 @@ pub struct SelfCollisionSection {
     /// Measure the average collision after every step (default false; it costs a broadphase
     /// query a step, see [`SelfCollision::measure`]).
     pub measure: Option<bool>,
+    /// The travel bound `T / d`, above 0 and at most 2 (default 1; see
+    /// [`SelfCollision::travel`]).
+    pub travel: Option<Travel>,
 }
 
 impl SelfCollisionSection {
@@ -136,6 +139,7 @@ impl SelfCollisionSection {
             response: self.response.unwrap_or(d.response),
             broadphase: self.broadphase.unwrap_or(d.broadphase),
             measure: self.measure.unwrap_or(d.measure),
+            travel: self.travel.map_or(d.travel, |v| v.0),
         }
     }
 }

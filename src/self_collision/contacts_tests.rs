@@ -100,7 +100,7 @@ fn reference(data: &SelfCollisionData, x: &[Vec<f32>; 3], p: &[Vec<f32>; 3], w: 
     all.fill_serial(n, |i, buf| {
         buf.extend(
             (0..n)
-                .filter(|&j| j != i && !rest_skipped(&data.rest, &data.cloth_of, i, j, a.d))
+                .filter(|&j| j != i && !rest_skipped(&data.rest, &data.cloth_of, i, j, a.skip))
                 .map(|j| j as u32),
         )
     })
@@ -195,7 +195,13 @@ fn rest_neighbours_are_never_listed() {
     for (i, j) in lists.pairs() {
         let (ri, rj) = (i as usize / cols, j as usize / cols);
         assert!(ri.abs_diff(rj) >= 3, "{i} {j}");
-        assert!(!rest_skipped(&data.rest, &data.cloth_of, i as usize, j as usize, d));
+        assert!(!rest_skipped(
+            &data.rest,
+            &data.cloth_of,
+            i as usize,
+            j as usize,
+            REST_SKIP_FACTOR * d
+        ));
     }
     // A flat cloth: the step has nothing to do.
     let flat: Vec<f32> = (0..n).map(|i| (i / cols) as f32 * s).collect();

@@ -9,7 +9,7 @@ use crate::data::exec::Exec;
 use rayon::prelude::*;
 
 use crate::error::Result;
-use crate::self_collision::{dist2, SelfBroadphase, SelfCollisionData, PENETRATION_TOLERANCE, QUERY_FACTOR};
+use crate::self_collision::{dist2, SelfBroadphase, SelfCollisionData, PENETRATION_TOLERANCE};
 
 impl SelfCollisionData {
     /// Measures the penetration of the state the lists were just built from (once per step
@@ -53,7 +53,12 @@ impl SelfCollisionData {
         let built = if st.fresh {
             Ok(())
         } else {
-            self.build_structure(&mut st, x, n, QUERY_FACTOR * d, broadphase, Exec::new(true, parallel))
+            let q = self
+                .config
+                .as_ref()
+                .map_or(crate::self_collision::QUERY_FACTOR, |c| c.query_factor())
+                * d;
+            self.build_structure(&mut st, x, n, q, broadphase, Exec::new(true, parallel))
         };
         st.fresh = built.is_ok();
         let r = built.and_then(|_| match &st.tree {

@@ -88,7 +88,7 @@ use crate::self_collision::reuse::Reuse;
 use crate::self_collision::tree::{ParticleTree, TreeShape};
 
 pub use crate::model::self_collision::{
-    Response, SelfBroadphase, SelfCollision, BOX_RADIUS, CELL_FACTOR, QUERY_FACTOR, REST_SKIP_FACTOR, TRAVEL_FACTOR,
+    Response, SelfBroadphase, SelfCollision, BOX_RADIUS, CELL_FACTOR, MAX_TRAVEL, QUERY_FACTOR, REST_SKIP_FACTOR, TRAVEL_FACTOR,
 };
 pub use crate::self_collision::config::{SelfCollisionPhases, SelfCollisionStats, PENETRATION_TOLERANCE};
 
@@ -142,6 +142,11 @@ pub(crate) struct Active {
     pub d: f32,
     pub response: Response,
     pub friction: f32,
+    /// The travel bound over `d` ([`SelfCollision::travel`]).
+    pub travel: f32,
+    /// The query radius `q` and the rest-skip radius, m.
+    pub q: f32,
+    pub skip: f32,
 }
 
 impl Active {
@@ -189,6 +194,9 @@ impl SelfCollisionData {
             d,
             response: c.response,
             friction: c.friction,
+            travel: c.travel,
+            q: c.query_factor() * d,
+            skip: c.rest_skip_factor() * d,
         })
     }
 
@@ -219,7 +227,7 @@ impl SelfCollisionData {
             hash: SpatialHash::new(n),
             ..State::default()
         });
-        let q = QUERY_FACTOR * a.d;
+        let q = a.q;
         let t0 = Instant::now();
         let mut r = Ok(());
         let mut t1 = t0;
@@ -233,11 +241,11 @@ impl SelfCollisionData {
             let out = if skin > 0.0 { &mut st.cand } else { &mut st.lists };
             r = r.and_then(|_| match (&st.tree, broadphase) {
                 (Some(t), SelfBroadphase::AabbTree) => {
-                    let (rest, cloth_of, d) = (&self.rest, &self.cloth_of, a.d);
-                    let keep = |i: usize, j: u32| !rest_skipped(rest, cloth_of, i, j as usize, d);
+                    let (rest, cloth_of, skip) = (&self.rest, &self.cloth_of, a.skip);
+                    let keep = |i: usize, j: u32| !rest_skipped(rest, cloth_of, i, j as usize, skip);
                     t.query_exec(x[0], x[1], x[2], n, reach, out, exec, true).map(|_| out.retain(keep))
                 }
-                _ => st.hash.query_upper_unskipped_cells_exec(reach, REST_SKIP_FACTOR * a.d, out, exec),
+                _ => st.hash.query_upper_unskipped_cells_exec(reach, a.skip, out, exec),
             });
             if r.is_ok() {
                 st.reuse.built(x, n, a.d, broadphase, skin);
@@ -351,12 +359,11 @@ impl SelfCollisionData {
     }
 }
 
-/// Whether `i` and `j` are rest neighbours: one cloth, rest distance at most
-/// `REST_SKIP_FACTOR d`. Such pairs are never contacts (the cloth's own constraints keep them
-/// apart), so the broadphase drops them when it writes the list.
+/// Whether `i` and `j` are rest neighbours: one cloth, rest distance at most `skip`
+/// ([`SelfCollision::rest_skip_factor`] `d`). Such pairs are never contacts (the cloth's own
+/// constraints keep them apart), so the broadphase drops them when it writes the list.
 #[inline]
-fn rest_skipped(rest: &[Vec<f32>; 3], cloth_of: &[u32], i: usize, j: usize, d: f32) -> bool {
-    let skip = REST_SKIP_FACTOR * d;
+fn rest_skipped(rest: &[Vec<f32>; 3], cloth_of: &[u32], i: usize, j: usize, skip: f32) -> bool {
     cloth_of[i] == cloth_of[j] && dist2(rest, i, j) <= skip * skip
 }
 
@@ -394,6 +401,13 @@ pub(crate) fn validate(c: &SelfCollision) -> Result<()> {
     }
     if !(c.friction.is_finite() && (0.0..=1.0).contains(&c.friction)) {
         return Err(WeftError::param("self_collision.friction", c.friction, "must be between 0 and 1"));
+    }
+    if !(c.travel > 0.0 && c.travel <= MAX_TRAVEL) {
+        return Err(WeftError::param(
+            "self_collision.travel",
+            c.travel,
+            format!("must be above 0 and at most {MAX_TRAVEL}"),
+        ));
     }
     Ok(())
 }

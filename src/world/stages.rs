@@ -4,7 +4,7 @@
 
 use crate::data::exec::Exec;
 use crate::self_collision::response::{clamp_speed, mean_velocity_in, ClampParams};
-use crate::self_collision::{Active, TRAVEL_FACTOR};
+use crate::self_collision::Active;
 use crate::world::World;
 
 impl World {
@@ -63,7 +63,7 @@ impl World {
         }
     }
     /// The self-collision speed clamp (relative to the mean velocity, at most
-    /// `TRAVEL_FACTOR d / substeps` per substep), then the predictions kept as box centres.
+    /// `travel d / substeps` per substep), then the predictions kept as box centres.
     /// `mean` is the mean velocity when the predict pass summed it already.
     pub(crate) fn self_collision_clamp(&mut self, a: Active, n_sub: u32, h: f32, exec: Exec, mean: Option<[f32; 3]>) {
         let (parallel, simd) = (exec.parallel(), exec.simd());
@@ -73,7 +73,7 @@ impl World {
         let mean = mean.unwrap_or_else(|| mean_velocity_in(parts, [&p.vx, &p.vy, &p.vz], &p.w, n, exec));
         let cp = ClampParams {
             mean,
-            limit: TRAVEL_FACTOR * a.d / n_sub as f32,
+            limit: a.travel * a.d / n_sub as f32,
             h,
         };
         // Each chunk also copies its predictions as VcCPBD's box centres (one parallel pass),

@@ -73,6 +73,10 @@ enum Command {
         /// With --self-collision: run only these scenes (comma-separated names).
         #[arg(long, value_delimiter = ',')]
         only: Vec<String>,
+        /// With --self-collision: the travel bound `T / d` of every scene (above 0, at most 2;
+        /// default: each scene's own, 1 in the shipped ones). Lower is cheaper and clamps harder.
+        #[arg(long)]
+        travel: Option<f32>,
     },
     /// Time against error for a grid of integrators and settings, against a cached reference.
     Accuracy(accuracy::AccuracyArgs),
@@ -94,8 +98,9 @@ fn main() -> ExitCode {
             suite,
             pictures,
             only,
+            travel,
             ..
-        } => bench::bench_self_collision(json, &suite, steps, pictures.as_deref(), &only),
+        } => bench::bench_self_collision(json, &suite, steps, pictures.as_deref(), &only, travel),
         Command::Bench { json, scenes, .. } => bench::bench(json, &scenes),
         Command::Accuracy(args) => accuracy::accuracy(args),
         Command::Reproduce(what) => reproduce::reproduce(what),

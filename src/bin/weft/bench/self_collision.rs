@@ -13,6 +13,8 @@ struct SelfCollisionFigure {
     particles: usize,
     substeps: u32,
     threads: usize,
+    /// The travel bound `T / d` the run used.
+    travel: f32,
     /// Self-collision stages of the stage clock (lists, clamp, pairs and correction) per
     /// particle per substep, ns.
     collision_ns_per_particle_substep: f64,
@@ -26,8 +28,9 @@ struct SelfCollisionFigure {
     /// The paper's average collision: mean over the steps of the share of particles with a
     /// non-neighbour (rest distance above 1.5 d) closer than 0.9 d, %.
     avg_collision_pct: f64,
-    /// Deepest `d - |x_i - x_j|` over the steps between non-neighbours (the pipeline's rule:
-    /// another cloth or more than `REST_SKIP_FACTOR d` apart at rest), m.
+    /// Deepest `d - |x_i - x_j|` over the steps between non-neighbours (the pipeline's rule at
+    /// the default travel, whatever the run's: another cloth or more than `REST_SKIP_FACTOR d`
+    /// apart at rest), m.
     max_violation_m: f64,
     /// Layer crossings summed over the steps (`self_collision::audit::count_crossings`).
     crossings: u64,
@@ -119,8 +122,16 @@ fn timed_run(run: &mut weft::suite::SuiteRun, steps: u32, audit: bool) -> weft::
 
 /// `weft bench --self-collision`: each suite scene on 1 and 2 threads, with and without
 /// self-collision, `steps` steps each; with `pictures`, the last state of each scene as
-/// `DIR/NAME.png`; `only` (if not empty) names the scenes to run.
-pub fn bench_self_collision(json: bool, dir: &Path, steps: u32, pictures: Option<&Path>, only: &[String]) -> weft::Result<ExitCode> {
+/// `DIR/NAME.png`; `only` (if not empty) names the scenes to run; `travel` (if given) replaces
+/// each scene's travel bound.
+pub fn bench_self_collision(
+    json: bool,
+    dir: &Path,
+    steps: u32,
+    pictures: Option<&Path>,
+    only: &[String],
+    travel: Option<f32>,
+) -> weft::Result<ExitCode> {
     use weft::suite::{SuiteRun, SCENES};
     if steps == 0 {
         return Err(weft::WeftError::param("steps", 0, "must be at least 1"));
@@ -140,8 +151,11 @@ pub fn bench_self_collision(json: bool, dir: &Path, steps: u32, pictures: Option
         let mut audit = (0.0, 0);
         for threads in [1usize, 2] {
             let mut run = SuiteRun::load(dir, name, threads, true)?;
+            let mut used = 0.0;
             if let Some(mut sc) = run.world.self_collision().cloned() {
                 sc.measure = true;
+                sc.travel = travel.unwrap_or(sc.travel);
+                used = sc.travel;
                 run.world.set_self_collision(Some(sc))?;
             }
             let span = crate::pictures::plane_span(&run.world);
@@ -164,6 +178,7 @@ pub fn bench_self_collision(json: bool, dir: &Path, steps: u32, pictures: Option
                 particles: n,
                 substeps,
                 threads,
+                travel: used,
                 collision_ns_per_particle_substep: collision_s * 1e9 / (steps as f64 * n as f64 * substeps as f64),
                 collision_share: if clock_s > 0.0 { collision_s / clock_s } else { 0.0 },
                 step_ms_median: median,
@@ -203,7 +218,8 @@ pub fn bench_self_collision(json: bool, dir: &Path, steps: u32, pictures: Option
     if json {
         return Ok(ExitCode::SUCCESS);
     }
-    println!("self-collision suite, {steps} steps a run; step ms with self-collision (median, p95) and without (median)");
+    let travel = travel.map_or("each scene's".to_string(), |t| t.to_string());
+    println!("self-collision suite, {steps} steps a run, travel {travel}; step ms with self-collision (median, p95) and without (median)");
     println!(
         "{:<8} {:>7} {:>3} {:>3} {:>9} {:>6} {:>8} {:>8} {:>8} {:>6} {:>9} {:>10} {:>9}",
         "scene", "parts", "sub", "thr", "coll ns", "share", "median", "p95", "without", "ratio", "avg coll%", "violation", "crossings"
