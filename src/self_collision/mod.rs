@@ -2,9 +2,10 @@
 //! Sulaiman & Bade 2016, VcCPBD).
 //!
 //! # The pipeline
-//! Constants: `q = QUERY_FACTOR d` (3), hash cell `CELL_FACTOR q` (1), travel `T = TRAVEL_FACTOR d`
-//! (1), VcCPBD box radius `r = BOX_RADIUS d` (1: with `r = d/2` the box test put particles back
-//! into contact, 1.27% average collision on the 100x100 fold against 0.0007% with `r = d`).
+//! Constants: travel `T = travel d` (the setting [`SelfCollision::travel`], 1 by default), query
+//! radius `q = d + 2 T` (3 d by default), hash cell `CELL_FACTOR q` (1), VcCPBD box radius
+//! `r = BOX_RADIUS d` (1: with `r = d/2` the box test put particles back into contact, 1.27%
+//! average collision on the 100x100 fold against 0.0007% with `r = d`).
 //!
 //! * **Once a step** ([`SelfCollisionData::begin_step`]), the paper's "generate collision
 //!   constraints" line of Algorithm 1: the broadphase (the spatial hash, a counting sort of the
@@ -12,7 +13,7 @@
 //!   start of the step, every pair closer than the query radius `q = d + 2 T`, `d` the
 //!   collision distance and `T` the relative travel the speed clamp allows a particle in one
 //!   step. **Rest neighbours** are dropped as the list is written: pairs of one cloth whose
-//!   rest distance is at most `q` (`REST_SKIP_FACTOR`), held apart by the cloth's own
+//!   rest distance is at most `q` (plus 0.1%, [`SelfCollision::rest_skip_factor`]), held apart by the cloth's own
 //!   constraints (in a flat cloth every pair the query finds is one). Each pair is listed
 //!   once, `(i, j)` with `i < j`, ordered by `i` then `j`, and read as a structure-of-arrays
 //!   pair list: the lists' ids are the `j`, and each entry's `i` is written out (`pairs`). Both broadphases give the same list (tested
