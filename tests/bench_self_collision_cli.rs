@@ -46,4 +46,36 @@ fn bench_self_collision_json_has_the_fields_and_plausible_figures() {
         .unwrap();
     assert!(!bad.status.success());
     assert!(String::from_utf8_lossy(&bad.stderr).contains("nope"));
+    assert!(rows.iter().all(|r| r["travel"] == 1.0), "the scenes' own travel");
+}
+
+/// `--travel` replaces every scene's travel bound; the library refuses one out of range.
+#[test]
+fn bench_self_collision_travel() {
+    let run = |travel: &str| {
+        Command::new(env!("CARGO_BIN_EXE_weft"))
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .args([
+                "bench",
+                "--self-collision",
+                "--json",
+                "--only",
+                "flag",
+                "--steps",
+                "2",
+                "--travel",
+                travel,
+            ])
+            .output()
+            .unwrap()
+    };
+    let out = run("0.5");
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8(out.stdout).unwrap();
+    let rows: Vec<serde_json::Value> = text.lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+    assert_eq!(rows.len(), 2);
+    assert!(rows.iter().all(|r| r["travel"] == 0.5), "{text}");
+    let bad = run("3");
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("self_collision.travel"));
 }
