@@ -25,8 +25,8 @@ impl World {
         self.selfcol.distance()
     }
 
-    /// The pair lists of the last step: pairs within `3 d` at the step's start, the cloths'
-    /// rest neighbours left out, each pair once in the list of its smaller id (see
+    /// The pair lists of the last step: pairs within `q = (1 + 2 travel) d` at the step's
+    /// start, the cloths' rest neighbours left out, each pair once in the list of its smaller id (see
     /// [`crate::self_collision`]), if self-collision has run.
     pub fn self_collision_pairs(&self) -> Option<&crate::self_collision::neighbours::Neighbours> {
         self.selfcol.lists()
