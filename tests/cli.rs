@@ -292,3 +292,36 @@ height = 300
     // Framing the plane too left the strip at 0.8% of the picture; framed alone it covers 6.5%.
     assert!(red > 0.04, "the cloth covers only {:.1}% of the picture", red * 100.0);
 }
+
+/// A self-collision distance that would list every pair of two cloths stops the run at its
+/// first step with the reason (exit code 2, as a diverged step).
+#[test]
+fn run_stops_when_self_collision_has_too_many_pairs() {
+    let dir = tmp("pairs");
+    let sheet = |y: f32| {
+        format!("[[cloth]]\nrows = 40\ncols = 40\nspacing = 0.01\norigin = [0.0, {y}, 0.0]\nu = [1.0, 0.0, 0.0]\nv = [0.0, 0.0, 1.0]\n")
+    };
+    let text = format!(
+        "[effects.self_collision]\ndistance = 1.0\n{}{}[output]\nsteps = 50\nframes = 1\n",
+        sheet(1.0),
+        sheet(1.02)
+    );
+    let scene = write_scene(&dir, &text);
+    let out = dir.join("out");
+    let o = weft()
+        .args(["run", "--quiet", "--no-pictures"])
+        .arg(&scene)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2), "{}", String::from_utf8_lossy(&o.stderr));
+    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let warning = summary["warnings"][0].as_str().unwrap();
+    assert!(
+        warning.starts_with("step 1 ran without self-collision") && warning.contains("self_collision.distance"),
+        "{warning}"
+    );
+    assert!(summary["self_collision"]["final_collision_pct"].is_null());
+    assert_eq!(summary["self_collision"]["stats"]["failed_steps"], 1);
+}

@@ -324,3 +324,56 @@ fn off_means_no_stage() {
     assert!(w.self_collision_pairs().is_none());
     assert_eq!(w.self_collision_stats().steps, 0);
 }
+
+/// A cloth collapsed onto one point, or a collision distance far above the spacing, would list
+/// every pair (`n²`); the broadphase stops at `MAX_PAIRS_PER_PARTICLE` a particle instead: the
+/// step runs without self-collision, the statistics count it and keep the error, and the
+/// next sane state steps with self-collision again.
+#[test]
+fn too_many_pairs_are_refused_not_listed() {
+    use weft::self_collision::MAX_PAIRS_PER_PARTICLE;
+    let (rows, cols, s) = (40u32, 40u32, 0.02f32);
+    for bp in [SelfBroadphase::Hash, SelfBroadphase::AabbTree] {
+        let sc = SelfCollision {
+            broadphase: bp,
+            ..SelfCollision::default()
+        };
+        let mut w = folded(rows, cols, s, 0.03, 0.0, sc.clone(), params(2));
+        let n = w.particle_count();
+        let flat = w.positions().map(|a| a.to_vec());
+        // Every particle at one point: n (n - 1) / 2 pairs minus the rest neighbours.
+        let one = vec![0.5f32; n];
+        w.set_positions([&one, &one, &one]).unwrap();
+        w.step(1.0 / 60.0).unwrap();
+        let st = w.self_collision_stats();
+        assert_eq!(st.failed_steps, 1, "{bp:?}");
+        let e = st.last_error.clone().unwrap();
+        assert!(
+            e.contains("self_collision.distance") && e.contains(&MAX_PAIRS_PER_PARTICLE.to_string()),
+            "{e}"
+        );
+        assert!(w.self_collision_pairs().is_none(), "no lists kept");
+        assert!(w.positions().iter().all(|a| a.iter().all(|v| v.is_finite())));
+        // Back to the folded cloth: self-collision runs again.
+        w.set_positions([&flat[0], &flat[1], &flat[2]]).unwrap();
+        w.step(1.0 / 60.0).unwrap();
+        assert_eq!(w.self_collision_stats().failed_steps, 1, "{bp:?}");
+        assert!(w.self_collision_pair_count() > 0);
+        // Two cloths and a distance of a metre: every pair of the two is within reach.
+        let sheet = |y: f32| {
+            format!("[[cloth]]\nrows = 30\ncols = 30\nspacing = 0.01\norigin = [0.0, {y}, 0.0]\nu = [1.0, 0.0, 0.0]\nv = [0.0, 0.0, 1.0]\n")
+        };
+        let text = format!(
+            "[effects.self_collision]\ndistance = 1.0\nbroadphase = \"{}\"\n{}{}",
+            bp.name(),
+            sheet(1.0),
+            sheet(1.02)
+        );
+        let mut two = Scene::parse(&text, "two.toml").unwrap().world().unwrap();
+        two.step(1.0 / 60.0).unwrap();
+        assert_eq!(two.self_collision_stats().failed_steps, 1, "{bp:?}");
+        // The on-demand measure needs the same lists and reports the same error.
+        let e = two.measure_self_collision().unwrap_err().to_string();
+        assert!(e.contains("self_collision.distance"), "{e}");
+    }
+}

@@ -23,6 +23,11 @@
 //! measured at the peak of a factorisation (160 × 160 cloth: about 840 bytes per particle
 //! and `log2 n`, of which 290 stay live).
 //!
+//! The self-collision row is a typical step's; the step's pair lists are capped at
+//! `self_collision::MAX_PAIRS_PER_PARTICLE` (128) a particle, about 11 kB a particle with
+//! every pair in contact, and a state that needs more (a cloth collapsed onto itself) is
+//! refused by the step instead of listed.
+//!
 //! Growth of `Vec`s while pieces are appended is not in the table; `tests/memory_budget.rs`
 //! holds the estimate to an allocation measured with a counting allocator (peak and live bytes
 //! of a mid-size world built and stepped) within a factor of two.

@@ -24,6 +24,12 @@ pub struct SelfCollisionStats {
     pub steps: u64,
     /// Where the time went.
     pub phases: SelfCollisionPhases,
+    /// Steps that ran without self-collision because their pair lists could not be built
+    /// (more than [`crate::self_collision::MAX_PAIRS_PER_PARTICLE`] pairs a particle, or
+    /// positions the broadphase refuses).
+    pub failed_steps: u64,
+    /// The error of the last such step.
+    pub last_error: Option<String>,
     #[serde(skip)]
     sum_pct: f64,
 }

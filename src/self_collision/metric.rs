@@ -62,9 +62,9 @@ impl SelfCollisionData {
         };
         st.fresh = built.is_ok();
         let r = built.and_then(|_| match &st.tree {
-            Some(t) if broadphase == SelfBroadphase::AabbTree => t
-                .query_exec(x[0], x[1], x[2], n, lim, &mut st.probe, Exec::new(true, parallel), false)
-                .map(|_| st.probe.retain(keep)),
+            Some(t) if broadphase == SelfBroadphase::AabbTree => {
+                t.query_exec(x[0], x[1], x[2], n, lim, &mut st.probe, Exec::new(true, parallel), false, &keep)
+            }
             _ if parallel => st.hash.query_filtered(x[0], x[1], x[2], n, lim, &keep, &mut st.probe),
             _ => st.hash.query_filtered_serial(x[0], x[1], x[2], n, lim, &keep, &mut st.probe),
         });

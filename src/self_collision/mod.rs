@@ -93,6 +93,28 @@ pub use crate::model::self_collision::{
 };
 pub use crate::self_collision::config::{SelfCollisionPhases, SelfCollisionStats, PENETRATION_TOLERANCE};
 
+/// Most pairs a step's lists may hold per particle (the metric's lists, which hold each pair
+/// twice, twice as many). The densest scenes of the suite list about 20 a particle at the
+/// default travel, about 90 at the largest; a state that needs more has particles collapsed
+/// onto each other or a collision distance far above the spacing, and would otherwise list
+/// up to every pair (`n²`). Past it the step's broadphase stops and reports an error, the
+/// step runs without self-collision, and [`SelfCollisionStats::failed_steps`] counts it.
+pub const MAX_PAIRS_PER_PARTICLE: usize = 128;
+
+/// The error of a step whose pairs passed [`MAX_PAIRS_PER_PARTICLE`], for distance `d` and
+/// reach `q`.
+fn too_many_pairs(d: f32, q: f32) -> WeftError {
+    WeftError::param(
+        "self_collision.distance",
+        format!("{d} m"),
+        format!(
+            "gives more than {MAX_PAIRS_PER_PARTICLE} pairs a particle within the step's reach {q} m \
+             (particles collapsed onto each other, or a distance far above the cloth's spacing): \
+             lower the distance or the travel"
+        ),
+    )
+}
+
 /// Leaf size of the AABB tree (the paper's depth 5 gives ~312 particles a leaf at 10 000
 /// particles; 16 queries much faster and gives the same pairs).
 const TREE_LEAF: u32 = 16;
@@ -207,8 +229,14 @@ impl SelfCollisionData {
     /// `exec` is parallel (the same lists either way).
     pub(crate) fn begin_step(&mut self, x: [&[f32]; 3], n: usize, damping: &[f32], exec: Exec) -> Result<bool> {
         let t0 = Instant::now();
-        if !self.build_lists(x, n, exec)? {
-            return Ok(false);
+        match self.build_lists(x, n, exec) {
+            Ok(true) => {}
+            Ok(false) => return Ok(false),
+            Err(e) => {
+                self.stats.failed_steps += 1;
+                self.stats.last_error = Some(e.to_string());
+                return Err(e);
+            }
         }
         if let Some(st) = &mut self.state {
             st.pass.prepare(n, damping);
@@ -229,6 +257,10 @@ impl SelfCollisionData {
             ..State::default()
         });
         let q = a.q;
+        let limit = MAX_PAIRS_PER_PARTICLE.saturating_mul(n);
+        st.cand.set_limit(limit);
+        st.lists.set_limit(limit);
+        st.probe.set_limit(limit.saturating_mul(2));
         let t0 = Instant::now();
         let mut r = Ok(());
         let mut t1 = t0;
@@ -244,7 +276,7 @@ impl SelfCollisionData {
                 (Some(t), SelfBroadphase::AabbTree) => {
                     let (rest, cloth_of, skip) = (&self.rest, &self.cloth_of, a.skip);
                     let keep = |i: usize, j: u32| !rest_skipped(rest, cloth_of, i, j as usize, skip);
-                    t.query_exec(x[0], x[1], x[2], n, reach, out, exec, true).map(|_| out.retain(keep))
+                    t.query_exec(x[0], x[1], x[2], n, reach, out, exec, true, &keep)
                 }
                 _ => st.hash.query_upper_unskipped_cells_exec(reach, a.skip, out, exec),
             });
@@ -255,6 +287,9 @@ impl SelfCollisionData {
         }
         if r.is_ok() && st.reuse.skin() > 0.0 {
             r = reuse::within_reach(&st.cand, x, q, &mut st.lists, exec);
+        }
+        if st.cand.limited() || st.lists.limited() {
+            r = Err(too_many_pairs(a.d, q));
         }
         let ph = &mut self.stats.phases;
         ph.build_s += t1.duration_since(t0).as_secs_f64();

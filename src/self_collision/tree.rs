@@ -28,7 +28,9 @@
 
 use crate::data::exec::Exec;
 use crate::data::lanes::LANES;
-use crate::self_collision::neighbours::{check_max_dist, check_positions, search_radius, sort_dedup_tail, Candidates, Neighbours, CHUNK};
+use crate::self_collision::neighbours::{
+    check_max_dist, check_positions, retain_tail, search_radius, sort_dedup_tail, Candidates, Neighbours, CHUNK,
+};
 use crate::{Result, WeftError};
 use rayon::prelude::*;
 
@@ -281,20 +283,22 @@ impl ParticleTree {
     /// leaf scans read the leaf-ordered copy the refit made). Errors if they are not, if `n`
     /// differs from the build, an array is short, or `max_dist` is negative or non-finite.
     pub fn query_all(&self, x: &[f32], y: &[f32], z: &[f32], n: usize, max_dist: f32, out: &mut Neighbours) -> Result<()> {
-        self.query_exec(x, y, z, n, max_dist, out, Exec::Parallel, false)
+        self.query_exec(x, y, z, n, max_dist, out, Exec::Parallel, false, &|_, _| true)
     }
 
     /// Serial, scalar twin of [`ParticleTree::query_all`] (no threads, no lanes); produces
     /// identical lists.
     pub fn query_all_serial(&self, x: &[f32], y: &[f32], z: &[f32], n: usize, max_dist: f32, out: &mut Neighbours) -> Result<()> {
-        self.query_exec(x, y, z, n, max_dist, out, Exec::Scalar, false)
+        self.query_exec(x, y, z, n, max_dist, out, Exec::Scalar, false, &|_, _| true)
     }
 
     /// [`ParticleTree::query_all`] when `exec` is parallel, else a serial walk with the lanes of
     /// `exec` (never entering rayon); identical lists. With `upper`, each pair is listed once,
-    /// in the list of its smaller id (half the candidates, the same pairs).
+    /// in the list of its smaller id (half the candidates, the same pairs). Only the pairs with
+    /// `keep(i, j)` are listed, filtered particle by particle (so the lists' limit counts the
+    /// kept pairs only).
     #[allow(clippy::too_many_arguments)]
-    pub(crate) fn query_exec(
+    pub(crate) fn query_exec<K>(
         &self,
         x: &[f32],
         y: &[f32],
@@ -304,18 +308,24 @@ impl ParticleTree {
         out: &mut Neighbours,
         exec: Exec,
         upper: bool,
-    ) -> Result<()> {
+        keep: &K,
+    ) -> Result<()>
+    where
+        K: Fn(usize, u32) -> bool + Sync,
+    {
         self.check_n(x, y, z, n)?;
         let md2 = check_max_dist(max_dist)?;
         let r = search_radius(max_dist);
         // The parallel query scans with lanes whatever `exec.simd()` says: the lists are the same.
         let (parallel, lanes) = (exec.parallel(), exec.parallel() || exec.simd());
         let scan = |i: usize, buf: &mut Vec<u32>| {
+            let start = buf.len();
             if lanes {
                 self.scan::<true>(x, y, z, i, md2, r, upper, buf)
             } else {
                 self.scan::<false>(x, y, z, i, md2, r, upper, buf)
             }
+            retain_tail(buf, start, |j| keep(i, j));
         };
         if parallel {
             Self::check_unchanged((0..n).into_par_iter().all(|i| self.unchanged(x, y, z, i)))?;
@@ -419,9 +429,11 @@ mod tests {
         let mut upper = want.clone();
         upper.retain(|i, j| j as usize > i);
         for exec in [Exec::Scalar, Exec::Simd, Exec::Parallel, Exec::ScalarParallel] {
-            tree.query_exec(&p[0], &p[1], &p[2], n, d, &mut got, exec, false).unwrap();
+            tree.query_exec(&p[0], &p[1], &p[2], n, d, &mut got, exec, false, &|_, _| true)
+                .unwrap();
             assert_eq!(got, want, "{exec:?}");
-            tree.query_exec(&p[0], &p[1], &p[2], n, d, &mut got, exec, true).unwrap();
+            tree.query_exec(&p[0], &p[1], &p[2], n, d, &mut got, exec, true, &|_, _| true)
+                .unwrap();
             assert_eq!(got, upper, "upper, {exec:?}");
         }
         assert!(

@@ -207,8 +207,17 @@ pub fn run(args: RunArgs) -> weft::Result<ExitCode> {
             break;
         }
         let t0 = Instant::now();
+        let failed = world.self_collision_stats().failed_steps;
         if let Err(e) = world.step(dt) {
             warnings.push(e.to_string());
+            diverged = true;
+            break;
+        }
+        // A step whose self-collision could not run (too many pairs) stops the run like a
+        // diverged step: what follows would be a cloth passing through itself.
+        if world.self_collision_stats().failed_steps > failed {
+            let why = world.self_collision_stats().last_error.clone().unwrap_or_default();
+            warnings.push(format!("step {} ran without self-collision: {why}", world.steps()));
             diverged = true;
             break;
         }
@@ -233,7 +242,8 @@ pub fn run(args: RunArgs) -> weft::Result<ExitCode> {
     let m = world.metrics();
     let self_collision = match world.self_collision().cloned() {
         Some(c) => {
-            let last = world.measure_self_collision()?;
+            // The measure needs the same lists: when they cannot be built it is the warning above.
+            let last = world.measure_self_collision().unwrap_or(f64::NAN);
             let st = world.self_collision_stats().clone();
             Some(SelfCollisionSummary {
                 response: c.response.name(),
@@ -341,12 +351,15 @@ pub fn run(args: RunArgs) -> weft::Result<ExitCode> {
             summary.max_strain * 100.0
         );
         if let Some(c) = &summary.self_collision {
+            let last = c.final_collision_pct;
+            let fin = if last.is_finite() {
+                format!("{last:.3}%")
+            } else {
+                "not measured".to_string()
+            };
             let avg = match c.avg_collision_pct {
-                Some(a) => format!("average collision {a:.3}% (final {:.3}%)", c.final_collision_pct),
-                None => format!(
-                    "final collision {:.3}% (measure = true in [effects.self_collision] for the average over the steps)",
-                    c.final_collision_pct
-                ),
+                Some(a) => format!("average collision {a:.3}% (final {fin})"),
+                None => format!("final collision {fin} (measure = true in [effects.self_collision] for the average over the steps)"),
             };
             println!(
                 "self-collision ({}, {}): {avg}, {:.3} ms/step",

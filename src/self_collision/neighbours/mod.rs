@@ -26,10 +26,17 @@
 //!
 //! Buffers are kept between calls: once the lists have reached their working size, refilling
 //! them allocates nothing.
+//!
+//! # Limit
+//! The entries a fill may write are bounded ([`Neighbours::set_limit`]): particles that have
+//! collapsed onto each other, or a reach far above their spacing, would otherwise list every
+//! pair (`n²` entries). A fill that passes the limit stops writing, empties the lists and
+//! returns an error; what it wrote beyond the limit is at most one particle's list a thread.
 
 use crate::data::lanes::{F32s, Vec3x8, LANES};
 use crate::{Result, WeftError};
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// Particles handled by one parallel task when filling lists. Fixed, so the work split does not
 /// depend on the thread count (the result would not either: lists are canonical).
@@ -48,6 +55,37 @@ pub struct Neighbours {
     /// Pair assembly (`neighbours_pairs`): list starts by partner, then smaller ids by partner.
     by_j: Vec<u32>,
     order: Vec<u32>,
+    /// Most entries a fill may write (see the module docs).
+    limit: usize,
+    /// Whether the last fill stopped at the limit.
+    limited: bool,
+}
+
+/// The entries a fill has written so far, shared by its tasks, against the lists' limit.
+pub(crate) struct Budget {
+    used: AtomicUsize,
+    limit: usize,
+}
+
+impl Budget {
+    fn new(limit: usize) -> Self {
+        Budget {
+            used: AtomicUsize::new(0),
+            limit,
+        }
+    }
+
+    /// Counts `k` more entries; `false` once the total passes the limit (the writer stops).
+    #[inline]
+    pub(crate) fn spend(&self, k: usize) -> bool {
+        k == 0 || self.used.fetch_add(k, Ordering::Relaxed).saturating_add(k) <= self.limit
+    }
+
+    /// Whether the total has passed the limit.
+    #[inline]
+    pub(crate) fn over(&self) -> bool {
+        self.used.load(Ordering::Relaxed) > self.limit
+    }
 }
 
 impl Default for Neighbours {
@@ -74,7 +112,25 @@ impl Neighbours {
             scratch: Vec::new(),
             by_j: Vec::new(),
             order: Vec::new(),
+            limit: MAX_ENTRIES,
+            limited: false,
         }
+    }
+
+    /// Bounds the entries a fill may write (at most `2^32 - 1`, the default): a fill that
+    /// would write more empties the lists and returns an error instead.
+    pub fn set_limit(&mut self, entries: usize) {
+        self.limit = entries.min(MAX_ENTRIES);
+    }
+
+    /// The limit of [`Neighbours::set_limit`].
+    pub fn limit(&self) -> usize {
+        self.limit
+    }
+
+    /// Whether the last fill stopped at the limit (and returned its error).
+    pub fn limited(&self) -> bool {
+        self.limited
     }
 
     /// Number of particles the lists are for.
@@ -173,6 +229,7 @@ impl Neighbours {
         }
         self.first.clear();
         self.first.resize(n + 1, 0);
+        let budget = Budget::new(self.limit);
         self.first[1..]
             .par_chunks_mut(CHUNK)
             .zip(self.scratch[..chunks].par_iter_mut())
@@ -180,11 +237,20 @@ impl Neighbours {
             .for_each(|(c, (counts, buf))| {
                 buf.clear();
                 for (k, count) in counts.iter_mut().enumerate() {
+                    if budget.over() {
+                        return;
+                    }
                     let before = buf.len();
                     f(c * CHUNK + k, buf);
                     *count = (buf.len() - before) as u32;
+                    budget.spend(buf.len() - before);
                 }
             });
+        self.limited = budget.over();
+        if self.limited {
+            self.clear();
+            return Err(too_many(self.limit, n));
+        }
         let total = match prefix_sum(&mut self.first) {
             Ok(t) => t,
             Err(e) => {
@@ -204,11 +270,13 @@ impl Neighbours {
         F: FnMut(usize, &mut Vec<u32>),
     {
         self.clear();
+        self.limited = false;
         for i in 0..n {
             f(i, &mut self.ids);
-            if self.ids.len() > u32::MAX as usize {
+            if self.ids.len() > self.limit {
                 self.clear();
-                return Err(too_many());
+                self.limited = true;
+                return Err(too_many(self.limit, n));
             }
             self.first.push(self.ids.len() as u32);
         }
@@ -222,18 +290,25 @@ fn prefix_sum(first: &mut [u32]) -> Result<usize> {
     for v in first.iter_mut().skip(1) {
         acc += u64::from(*v);
         if acc > u64::from(u32::MAX) {
-            return Err(too_many());
+            return Err(too_many(MAX_ENTRIES, first.len().saturating_sub(1)));
         }
         *v = acc as u32;
     }
     Ok(acc as usize)
 }
 
-fn too_many() -> WeftError {
+/// Most entries of any lists: ids and offsets are `u32`.
+const MAX_ENTRIES: usize = u32::MAX as usize;
+
+/// The error of a fill past `limit` entries for `n` particles.
+pub(crate) fn too_many(limit: usize, n: usize) -> WeftError {
     WeftError::param(
         "max_dist",
         "too large",
-        "more than 2^32 - 1 neighbour entries in total; use a smaller max_dist",
+        format!(
+            "more than {limit} neighbour entries in total ({:.0} a particle): the reach is too large for the particles' spacing, or they have collapsed onto each other",
+            limit as f64 / n.max(1) as f64
+        ),
     )
 }
 

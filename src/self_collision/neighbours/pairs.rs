@@ -23,39 +23,58 @@
 //! was no faster on two threads (a folded cloth's pairs crowd into a few ranges, and joining
 //! the ranges' lists costs what the parallel sorts save).
 
-use crate::self_collision::neighbours::{prefix_sum, Neighbours};
+use crate::self_collision::neighbours::{prefix_sum, too_many, Budget, Neighbours};
 use crate::Result;
 use rayon::prelude::*;
 
 impl Neighbours {
     /// Fills upper lists (each pair once, under its smaller id) for `n` particles from pairs:
-    /// `f(t, buf)` for each task `t < tasks` (in parallel) appends pairs `i, j` (`i < j < n`,
-    /// flattened) to `buf`; a pair may be emitted more than once.
+    /// `f(t, buf, budget)` for each task `t < tasks` (in parallel) appends pairs `i, j`
+    /// (`i < j < n`, flattened) to `buf`; a pair may be emitted more than once. The task
+    /// counts the pairs it appends on `budget` as it goes ([`Budget::spend`]) and stops
+    /// when told to: past the lists' limit the fill empties them and returns an error.
     pub(crate) fn fill_pairs_parallel<F>(&mut self, n: usize, tasks: usize, f: F) -> Result<()>
     where
-        F: Fn(usize, &mut Vec<u32>) + Sync,
+        F: Fn(usize, &mut Vec<u32>, &Budget) + Sync,
     {
         if self.scratch.len() < tasks {
             self.scratch.resize_with(tasks, Vec::new);
         }
+        let budget = Budget::new(self.limit);
         self.scratch[..tasks].par_iter_mut().enumerate().for_each(|(t, buf)| {
             buf.clear();
-            f(t, buf);
+            if !budget.over() {
+                f(t, buf, &budget);
+            }
         });
-        self.assemble(n, tasks)
+        self.assemble_within(n, tasks, &budget)
     }
 
     /// Serial twin of [`Neighbours::fill_pairs_parallel`]: one task appends every pair.
     pub(crate) fn fill_pairs_serial<F>(&mut self, n: usize, f: F) -> Result<()>
     where
-        F: FnOnce(&mut Vec<u32>),
+        F: FnOnce(&mut Vec<u32>, &Budget),
     {
         if self.scratch.is_empty() {
             self.scratch.push(Vec::new());
         }
         self.scratch[0].clear();
-        f(&mut self.scratch[0]);
-        self.assemble(n, 1)
+        let budget = Budget::new(self.limit);
+        f(&mut self.scratch[0], &budget);
+        self.assemble_within(n, 1, &budget)
+    }
+
+    /// [`Neighbours::assemble`], or the limit's error when the emitting passed it.
+    fn assemble_within(&mut self, n: usize, tasks: usize, budget: &Budget) -> Result<()> {
+        self.limited = budget.over();
+        if self.limited {
+            for b in &mut self.scratch[..tasks] {
+                b.clear();
+            }
+            self.clear();
+            return Err(too_many(self.limit, n));
+        }
+        self.assemble(n, tasks)
     }
 
     /// Counts and places the pairs of the first `tasks` buffers (two stable counting sorts,
@@ -171,7 +190,7 @@ mod tests {
             let per = pairs.len().div_ceil(tasks);
             let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
             pool.install(|| {
-                got.fill_pairs_parallel(n, tasks, |t, buf| {
+                got.fill_pairs_parallel(n, tasks, |t, buf, _| {
                     for &(i, j) in pairs.iter().skip(t * per).take(per) {
                         buf.extend([i, j]);
                     }
@@ -180,10 +199,10 @@ mod tests {
             .unwrap();
             assert_eq!(got, want, "{tasks} tasks");
         }
-        got.fill_pairs_serial(n, |buf| pairs.iter().for_each(|&(i, j)| buf.extend([i, j])))
+        got.fill_pairs_serial(n, |buf, _| pairs.iter().for_each(|&(i, j)| buf.extend([i, j])))
             .unwrap();
         assert_eq!(got, want);
-        got.fill_pairs_serial(5, |_| {}).unwrap();
+        got.fill_pairs_serial(5, |_, _| {}).unwrap();
         assert_eq!((got.len(), got.total()), (5, 0));
     }
 }

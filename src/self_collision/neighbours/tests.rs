@@ -61,3 +61,52 @@ fn parallel_fill_equals_serial_fill() {
     assert_eq!(a, b);
     assert_eq!(a.ids.capacity(), cap);
 }
+
+/// Every fill stops at the limit: the lists come back empty with the error, the writing
+/// stopped near the limit (the buffers hold at most the limit plus one particle's list a
+/// task), and the same fill under the limit succeeds.
+#[test]
+fn fills_stop_at_the_limit() {
+    let n = 4 * CHUNK;
+    // Each particle lists 10 others: 10 n entries in all.
+    let f = |i: usize, buf: &mut Vec<u32>| buf.extend((1..=10).map(|k| ((i + k) % n) as u32));
+    let pairs = |buf: &mut Vec<u32>, budget: &Budget| {
+        for i in 0..n as u32 {
+            let before = buf.len();
+            buf.extend((1..=5).map(|k| [i, i + k]).filter(|p| (p[1] as usize) < n).flatten());
+            if !budget.spend((buf.len() - before) / 2) {
+                return;
+            }
+        }
+    };
+    let mut nb = Neighbours::new();
+    nb.set_limit(10 * n);
+    nb.fill_parallel(n, f).unwrap();
+    nb.fill_serial(n, f).unwrap();
+    nb.fill_pairs_serial(n, pairs).unwrap();
+    assert!(!nb.limited() && nb.total() > 4 * n);
+    nb.set_limit(3 * n);
+    assert_eq!(nb.limit(), 3 * n);
+    let e = nb.fill_parallel(n, f).unwrap_err().to_string();
+    assert!(e.contains(&(3 * n).to_string()) && e.contains("3 a particle"), "{e}");
+    assert!(nb.limited() && nb.is_empty());
+    let written: usize = nb.scratch.iter().map(Vec::len).sum();
+    assert!(written <= 3 * n + 10 * rayon::current_num_threads(), "{written}");
+    assert!(nb.fill_serial(n, f).is_err() && nb.limited() && nb.is_empty());
+    assert!(nb.fill_pairs_serial(n, pairs).is_err() && nb.limited() && nb.is_empty());
+    let e = nb.fill_pairs_parallel(n, 8, |t, buf, b| {
+        if t == 0 {
+            pairs(buf, b)
+        }
+    });
+    assert!(e.is_err() && nb.limited());
+    nb.set_limit(usize::MAX);
+    assert_eq!(nb.limit(), u32::MAX as usize, "at most the ids' range");
+    nb.fill_pairs_parallel(n, 8, |t, buf, b| {
+        if t == 0 {
+            pairs(buf, b)
+        }
+    })
+    .unwrap();
+    assert!(!nb.limited() && nb.total() > 4 * n);
+}

@@ -40,7 +40,7 @@
 use crate::data::exec::Exec;
 use crate::data::lanes::{load, load_idx, load_idx_unchecked, load_unchecked, F32s, Vec3x8, LANES};
 use crate::self_collision::hash::SpatialHash;
-use crate::self_collision::neighbours::{search_radius, within, Neighbours};
+use crate::self_collision::neighbours::{search_radius, within, Budget, Neighbours};
 use crate::Result;
 use wide::u32x8;
 
@@ -89,10 +89,12 @@ impl SpatialHash {
             len: self.scan_len(),
         };
         let ts = self.table_size;
-        out.fill_pairs_parallel(self.n, ts.div_ceil(BUCKETS_PER_TASK), |t, buf| {
+        out.fill_pairs_parallel(self.n, ts.div_ceil(BUCKETS_PER_TASK), |t, buf, budget| {
             let end = ((t + 1) * BUCKETS_PER_TASK).min(ts);
             for b in t * BUCKETS_PER_TASK..end {
-                self.bucket_pairs::<true>(b, k, buf);
+                if !self.bucket_pairs::<true>(b, k, buf, budget) {
+                    return;
+                }
             }
         })
     }
@@ -121,9 +123,11 @@ impl SpatialHash {
             s2,
             len: self.scan_len(),
         };
-        out.fill_pairs_serial(self.n, |buf| {
+        out.fill_pairs_serial(self.n, |buf, budget| {
             for b in 0..self.table_size {
-                self.bucket_pairs::<SIMD>(b, k, buf);
+                if !self.bucket_pairs::<SIMD>(b, k, buf, budget) {
+                    return;
+                }
             }
         })
     }
@@ -158,18 +162,20 @@ impl SpatialHash {
         }
     }
 
-    /// Emits the kept pairs of the particles of bucket `b` (see the module docs).
+    /// Emits the kept pairs of the particles of bucket `b` (see the module docs), counting
+    /// each particle's on `budget`; `false` when the budget is spent (the query stops).
     #[inline]
-    fn bucket_pairs<const SIMD: bool>(&self, b: usize, k: Reach, buf: &mut Vec<u32>) {
+    fn bucket_pairs<const SIMD: bool>(&self, b: usize, k: Reach, buf: &mut Vec<u32>, budget: &Budget) -> bool {
         let (s, e) = (self.cell_start[b] as usize, self.cell_start[b + 1] as usize);
         if s == e {
-            return;
+            return true;
         }
         let home = self.cell_of_slot(s);
         let mut ranges = [(0usize, 0usize); 9];
         let mut nr = 0;
         let mut members = 0u32;
         for slot in s..e {
+            let before = buf.len();
             let is_member = if SIMD {
                 if (slot - s) % LANES == 0 {
                     members = self.member_lanes(slot, e, home, k.r);
@@ -180,6 +186,9 @@ impl SpatialHash {
             };
             if !is_member {
                 self.full_box::<SIMD>(slot, k, buf);
+                if !budget.spend((buf.len() - before) / 2) {
+                    return false;
+                }
                 continue;
             }
             if nr == 0 {
@@ -194,7 +203,11 @@ impl SpatialHash {
             for &(rs, re) in &ranges[usize::from(merged)..nr] {
                 self.pair_scan::<SIMD>(&q, k, rs, re, buf);
             }
+            if !budget.spend((buf.len() - before) / 2) {
+                return false;
+            }
         }
+        true
     }
 
     /// The slot ranges of the half shell of cell `home` (bucket `b`) other than its own
