@@ -103,6 +103,8 @@ pub const MAX_PAIRS_PER_PARTICLE: usize = 128;
 
 /// The error of a step whose pairs passed [`MAX_PAIRS_PER_PARTICLE`], for distance `d` and
 /// reach `q`.
+#[cold]
+#[inline(never)]
 fn too_many_pairs(d: f32, q: f32) -> WeftError {
     WeftError::param(
         "self_collision.distance",

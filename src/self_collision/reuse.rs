@@ -104,11 +104,11 @@ pub(crate) fn within_reach(cand: &Neighbours, x: [&[f32]; 3], q: f32, out: &mut 
     let q2 = q * q;
     let keep = |i: usize, buf: &mut Vec<u32>| {
         let (xi, yi, zi) = (x[0][i], x[1][i], x[2][i]);
-        buf.extend(
-            cand.of(i)
-                .iter()
-                .filter(|&&j| within(xi, yi, zi, x[0][j as usize], x[1][j as usize], x[2][j as usize], q2)),
-        )
+        for &j in cand.of(i) {
+            if within(xi, yi, zi, x[0][j as usize], x[1][j as usize], x[2][j as usize], q2) {
+                buf.push(j);
+            }
+        }
     };
     if exec.parallel() {
         out.fill_parallel(cand.len(), keep)

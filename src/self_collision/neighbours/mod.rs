@@ -31,7 +31,9 @@
 //! The entries a fill may write are bounded ([`Neighbours::set_limit`]): particles that have
 //! collapsed onto each other, or a reach far above their spacing, would otherwise list every
 //! pair (`n²` entries). A fill that passes the limit stops writing, empties the lists and
-//! returns an error; what it wrote beyond the limit is at most one particle's list a thread.
+//! returns an error. Its tasks count what they write in batches of `METER_BATCH` entries (the
+//! shared count is touched once a batch), so what it wrote beyond the limit is at most a batch
+//! and one particle's list a running task.
 
 use crate::data::lanes::{F32s, Vec3x8, LANES};
 use crate::{Result, WeftError};
@@ -85,6 +87,37 @@ impl Budget {
     #[inline]
     pub(crate) fn over(&self) -> bool {
         self.used.load(Ordering::Relaxed) > self.limit
+    }
+
+    /// A task's meter on this budget.
+    pub(crate) fn meter(&self) -> Meter<'_> {
+        Meter { budget: self, pending: 0 }
+    }
+}
+
+/// Entries a task counts before it adds them to the shared budget: the tasks touch the
+/// shared count once per this many entries, not once per particle.
+const METER_BATCH: usize = 1024;
+
+/// One task's count of the entries it wrote, added to its [`Budget`] in batches. The task
+/// must [`Meter::flush`] when it ends (so the budget's total is exact).
+pub(crate) struct Meter<'a> {
+    budget: &'a Budget,
+    pending: usize,
+}
+
+impl Meter<'_> {
+    /// Counts `k` more entries; `false` once the budget's total passes the limit.
+    #[inline]
+    pub(crate) fn add(&mut self, k: usize) -> bool {
+        self.pending += k;
+        self.pending < METER_BATCH || self.flush()
+    }
+
+    /// Adds the pending count to the budget; `false` once its total passes the limit.
+    pub(crate) fn flush(&mut self) -> bool {
+        let k = std::mem::take(&mut self.pending);
+        self.budget.spend(k)
     }
 }
 
@@ -236,15 +269,19 @@ impl Neighbours {
             .enumerate()
             .for_each(|(c, (counts, buf))| {
                 buf.clear();
+                if budget.over() {
+                    return;
+                }
+                let mut meter = budget.meter();
                 for (k, count) in counts.iter_mut().enumerate() {
-                    if budget.over() {
-                        return;
-                    }
                     let before = buf.len();
                     f(c * CHUNK + k, buf);
                     *count = (buf.len() - before) as u32;
-                    budget.spend(buf.len() - before);
+                    if !meter.add(buf.len() - before) {
+                        return;
+                    }
                 }
+                meter.flush();
             });
         self.limited = budget.over();
         if self.limited {
@@ -265,6 +302,7 @@ impl Neighbours {
     }
 
     /// Serial twin of [`Neighbours::fill_parallel`]: one loop, appending straight into `ids`.
+    #[inline]
     pub(crate) fn fill_serial<F>(&mut self, n: usize, mut f: F) -> Result<()>
     where
         F: FnMut(usize, &mut Vec<u32>),
@@ -300,7 +338,10 @@ fn prefix_sum(first: &mut [u32]) -> Result<usize> {
 /// Most entries of any lists: ids and offsets are `u32`.
 const MAX_ENTRIES: usize = u32::MAX as usize;
 
-/// The error of a fill past `limit` entries for `n` particles.
+/// The error of a fill past `limit` entries for `n` particles (cold and out of line: the fills'
+/// loops stay small enough to inline their callbacks).
+#[cold]
+#[inline(never)]
 pub(crate) fn too_many(limit: usize, n: usize) -> WeftError {
     WeftError::param(
         "max_dist",

@@ -63,8 +63,8 @@ fn parallel_fill_equals_serial_fill() {
 }
 
 /// Every fill stops at the limit: the lists come back empty with the error, the writing
-/// stopped near the limit (the buffers hold at most the limit plus one particle's list a
-/// task), and the same fill under the limit succeeds.
+/// stopped near the limit (the buffers hold at most the limit plus a batch and one particle's
+/// list a thread), and the same fill under the limit succeeds.
 #[test]
 fn fills_stop_at_the_limit() {
     let n = 4 * CHUNK;
@@ -91,7 +91,7 @@ fn fills_stop_at_the_limit() {
     assert!(e.contains(&(3 * n).to_string()) && e.contains("3 a particle"), "{e}");
     assert!(nb.limited() && nb.is_empty());
     let written: usize = nb.scratch.iter().map(Vec::len).sum();
-    assert!(written <= 3 * n + 10 * rayon::current_num_threads(), "{written}");
+    assert!(written <= 3 * n + (METER_BATCH + 10) * rayon::current_num_threads(), "{written}");
     assert!(nb.fill_serial(n, f).is_err() && nb.limited() && nb.is_empty());
     assert!(nb.fill_pairs_serial(n, pairs).is_err() && nb.limited() && nb.is_empty());
     let e = nb.fill_pairs_parallel(n, 8, |t, buf, b| {

@@ -40,7 +40,7 @@
 use crate::data::exec::Exec;
 use crate::data::lanes::{load, load_idx, load_idx_unchecked, load_unchecked, F32s, Vec3x8, LANES};
 use crate::self_collision::hash::SpatialHash;
-use crate::self_collision::neighbours::{search_radius, within, Budget, Neighbours};
+use crate::self_collision::neighbours::{search_radius, within, Meter, Neighbours};
 use crate::Result;
 use wide::u32x8;
 
@@ -91,11 +91,13 @@ impl SpatialHash {
         let ts = self.table_size;
         out.fill_pairs_parallel(self.n, ts.div_ceil(BUCKETS_PER_TASK), |t, buf, budget| {
             let end = ((t + 1) * BUCKETS_PER_TASK).min(ts);
+            let mut meter = budget.meter();
             for b in t * BUCKETS_PER_TASK..end {
-                if !self.bucket_pairs::<true>(b, k, buf, budget) {
+                if !self.bucket_pairs::<true>(b, k, buf, &mut meter) {
                     return;
                 }
             }
+            meter.flush();
         })
     }
 
@@ -124,11 +126,13 @@ impl SpatialHash {
             len: self.scan_len(),
         };
         out.fill_pairs_serial(self.n, |buf, budget| {
+            let mut meter = budget.meter();
             for b in 0..self.table_size {
-                if !self.bucket_pairs::<SIMD>(b, k, buf, budget) {
+                if !self.bucket_pairs::<SIMD>(b, k, buf, &mut meter) {
                     return;
                 }
             }
+            meter.flush();
         })
     }
 
@@ -163,9 +167,10 @@ impl SpatialHash {
     }
 
     /// Emits the kept pairs of the particles of bucket `b` (see the module docs), counting
-    /// each particle's on `budget`; `false` when the budget is spent (the query stops).
+    /// each particle's on the task's `meter`; `false` when the lists' limit is passed (the
+    /// query stops).
     #[inline]
-    fn bucket_pairs<const SIMD: bool>(&self, b: usize, k: Reach, buf: &mut Vec<u32>, budget: &Budget) -> bool {
+    fn bucket_pairs<const SIMD: bool>(&self, b: usize, k: Reach, buf: &mut Vec<u32>, meter: &mut Meter<'_>) -> bool {
         let (s, e) = (self.cell_start[b] as usize, self.cell_start[b + 1] as usize);
         if s == e {
             return true;
@@ -186,7 +191,7 @@ impl SpatialHash {
             };
             if !is_member {
                 self.full_box::<SIMD>(slot, k, buf);
-                if !budget.spend((buf.len() - before) / 2) {
+                if !meter.add((buf.len() - before) / 2) {
                     return false;
                 }
                 continue;
@@ -203,7 +208,7 @@ impl SpatialHash {
             for &(rs, re) in &ranges[usize::from(merged)..nr] {
                 self.pair_scan::<SIMD>(&q, k, rs, re, buf);
             }
-            if !budget.spend((buf.len() - before) / 2) {
+            if !meter.add((buf.len() - before) / 2) {
                 return false;
             }
         }
