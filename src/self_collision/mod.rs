@@ -13,8 +13,9 @@
 //!   start of the step, every pair closer than the query radius `q = d + 2 T`, `d` the
 //!   collision distance and `T` the relative travel the speed clamp allows a particle in one
 //!   step. **Rest neighbours** are dropped as the list is written: pairs of one cloth whose
-//!   rest distance is at most `q` (plus 0.1%, [`SelfCollision::rest_skip_factor`]), held apart by the cloth's own
-//!   constraints (in a flat cloth every pair the query finds is one). Each pair is listed
+//!   rest distance is at most `q` (plus 0.1%, [`SelfCollision::rest_skip_factor`]), held
+//!   apart by the cloth's own constraints (in a flat cloth every pair the query finds is
+//!   one). The lists hold at most [`MAX_PAIRS_PER_PARTICLE`] a particle. Each pair is listed
 //!   once, `(i, j)` with `i < j`, ordered by `i` then `j`, and read as a structure-of-arrays
 //!   pair list: the lists' ids are the `j`, and each entry's `i` is written out (`pairs`). Both broadphases give the same list (tested
 //!   equal to each other and to a brute force).
