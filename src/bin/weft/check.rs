@@ -77,11 +77,13 @@ pub fn describe(scene: &Scene, world: &weft::World) -> String {
     );
     if let Some(c) = world.self_collision() {
         s += &format!(
-            "  self-collision distance {} m, {} response, {} broadphase, friction {}\n",
+            "  self-collision distance {} m, {} response, {} broadphase, friction {}, travel {} (reach {} m)\n",
             world.self_collision_distance(),
             c.response.name(),
             c.broadphase.name(),
-            c.friction
+            c.friction,
+            c.travel,
+            c.query_factor() * world.self_collision_distance()
         );
     }
     s += &format!(
