@@ -307,6 +307,13 @@ fn run_stops_when_self_collision_has_too_many_pairs() {
         sheet(1.02)
     );
     let scene = write_scene(&dir, &text);
+    // `check` shows the reach the distance gives.
+    let c = weft().arg("check").arg(&scene).output().unwrap();
+    let shown = String::from_utf8_lossy(&c.stdout);
+    assert!(
+        shown.contains("self-collision distance 1 m") && shown.contains("travel 1 (reach 3 m)"),
+        "{shown}"
+    );
     let out = dir.join("out");
     let o = weft()
         .args(["run", "--quiet", "--no-pictures"])
