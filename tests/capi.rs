@@ -594,3 +594,28 @@ fn self_collision_advance_readback_and_snapshots() {
         assert_eq!(weft_world_destroy(other), WeftStatus::Ok);
     }
 }
+
+/// Two cloths with a distance that would pair every particle of one with every particle of
+/// the other: the step succeeds without self-collision and the count says so.
+#[test]
+fn self_collision_failed_steps_count_the_refused_lists() {
+    let sheet = |y: f32| {
+        format!("[[cloth]]\nrows = 30\ncols = 30\nspacing = 0.01\norigin = [0.0, {y}, 0.0]\nu = [1.0, 0.0, 0.0]\nv = [0.0, 0.0, 1.0]\n")
+    };
+    unsafe {
+        for (distance, failed) in [(0.01, 0u64), (1.0, 1)] {
+            let text = format!("[effects.self_collision]\ndistance = {distance}\n{}{}", sheet(1.0), sheet(1.02));
+            let mut w = std::ptr::null_mut();
+            assert_eq!(
+                weft_world_create_from_scene(text.as_ptr().cast(), text.len(), &mut w),
+                WeftStatus::Ok
+            );
+            assert_eq!(weft_world_step(w, 1.0 / 60.0), WeftStatus::Ok);
+            let mut n = u64::MAX;
+            assert_eq!(weft_world_self_collision_failed_steps(w, &mut n), WeftStatus::Ok);
+            assert_eq!(n, failed, "distance {distance}");
+            assert_eq!(weft_world_self_collision_failed_steps(w, null_mut()), WeftStatus::NullPointer);
+            assert_eq!(weft_world_destroy(w), WeftStatus::Ok);
+        }
+    }
+}

@@ -315,6 +315,14 @@ impl PyWorld {
         self.world.set_self_collision(config.map(|c| c.config.clone())).or_raise()
     }
 
+    /// Steps that ran without self-collision because their pair lists could not be built (more
+    /// than 128 pairs a particle: a cloth collapsed onto itself, or a distance far above the
+    /// spacing). 0 while self-collision holds.
+    #[getter]
+    fn self_collision_failed_steps(&self) -> u64 {
+        self.world.self_collision_stats().failed_steps
+    }
+
     /// Whether self-collision is on.
     #[getter]
     fn self_collision(&self) -> bool {

@@ -248,3 +248,15 @@ def test_wind_and_metrics():
     m = calm.metrics()
     assert set(m) == {"kinetic", "potential", "elastic", "total", "max_strain", "mean_strain"}
     assert m["kinetic"] > 0.0
+
+
+def test_self_collision_failed_steps_count_the_refused_lists():
+    # Two cloths and a distance that pairs every particle of one with every particle of the
+    # other: more than 128 pairs a particle, so the step runs without self-collision.
+    def sheet(y):
+        return f"[[cloth]]\nrows = 30\ncols = 30\nspacing = 0.01\norigin = [0.0, {y}, 0.0]\nu = [1.0, 0.0, 0.0]\nv = [0.0, 0.0, 1.0]\n"
+
+    for distance, failed in ((0.01, 0), (1.0, 1)):
+        w = weft.World.from_scene_text(f"[effects.self_collision]\ndistance = {distance}\n" + sheet(1.0) + sheet(1.02))
+        w.step()
+        assert w.self_collision_failed_steps == failed, distance

@@ -220,6 +220,22 @@ pub extern "C" fn weft_self_collision_default() -> WeftSelfCollision {
     }
 }
 
+/// Writes to `*out` the number of steps that ran without self-collision because their pair
+/// lists could not be built (more than `MAX_PAIRS_PER_PARTICLE`, 128, pairs a particle: a
+/// cloth collapsed onto itself or a distance far above the spacing). 0 while it holds;
+/// [`weft_last_error_message`] does not carry the reason, the step itself succeeded.
+///
+/// # Safety
+/// `out` must point at a writable `uint64_t`.
+#[no_mangle]
+pub unsafe extern "C" fn weft_world_self_collision_failed_steps(world: *mut WeftWorld, out: *mut u64) -> WeftStatus {
+    boundary(|| {
+        let w = world_mut(world)?;
+        // SAFETY: writable by the contract.
+        unsafe { put(out, w.self_collision_stats().failed_steps, "out") }
+    })
+}
+
 /// Turns self-collision on with the settings at `config`, or off if `config` is null.
 /// Invalid settings change nothing.
 ///
