@@ -232,9 +232,9 @@ enum WeftStatus weft_world_set_friction(struct WeftWorld *world, float mu);
 struct WeftSelfCollision weft_self_collision_default(void);
 
 // Writes to `*out` the number of steps that ran without self-collision because their pair
-// lists could not be built (more than `MAX_PAIRS_PER_PARTICLE`, 128, pairs a particle: a
-// cloth collapsed onto itself or a distance far above the spacing). 0 while it holds;
-// [`weft_last_error_message`] does not carry the reason, the step itself succeeded.
+// lists could not be built (more than `MAX_PAIRS_PER_PARTICLE`, 128, pairs a particle on
+// average: a cloth collapsed onto itself or a distance far above the spacing). 0 while it
+// holds; [`weft_last_error_message`] does not carry the reason, the step itself succeeded.
 //
 // # Safety
 // `out` must point at a writable `uint64_t`.

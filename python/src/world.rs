@@ -316,7 +316,7 @@ impl PyWorld {
     }
 
     /// Steps that ran without self-collision because their pair lists could not be built (more
-    /// than 128 pairs a particle: a cloth collapsed onto itself, or a distance far above the
+    /// than 128 pairs a particle on average: a cloth collapsed onto itself, or a distance far above the
     /// spacing). 0 while self-collision holds.
     #[getter]
     fn self_collision_failed_steps(&self) -> u64 {

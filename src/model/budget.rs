@@ -24,7 +24,7 @@
 //! and `log2 n`, of which 290 stay live).
 //!
 //! The self-collision row is a typical step's; the step's pair lists are capped at
-//! `self_collision::MAX_PAIRS_PER_PARTICLE` (128) a particle, about 11 kB a particle with
+//! `self_collision::MAX_PAIRS_PER_PARTICLE` (128) pairs a particle on average, about 11 kB a particle with
 //! every pair in contact, and a state that needs more (a cloth collapsed onto itself) is
 //! refused by the step instead of listed.
 //!

@@ -15,10 +15,11 @@
 //!   step. **Rest neighbours** are dropped as the list is written: pairs of one cloth whose
 //!   rest distance is at most `q` (plus 0.1%, [`SelfCollision::rest_skip_factor`]), held
 //!   apart by the cloth's own constraints (in a flat cloth every pair the query finds is
-//!   one). The lists hold at most [`MAX_PAIRS_PER_PARTICLE`] a particle. Each pair is listed
-//!   once, `(i, j)` with `i < j`, ordered by `i` then `j`, and read as a structure-of-arrays
-//!   pair list: the lists' ids are the `j`, and each entry's `i` is written out (`pairs`). Both broadphases give the same list (tested
-//!   equal to each other and to a brute force).
+//!   one). The lists hold at most [`MAX_PAIRS_PER_PARTICLE`] pairs a particle on average.
+//!   Each pair is listed once, `(i, j)` with `i < j`, ordered by `i` then `j`, and read as a
+//!   structure-of-arrays pair list: the lists' ids are the `j`, and each entry's `i` is
+//!   written out (`pairs`). Both broadphases give the same list (tested equal to each other
+//!   and to a brute force).
 //! * **After predict** (each substep): the speed clamp ([`crate::self_collision::response`])
 //!   limits a free particle's velocity relative to the mean velocity of the free particles to
 //!   `T / substeps` a substep, so two particles close in by at most `2T` in a step: any pair
@@ -94,9 +95,10 @@ pub use crate::model::self_collision::{
 };
 pub use crate::self_collision::config::{SelfCollisionPhases, SelfCollisionStats, PENETRATION_TOLERANCE};
 
-/// Most pairs a step's lists may hold per particle (the metric's lists, which hold each pair
-/// twice, twice as many). The densest scenes of the suite list about 20 a particle at the
-/// default travel, about 90 at the largest; a state that needs more has particles collapsed
+/// Most pairs a step's lists may hold, per particle: the cap is `MAX_PAIRS_PER_PARTICLE n`
+/// pairs in all, so one crowded region may hold more as long as the average stays below (the
+/// metric's lists, which hold each pair twice, twice as many). The densest scenes of the
+/// suite list about 20 a particle at the default travel, about 90 at the largest; a state that needs more has particles collapsed
 /// onto each other or a collision distance far above the spacing, and would otherwise list
 /// up to every pair (`n²`). Past it the step's broadphase stops and reports an error, the
 /// step runs without self-collision, and [`SelfCollisionStats::failed_steps`] counts it.
@@ -111,7 +113,7 @@ fn too_many_pairs(d: f32, q: f32) -> WeftError {
         "self_collision.distance",
         format!("{d} m"),
         format!(
-            "gives more than {MAX_PAIRS_PER_PARTICLE} pairs a particle within the step's reach {q} m \
+            "gives more than {MAX_PAIRS_PER_PARTICLE} pairs a particle on average within the step's reach {q} m \
              (particles collapsed onto each other, or a distance far above the cloth's spacing): \
              lower the distance or the travel"
         ),
