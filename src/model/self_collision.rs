@@ -8,11 +8,15 @@ pub const QUERY_FACTOR: f32 = 3.0;
 /// Hash cell side over the query radius (Müller's hash uses 1; wider cells were no faster).
 pub const CELL_FACTOR: f32 = 1.0;
 
+/// Rest-neighbour skip radius over the query radius: 0.1% more, so that lattice pairs lying
+/// exactly at the reach are skipped whatever the rounding.
+const REST_SKIP_MARGIN: f32 = 1.001;
+
 /// Rest-neighbour skip radius over the collision distance at the default travel: pairs of one
 /// cloth whose rest distance is at most this are never contacts (the query reach
-/// `QUERY_FACTOR`, plus 0.1% so that lattice pairs lying exactly at the reach are skipped
-/// whatever the rounding; [`SelfCollision::rest_skip_factor`] for another travel).
-pub const REST_SKIP_FACTOR: f32 = QUERY_FACTOR * 1.001;
+/// `QUERY_FACTOR` times `REST_SKIP_MARGIN`; [`SelfCollision::rest_skip_factor`] for another
+/// travel).
+pub const REST_SKIP_FACTOR: f32 = QUERY_FACTOR * REST_SKIP_MARGIN;
 
 /// VcCPBD box radius over the collision distance (`r / d`).
 pub const BOX_RADIUS: f32 = 1.0;
@@ -110,7 +114,7 @@ impl SelfCollision {
     /// Rest-neighbour skip radius over collision distance: the query factor plus 0.1% (see
     /// [`REST_SKIP_FACTOR`]).
     pub fn rest_skip_factor(&self) -> f32 {
-        self.query_factor() * 1.001
+        self.query_factor() * REST_SKIP_MARGIN
     }
 }
 

@@ -41,7 +41,9 @@ impl SelfCollisionData {
     /// Fills the metric lists (non-neighbours within the penetration limit) from the
     /// broadphase of the same positions `x` (built here if the step kept older candidates).
     fn probe_lists(&mut self, x: [&[f32]; 3], n: usize, parallel: bool) -> Result<()> {
-        let d = self.distance();
+        // Ready lists mean self-collision is active (the step built them from its settings).
+        let Some(a) = self.active() else { return Ok(()) };
+        let d = a.d;
         let lim = d * (1.0 - PENETRATION_TOLERANCE);
         let far2 = (1.5 * d) * (1.5 * d);
         let Some(mut st) = self.state.take().filter(|s| s.ready) else {
@@ -53,12 +55,7 @@ impl SelfCollisionData {
         let built = if st.fresh {
             Ok(())
         } else {
-            let q = self
-                .config
-                .as_ref()
-                .map_or(crate::self_collision::QUERY_FACTOR, |c| c.query_factor())
-                * d;
-            self.build_structure(&mut st, x, n, q, broadphase, Exec::new(true, parallel))
+            self.build_structure(&mut st, x, n, a.q, broadphase, Exec::new(true, parallel))
         };
         st.fresh = built.is_ok();
         let r = built.and_then(|_| match &st.tree {
