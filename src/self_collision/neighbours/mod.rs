@@ -99,8 +99,8 @@ impl Budget {
 /// shared count once per this many entries, not once per particle.
 const METER_BATCH: usize = 1024;
 
-/// One task's count of the entries it wrote, added to its [`Budget`] in batches. The task
-/// must [`Meter::flush`] when it ends (so the budget's total is exact).
+/// One task's count of the entries it wrote, added to its [`Budget`] in batches. The fills
+/// hand one to each task and flush it when the task ends (so the budget's total is exact).
 pub(crate) struct Meter<'a> {
     budget: &'a Budget,
     pending: usize,

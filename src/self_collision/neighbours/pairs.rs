@@ -23,19 +23,20 @@
 //! was no faster on two threads (a folded cloth's pairs crowd into a few ranges, and joining
 //! the ranges' lists costs what the parallel sorts save).
 
-use crate::self_collision::neighbours::{prefix_sum, too_many, Budget, Neighbours};
+use crate::self_collision::neighbours::{prefix_sum, too_many, Budget, Meter, Neighbours};
 use crate::Result;
 use rayon::prelude::*;
 
 impl Neighbours {
     /// Fills upper lists (each pair once, under its smaller id) for `n` particles from pairs:
-    /// `f(t, buf, budget)` for each task `t < tasks` (in parallel) appends pairs `i, j`
+    /// `f(t, buf, meter)` for each task `t < tasks` (in parallel) appends pairs `i, j`
     /// (`i < j < n`, flattened) to `buf`; a pair may be emitted more than once. The task
-    /// counts the pairs it appends on `budget` as it goes ([`Budget::spend`]) and stops
-    /// when told to: past the lists' limit the fill empties them and returns an error.
+    /// counts the pairs it appends on its `meter` as it goes ([`Meter::add`], flushed here when
+    /// it returns) and stops when told to: past the lists' limit the fill empties them and
+    /// returns an error.
     pub(crate) fn fill_pairs_parallel<F>(&mut self, n: usize, tasks: usize, f: F) -> Result<()>
     where
-        F: Fn(usize, &mut Vec<u32>, &Budget) + Sync,
+        F: Fn(usize, &mut Vec<u32>, &mut Meter<'_>) + Sync,
     {
         if self.scratch.len() < tasks {
             self.scratch.resize_with(tasks, Vec::new);
@@ -44,7 +45,9 @@ impl Neighbours {
         self.scratch[..tasks].par_iter_mut().enumerate().for_each(|(t, buf)| {
             buf.clear();
             if !budget.over() {
-                f(t, buf, &budget);
+                let mut meter = budget.meter();
+                f(t, buf, &mut meter);
+                meter.flush();
             }
         });
         self.assemble_within(n, tasks, &budget)
@@ -53,14 +56,16 @@ impl Neighbours {
     /// Serial twin of [`Neighbours::fill_pairs_parallel`]: one task appends every pair.
     pub(crate) fn fill_pairs_serial<F>(&mut self, n: usize, f: F) -> Result<()>
     where
-        F: FnOnce(&mut Vec<u32>, &Budget),
+        F: FnOnce(&mut Vec<u32>, &mut Meter<'_>),
     {
         if self.scratch.is_empty() {
             self.scratch.push(Vec::new());
         }
         self.scratch[0].clear();
         let budget = Budget::new(self.limit);
-        f(&mut self.scratch[0], &budget);
+        let mut meter = budget.meter();
+        f(&mut self.scratch[0], &mut meter);
+        meter.flush();
         self.assemble_within(n, 1, &budget)
     }
 

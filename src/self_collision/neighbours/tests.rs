@@ -70,11 +70,11 @@ fn fills_stop_at_the_limit() {
     let n = 4 * CHUNK;
     // Each particle lists 10 others: 10 n entries in all.
     let f = |i: usize, buf: &mut Vec<u32>| buf.extend((1..=10).map(|k| ((i + k) % n) as u32));
-    let pairs = |buf: &mut Vec<u32>, budget: &Budget| {
+    let pairs = |buf: &mut Vec<u32>, meter: &mut Meter<'_>| {
         for i in 0..n as u32 {
             let before = buf.len();
             buf.extend((1..=5).map(|k| [i, i + k]).filter(|p| (p[1] as usize) < n).flatten());
-            if !budget.spend((buf.len() - before) / 2) {
+            if !meter.add((buf.len() - before) / 2) {
                 return;
             }
         }

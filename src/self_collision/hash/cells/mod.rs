@@ -89,15 +89,13 @@ impl SpatialHash {
             len: self.scan_len(),
         };
         let ts = self.table_size;
-        out.fill_pairs_parallel(self.n, ts.div_ceil(BUCKETS_PER_TASK), |t, buf, budget| {
+        out.fill_pairs_parallel(self.n, ts.div_ceil(BUCKETS_PER_TASK), |t, buf, meter| {
             let end = ((t + 1) * BUCKETS_PER_TASK).min(ts);
-            let mut meter = budget.meter();
             for b in t * BUCKETS_PER_TASK..end {
-                if !self.bucket_pairs::<true>(b, k, buf, &mut meter) {
+                if !self.bucket_pairs::<true>(b, k, buf, meter) {
                     return;
                 }
             }
-            meter.flush();
         })
     }
 
@@ -125,14 +123,12 @@ impl SpatialHash {
             s2,
             len: self.scan_len(),
         };
-        out.fill_pairs_serial(self.n, |buf, budget| {
-            let mut meter = budget.meter();
+        out.fill_pairs_serial(self.n, |buf, meter| {
             for b in 0..self.table_size {
-                if !self.bucket_pairs::<SIMD>(b, k, buf, &mut meter) {
+                if !self.bucket_pairs::<SIMD>(b, k, buf, meter) {
                     return;
                 }
             }
-            meter.flush();
         })
     }
 
