@@ -226,6 +226,12 @@ pub fn shape_block_simd(shape: &Shape, g: &GenInput, b: usize, out: &mut [f32]) 
 }
 
 /// The sphere test of `shapes::ball_contact`, lane-wise: `(point, normal, hit)`.
+///
+/// The scalar test normalises one vector a particle: `p - c` in proximity (or `x - c` when
+/// `p = c`), else the entry point's `e - c`. The lanes choose that vector and its squared
+/// length first and then take one square root and one normalisation (the scalar's
+/// operations on the chosen values, so the same bits), instead of three normalisations of
+/// which two are thrown away: the divider bounds this kernel.
 #[inline(always)]
 fn sphere_lanes(center: [f32; 3], r: f32, x: Vec3x8, p: Vec3x8, th: F32s, reach: F32s) -> (Vec3x8, Vec3x8, F32s) {
     let zero = F32s::splat(0.0);
@@ -238,11 +244,7 @@ fn sphere_lanes(center: [f32; 3], r: f32, x: Vec3x8, p: Vec3x8, th: F32s, reach:
     let l2 = dp.length_sq();
     let rr = rv + reach;
     let prox = l2.simd_lt(rr * rr);
-    let l = l2.sqrt();
     let dx = x - c;
-    let lx = dx.length_sq().sqrt();
-    let n_x = Vec3x8::select(lx.simd_gt(zero), dx.div(lx), up);
-    let n_prox = Vec3x8::select(l.simd_gt(zero), dp.div(l), n_x);
     // crossing into the ball of radius r + th
     let d = p - x;
     let f = dx;
@@ -254,9 +256,11 @@ fn sphere_lanes(center: [f32; 3], r: f32, x: Vec3x8, p: Vec3x8, th: F32s, reach:
     let t = (-b - disc.sqrt()) / a;
     let cross = a.simd_gt(zero) & cc.simd_gt(zero) & b.simd_lt(zero) & disc.simd_ge(zero) & t.simd_ge(zero) & t.simd_le(one);
     let e = (x + d.scale(t)) - c;
-    let le = e.length_sq().sqrt();
-    let n_cross = Vec3x8::select(le.simd_gt(zero), e.div(le), up);
-    let n = Vec3x8::select(prox, n_prox, n_cross);
+    // the one vector each lane normalises; `p = c` exactly (l2 = 0) falls back to `x - c`
+    let at_centre = prox & !l2.simd_gt(zero);
+    let v = Vec3x8::select(prox, Vec3x8::select(at_centre, dx, dp), e);
+    let len = v.length_sq().sqrt();
+    let n = Vec3x8::select(len.simd_gt(zero), v.div(len), up);
     (c + n.scale(rv), n, prox | cross)
 }
 

@@ -442,3 +442,46 @@ fn sphere_pretest_rejects_far_blocks_only() {
     shape_block_simd(&sphere, &g, 0, &mut out);
     assert!(normals_set(&out), "the near block touches");
 }
+
+/// The sphere's SIMD contacts equal the scalar ones in every case the test tells apart, in one
+/// block: in proximity, predicted exactly at the centre (normal from the start, or `up` when
+/// the start is at the centre too), a path crossing the ball, a miss, and a pinned particle.
+#[test]
+fn sphere_lanes_equal_scalar_in_every_case() {
+    let c = [0.25f32, -0.5, 1.0];
+    let at = |d: [f32; 3]| [c[0] + d[0], c[1] + d[1], c[2] + d[2]];
+    // (start, prediction) per lane
+    let paths = [
+        (at([0.0, 1.3, 0.0]), at([0.01, 1.002, 0.0])), // proximity
+        (at([0.3, 0.4, 0.1]), c),                      // at the centre, normal from the start
+        (c, c),                                        // at the centre, start there too: up
+        (at([-1.5, 0.2, 0.0]), at([1.5, 0.25, 0.0])),  // crosses the ball
+        (at([0.0, 2.0, 0.0]), at([0.0, 1.9, 0.0])),    // a miss
+        (at([0.0, 1.2, 0.0]), at([0.0, -1.2, 0.0])),   // straight through the centre
+        (at([0.9, 0.0, 0.0]), at([0.99, 0.0, 0.0])),   // inside, near the surface
+        (at([0.0, 1.001, 0.0]), at([0.0, 1.0, 0.0])),  // pinned below
+    ];
+    let mut v: [Vec<f32>; 8] = std::array::from_fn(|_| vec![0.0; LANES]);
+    for (i, (x, p)) in paths.iter().enumerate() {
+        for k in 0..3 {
+            v[k][i] = x[k];
+            v[3 + k][i] = p[k];
+        }
+        v[6][i] = if i == 7 { 0.0 } else { 1.0 };
+        v[7][i] = 0.005;
+    }
+    let g = input(&v, LANES, [0.0; 3]);
+    let sphere = Shape::Sphere { center: c, radius: 1.0 };
+    let (mut a, mut s) = (vec![7.0; SLOT_BLOCK], vec![7.0; SLOT_BLOCK]);
+    shape_block_simd(&sphere, &g, 0, &mut a);
+    shape_block_scalar(&sphere, &g, 0, &mut s);
+    let bits = |o: &[f32]| o.iter().map(|f| f.to_bits()).collect::<Vec<_>>();
+    assert_eq!(bits(&a), bits(&s));
+    let normal = |l: usize| [3, 4, 5].map(|k| s[k * LANES + l]);
+    for l in [0, 1, 2, 3, 5, 6] {
+        assert_ne!(normal(l), [0.0; 3], "lane {l} touches");
+    }
+    assert_eq!(normal(2), [0.0, 1.0, 0.0], "start and prediction at the centre: up");
+    assert_eq!(normal(4), [0.0; 3], "the miss");
+    assert_eq!(normal(7), [0.0; 3], "pinned");
+}
