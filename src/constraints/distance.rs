@@ -278,6 +278,53 @@ impl DistanceSet {
         }
     }
 
+    /// Whether [`solve_wave`](Self::solve_wave) can run this set over `count` particles: every
+    /// constraint is in the structured colours of one grid cloth that starts at particle 0 and
+    /// holds all `count` particles.
+    pub fn wave_ready(&self, count: usize) -> bool {
+        let spec = |k: usize| match &self.passes[k] {
+            Pass::Grid(r) => self.colours[r.start].grid.as_ref().map(|g| (g.spec, g.seam)),
+            Pass::Planned(_) => None,
+        };
+        match self.passes.len() {
+            1 | 2 => {
+                let Some((first, false)) = spec(0) else { return false };
+                let seams_match = self.passes.len() == 1 || spec(1) == Some((first, true));
+                seams_match && first.first == 0 && (first.rows * first.cols) as usize == count
+            }
+            _ => false,
+        }
+    }
+
+    /// One sweep of [`solve_simd`](Self::solve_simd) as a wave over the grid that hands each
+    /// range of particles to `finish` as soon as the sweep is done with it, all `p`'s
+    /// particles once ([`grid_sweep::run_wave`]); the same bits as the sweep followed by
+    /// `finish` over all particles. Requires [`wave_ready`](Self::wave_ready).
+    pub fn solve_wave(
+        &mut self,
+        p: &crate::data::particles::RawParticles,
+        inv_h2: f32,
+        parallel: bool,
+        finish: &(dyn Fn(std::ops::Range<usize>) + Sync),
+    ) {
+        let wave = match self.take_reset() {
+            (true, true) => grid_sweep::run_wave::<true, true>,
+            (true, false) => grid_sweep::run_wave::<true, false>,
+            _ => grid_sweep::run_wave::<false, true>,
+        };
+        let sweep = Sweep {
+            p: p.p(),
+            w: p.w(),
+            inv_h2,
+        };
+        let split = self.passes.get(1).map_or(self.colours.len(), |q| match q {
+            Pass::Grid(r) => r.start,
+            Pass::Planned(k) => *k,
+        });
+        let (bands, seams) = self.colours.split_at_mut(split);
+        wave(bands, seams, &sweep, parallel, p.len(), finish);
+    }
+
     /// The scalar f32 twin of [`solve_simd`](Self::solve_simd): one constraint at a time,
     /// one thread, the same arithmetic (a grid colour's projection with one division).
     pub fn solve_scalar(&mut self, px: &mut [f32], py: &mut [f32], pz: &mut [f32], w: &[f32], inv_h2: f32) {

@@ -92,6 +92,110 @@ pub(crate) fn run_pass<const RESET: bool, const STORE: bool>(colours: &mut [Colo
     }
 }
 
+/// Most parts a wave is cut into (see [`run_wave`]).
+const MAX_PARTS: usize = 16;
+
+/// One sweep of a grid's band colours and seam colours as a wave that hands every particle to
+/// `finish` (ranges of whole blocks of eight, each particle once) as soon as the sweep is done
+/// with it, while the particle is still in cache; the grid must start at particle 0 and
+/// `len` (the padded particle count, a multiple of eight) must cover it. The particles
+/// beyond the grid are finished with the last band.
+///
+/// The bands are cut into parts of consecutive bands (at least two, at most [`MAX_PARTS`]
+/// parts, by the band count alone). A task runs its part band after band: the band's
+/// colours, then the seam above it, then finishes the rows that no later constraint of
+/// the sweep touches (all but the two rows on each side of a seam still to come). After
+/// the tasks, the seams between parts and the rows around them. A particle meets its
+/// constraints in the order of the two passes [`run_pass`] makes (its band's colours, then
+/// its seam's), so the bits are those of the two passes followed by `finish` over all
+/// particles.
+pub(crate) fn run_wave<const RESET: bool, const STORE: bool>(
+    bands: &mut [Colour],
+    seams: &mut [Colour],
+    s: &Sweep<'_>,
+    parallel: bool,
+    len: usize,
+    finish: &(dyn Fn(std::ops::Range<usize>) + Sync),
+) {
+    assert!(bands.len() <= MAX_COLOURS && seams.len() <= MAX_COLOURS);
+    let Some(spec) = bands.first().and_then(|c| c.grid.as_ref()).map(|g| g.spec) else {
+        finish(0..len);
+        return;
+    };
+    let same = |c: &Colour| c.grid.as_ref().is_some_and(|g| g.spec == spec);
+    assert!(spec.first == 0 && bands.iter().chain(seams.iter()).all(same));
+    assert!(len.is_multiple_of(LANES) && (spec.rows * spec.cols) as usize <= len);
+    let (mut band_l, mut seam_l) = ([Multipliers::EMPTY; MAX_COLOURS], [Multipliers::EMPTY; MAX_COLOURS]);
+    for (m, c) in band_l
+        .iter_mut()
+        .zip(bands.iter_mut())
+        .chain(seam_l.iter_mut().zip(seams.iter_mut()))
+    {
+        *m = Multipliers::new(&mut c.lambda);
+    }
+    let (bands, seams): (&[Colour], &[Colour]) = (bands, seams);
+    // SAFETY (the three closures below): as in `run_pass`, a group's rows touch only the
+    // particles of that group; a task owns its part's bands, the seams inside its part and
+    // the finished ranges of its part, which the seams between parts do not reach (they
+    // touch two rows on each side of a boundary); those seams and the rows around them run
+    // after all tasks, one boundary a task.
+    let group = |colours: &[Colour], lambdas: &[Multipliers], q: usize| {
+        for (c, lambda) in colours.iter().zip(lambdas) {
+            let Some(g) = &c.grid else { continue };
+            for i in g.group(q) {
+                unsafe { row::<RESET, STORE>(g, i, lambda, s) };
+            }
+        }
+    };
+    let (cols, b) = (spec.cols as usize, super::grid::band_rows(spec.cols) as usize);
+    let nb = (spec.rows as usize).div_ceil(b);
+    let down = |i: usize| i - i % LANES;
+    let up = |i: usize| down(i + LANES - 1).min(len);
+    let work: usize = bands.iter().chain(seams.iter()).map(|c| c.real).sum();
+    let per_part = if parallel && work > SERIAL_MAX {
+        nb.div_ceil(MAX_PARTS).max(2)
+    } else {
+        nb
+    };
+    let parts = nb.div_ceil(per_part);
+    // where part `k`'s own finished range starts
+    let start = |k: usize| if k == 0 { 0 } else { up((k * per_part * b + 2) * cols) };
+    let run_part = |k: usize| -> usize {
+        let (q0, q1) = (k * per_part, ((k + 1) * per_part).min(nb));
+        let mut done = start(k);
+        for q in q0..q1 {
+            group(bands, &band_l, q);
+            if q > q0 {
+                group(seams, &seam_l, q - 1);
+            }
+            let end = if q + 1 == nb { len } else { down(((q + 1) * b - 2) * cols) };
+            if end > done {
+                finish(done..end);
+                done = end;
+            }
+        }
+        done
+    };
+    let fix = |k: usize, from: usize| {
+        group(seams, &seam_l, k * per_part - 1);
+        let to = start(k);
+        if to > from {
+            finish(from..to);
+        }
+    };
+    if parts == 1 {
+        run_part(0);
+        return;
+    }
+    let ends: [std::sync::atomic::AtomicUsize; MAX_PARTS] = Default::default();
+    (0..parts)
+        .into_par_iter()
+        .for_each(|k| ends[k].store(run_part(k), std::sync::atomic::Ordering::Relaxed));
+    (1..parts)
+        .into_par_iter()
+        .for_each(|k| fix(k, ends[k - 1].load(std::sync::atomic::Ordering::Relaxed)));
+}
+
 /// Solves the row at position `at` of a grid colour: whole blocks in SIMD, the rest one at a
 /// time.
 ///

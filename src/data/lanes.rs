@@ -455,6 +455,15 @@ impl SharedVec3 {
         }
     }
 
+    /// A view of three arrays given by their pointers.
+    ///
+    /// # Safety
+    /// Each pointer is valid for reads and writes of `len` elements for as long as the view
+    /// is used, and the arrays are accessed only as the type docs allow meanwhile.
+    pub unsafe fn from_raw(x: *mut f32, y: *mut f32, z: *mut f32, len: usize) -> Self {
+        Self { x, y, z, len }
+    }
+
     /// Number of elements in each array.
     pub fn len(&self) -> usize {
         self.len

@@ -13,7 +13,7 @@
 //! inside the first predict, [`chunk_finite_simd`] checks the end state chunk by chunk inside
 //! the last update, while the chunk is still in cache).
 
-use crate::data::lanes::round_up;
+use crate::data::lanes::{round_up, SharedVec3};
 
 /// Particle arrays (SoA), padded to the lane width.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -244,6 +244,93 @@ impl Particles {
             vy: &mut self.vy,
             vz: &mut self.vz,
             w: &self.w,
+        }
+    }
+}
+
+/// The particle arrays as raw pointers, for a pass whose tasks sweep constraints through a
+/// [`SharedVec3`] view of the predictions and finish ranges of particles whose constraints
+/// are done ([`chunk`](Self::chunk)) while other tasks still sweep elsewhere.
+#[derive(Clone, Copy, Debug)]
+pub struct RawParticles {
+    /// `x, y, z, px, py, pz, vx, vy, vz`.
+    arrays: [*mut f32; 9],
+    w: *const f32,
+    len: usize,
+}
+
+// SAFETY: pointers and a length; the methods that hand out access are `unsafe`, and their
+// callers guarantee that tasks touch disjoint particles.
+unsafe impl Send for RawParticles {}
+// SAFETY: as above.
+unsafe impl Sync for RawParticles {}
+
+impl RawParticles {
+    /// Captures the arrays of `p` (padded length). `p` must outlive every use of the view and
+    /// not be touched otherwise meanwhile.
+    pub fn new(p: &mut Particles) -> Self {
+        let len = p.padded_len();
+        let arrays = [
+            &mut p.x, &mut p.y, &mut p.z, &mut p.px, &mut p.py, &mut p.pz, &mut p.vx, &mut p.vy, &mut p.vz,
+        ]
+        .map(|a| {
+            assert_eq!(a.len(), len);
+            a.as_mut_ptr()
+        });
+        assert_eq!(p.w.len(), len);
+        RawParticles {
+            arrays,
+            w: p.w.as_ptr(),
+            len,
+        }
+    }
+
+    /// Padded number of particles.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Whether there are no particles.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// The predictions, for the constraint sweep.
+    pub fn p(&self) -> SharedVec3 {
+        // SAFETY: the three arrays are valid for `len` elements while the particles live
+        // (`new`'s contract); the sweep's callers keep to `SharedVec3`'s rules.
+        unsafe { SharedVec3::from_raw(self.arrays[3], self.arrays[4], self.arrays[5], self.len) }
+    }
+
+    /// The inverse masses.
+    pub fn w<'a>(&self) -> &'a [f32] {
+        // SAFETY: the inverse masses are only read while the view is used (`new`'s contract).
+        unsafe { std::slice::from_raw_parts(self.w, self.len) }
+    }
+
+    /// Particles `range` as a chunk.
+    ///
+    /// # Safety
+    /// `range` is in bounds, and no other task reads or writes these particles (through
+    /// another chunk or the sweep's view) while the chunk lives.
+    pub unsafe fn chunk<'a>(&self, range: std::ops::Range<usize>) -> ParticleChunk<'a> {
+        assert!(range.start <= range.end && range.end <= self.len);
+        let n = range.end - range.start;
+        // SAFETY: in bounds (checked above) and exclusive by the caller's guarantee.
+        let a = |k: usize| unsafe { std::slice::from_raw_parts_mut(self.arrays[k].add(range.start), n) };
+        ParticleChunk {
+            start: range.start,
+            x: a(0),
+            y: a(1),
+            z: a(2),
+            px: a(3),
+            py: a(4),
+            pz: a(5),
+            vx: a(6),
+            vy: a(7),
+            vz: a(8),
+            // SAFETY: in bounds; only read.
+            w: unsafe { std::slice::from_raw_parts(self.w.add(range.start), n) },
         }
     }
 }

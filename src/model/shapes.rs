@@ -31,7 +31,7 @@ pub const MIN_MARGIN: f32 = 3e-3;
 const UNIT_TOL: f32 = 1e-3;
 
 /// An analytic obstacle shape.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Shape {
     /// The solid half-space `n.(q - point) <= 0`; `normal` is unit and points out of the solid.
     Plane {

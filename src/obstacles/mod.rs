@@ -20,6 +20,10 @@
 //!    relative to the obstacle's velocity, the normal impulse measured by the approach speed
 //!    of the predicted velocity (`obstacle_kernels.rs`).
 //!
+//! When every obstacle is an analytic shape, stages 2 to 4 run chunk by chunk inside the
+//! step's predict and update passes ([`chunkwise`]): the same bits, one pass over the
+//! particles fewer for each.
+//!
 //! Mesh obstacles use one of three broadphases ([`BroadphaseKind`]), all giving the same
 //! contacts, and optionally the paper's face memory ([`face_memory`](crate::obstacles::mesh::face_memory)): a
 //! particle over the face it touched last tests only that face. Each particle keeps the
@@ -34,6 +38,7 @@
 //! memories and may differ slightly. `World::restore` empties them too (and the face caches),
 //! so restoring in place and resuming from a file step alike.
 
+pub(crate) mod chunkwise;
 pub mod kernels;
 pub mod mesh;
 pub mod obstacle;
@@ -164,6 +169,13 @@ impl ObstacleSet {
         }
     }
 
+    /// Whether every obstacle is an analytic shape and there are at most
+    /// [`chunkwise::MAX_OBSTACLES`]: the step then runs the obstacle stages chunk by chunk
+    /// inside its element-wise passes ([`chunkwise`]).
+    pub(crate) fn runs_chunkwise(&self) -> bool {
+        self.list.len() <= chunkwise::MAX_OBSTACLES && self.list.iter().all(|o| matches!(o.geometry, Geometry::Shape(_)))
+    }
+
     /// Sizes the per-particle arrays (thickness per cloth, contact slots, face memory).
     pub(crate) fn prepare(
         &mut self,
@@ -218,26 +230,7 @@ impl ObstacleSet {
                 Geometry::Shape(s) => {
                     let shape = s.translated(displacement(u, t));
                     for_blocks(slots, &mut [], &mut [], parallel, 0, |b, out, was, _, _, _| {
-                        let may = if simd {
-                            k::shape_may_touch_simd(&shape, &g, b)
-                        } else {
-                            k::shape_may_touch_scalar(&shape, &g, b)
-                        };
-                        if !may {
-                            // exactly the empty block the full test writes
-                            if was {
-                                out.fill(0.0);
-                            }
-                            return false;
-                        }
-                        if simd {
-                            k::shape_block_simd(&shape, &g, b, out);
-                            k::fill_approach_simd(out, b, vel, u);
-                        } else {
-                            k::shape_block_scalar(&shape, &g, b, out);
-                            k::fill_approach(out, b, vel, u);
-                        }
-                        k::block_nonzero(out)
+                        shape_block(&shape, &g, b, out, was, vel, u, simd)
                     });
                 }
                 Geometry::Mesh(m) => {
@@ -324,6 +317,42 @@ impl ObstacleSet {
             k::velocity_pass(&self.slots, motion, &self.th, c.start, x, v)
         }
     }
+}
+
+/// The contacts of block `b` (its slots `out`, its flag `was`) with a placed shape, and their
+/// approach speeds from the velocities `vel` (indexed as `g`'s arrays); returns the block's
+/// new flag. A block the pre-test finds far gets exactly the empty block the full test writes.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+pub(crate) fn shape_block(
+    shape: &crate::model::shapes::Shape,
+    g: &GenInput,
+    b: usize,
+    out: &mut [f32],
+    was: bool,
+    vel: [&[f32]; 3],
+    u: [f32; 3],
+    simd: bool,
+) -> bool {
+    let may = if simd {
+        k::shape_may_touch_simd(shape, g, b)
+    } else {
+        k::shape_may_touch_scalar(shape, g, b)
+    };
+    if !may {
+        if was {
+            out.fill(0.0);
+        }
+        return false;
+    }
+    if simd {
+        k::shape_block_simd(shape, g, b, out);
+        k::fill_approach_simd(out, b, vel, u);
+    } else {
+        k::shape_block_scalar(shape, g, b, out);
+        k::fill_approach(out, b, vel, u);
+    }
+    k::block_nonzero(out)
 }
 
 /// Runs `f(block, slots of the block, its touched flag, face memory of the block, face cache

@@ -30,7 +30,7 @@ impl World {
             .iter()
             .map(|o| ObstacleDesc {
                 shape: match o.geometry() {
-                    Geometry::Shape(s) => Some(s.clone()),
+                    Geometry::Shape(s) => Some(*s),
                     Geometry::Mesh(_) => None,
                 },
                 velocity: o.velocity(),

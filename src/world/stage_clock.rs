@@ -113,11 +113,12 @@ mod tests {
         let c = w.stage_clock();
         assert_eq!(c.steps(), 3);
         assert!(c.total() <= wall && c.total() > wall / 2, "{:?} of {wall:?}", c.total());
+        // a shape's contacts run inside predict, its projection and velocity pass inside
+        // the update pass (`obstacles::chunkwise`)
         for s in [
-            "predict",
-            "obstacle contacts",
+            "predict, obstacle contacts",
             "distance constraints",
-            "obstacle projection",
+            "tethers",
             "update, obstacle velocity, next predict",
         ] {
             assert!(c.stages().iter().any(|(n, _)| *n == s), "{s} missing from {:?}", c.stages());

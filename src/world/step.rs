@@ -18,6 +18,10 @@
 //!     obstacle velocity pass: normal part, friction     [obstacles]        (if any)
 //!       (both chunk by chunk in one pass; the last substep's pass also checks that the
 //!        chunk's x, v are finite, for the guard)
+//!   Fused forms, the same bits: obstacles that are all shapes run their contacts after each
+//!   chunk's predict, their last projection before its update and their velocity pass after
+//!   it (`obstacles::chunkwise`); a world that is one grid cloth swept once a substep runs
+//!   the sweep and the update pass as one wave (`DistanceSet::solve_wave`).
 //!   (solver.method = symplectic-euler | leapfrog | implicit-euler: the force-based step of
 //!    integrate::mass_spring / integrate::implicit replaces the substep loop above; its drift
 //!    feeds the obstacle and self-collision stages as the prediction p, world::contacts)
@@ -33,10 +37,12 @@
 
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use crate::data::particles::chunk_finite_simd;
+use crate::data::particles::{chunk_finite_simd, ParticleChunk, RawParticles};
 use crate::error::{positive, Result, WeftError};
 use crate::integrate::{predict, update, PredictParams};
 use crate::model::params::Method;
+use crate::obstacles::chunkwise::ChunkObstacles;
+use crate::obstacles::ObstacleSet;
 use crate::self_collision::response::MeanParts;
 use crate::world::World;
 
@@ -206,6 +212,23 @@ impl World {
         }
         let mean_parts = fused_mean.then_some(&parts);
         let mean_sink = mean_parts.map(|m| (m, &mean_ns));
+        // All-shape obstacles run chunk by chunk inside the element-wise passes
+        // (`obstacles::chunkwise`): the contacts after each chunk's predict, the velocity pass
+        // after its update, and the last iteration's projection before its update when nothing
+        // runs between the two (no scalp, no self-collision).
+        let chunk_obstacles = has_obstacles && self.fuse_predict && !check && self.obstacles.runs_chunkwise();
+        let fuse_project = chunk_obstacles && self.scalps.is_empty() && sc.is_none();
+        // One grid cloth swept once a substep with nothing else in the iteration: the sweep
+        // hands each band of rows to the update pass as soon as it is done with it
+        // (`DistanceSet::solve_wave`), so a substep reads the particles from memory once.
+        let wave = simd
+            && self.fuse_predict
+            && !check
+            && self.params.iterations == 1
+            && self.tethers.is_empty()
+            && (fuse_project || (!has_obstacles && self.scalps.is_empty() && sc.is_none()))
+            && self.distance.wave_ready(n);
+        let obstacle_ns = AtomicU64::new(0);
         let mut predicted_ahead = false;
         for s in 0..n_sub {
             let t = self.time + (s as f64) * (h as f64);
@@ -223,6 +246,17 @@ impl World {
                     drag: self.effects.drag,
                     force,
                 };
+                let t_end = self.time + ((s + 1) as f64) * (h as f64);
+                let co = if chunk_obstacles && !predicted_ahead {
+                    self.obstacles.chunkwise(t_end, h, n)
+                } else {
+                    None
+                };
+                let contacts = |c: &mut ParticleChunk<'_>| {
+                    if let Some(co) = &co {
+                        timed(&obstacle_ns, || co.contacts(c, simd));
+                    }
+                };
                 if predicted_ahead {
                     // done by the previous substep's update pass
                 } else if fused_guard && s == 0 {
@@ -232,11 +266,13 @@ impl World {
                         }
                         predict(c.reborrow(), &pp, simd);
                         add_mean(mean_sink, &c, n, simd);
+                        contacts(&mut c);
                     });
                 } else {
                     self.particles.for_chunks(parallel, |mut c| {
                         predict(c.reborrow(), &pp, simd);
                         add_mean(mean_sink, &c, n, simd);
+                        contacts(&mut c);
                     });
                 }
             }
@@ -244,8 +280,9 @@ impl World {
                 let p = &self.particles;
                 checkpoint!("predict", p.px, p.py, p.pz, p.vx, p.vy, p.vz);
             }
-            self.clock.lap("predict");
-            if has_obstacles {
+            self.clock
+                .lap(if chunk_obstacles { "predict, obstacle contacts" } else { "predict" });
+            if has_obstacles && !chunk_obstacles {
                 self.obstacle_contacts_stage(s, h, exec);
                 let p = &self.particles;
                 checkpoint!("obstacles", p.px, p.py, p.pz);
@@ -267,18 +304,20 @@ impl World {
             } else {
                 self.distance.reset_lambda();
             }
-            for _ in 0..self.params.iterations {
-                self.distance_stage(inv_h2, exec);
-                let p = &self.particles;
-                checkpoint!("constraints", p.px, p.py, p.pz);
-                self.clock.lap("distance constraints");
+            for it in 0..self.params.iterations {
+                if !wave {
+                    self.distance_stage(inv_h2, exec);
+                    let p = &self.particles;
+                    checkpoint!("constraints", p.px, p.py, p.pz);
+                    self.clock.lap("distance constraints");
+                }
                 if !self.tethers.is_empty() {
                     self.tether_stage(exec);
                     let p = &self.particles;
                     checkpoint!("tethers", p.px, p.py, p.pz);
                     self.clock.lap("tethers");
                 }
-                if has_obstacles {
+                if has_obstacles && !(fuse_project && it + 1 == self.params.iterations) {
                     self.obstacle_projection_stage(exec);
                     let p = &self.particles;
                     checkpoint!("obstacles", p.px, p.py, p.pz);
@@ -311,38 +350,62 @@ impl World {
                     drag: self.effects.drag,
                     force: None,
                 };
-                let (obstacles, finite) = (&self.obstacles, &all_finite);
-                let velocity_ns = std::sync::atomic::AtomicU64::new(0);
-                let particles = &mut self.particles;
-                obstacles.with_motion(|motion| {
-                    particles.for_chunks(parallel, |mut c| {
+                let finite = &all_finite;
+                // the next substep's contacts (the shapes placed at its end) when it is
+                // predicted here
+                let t_next = self.time + ((s + 2) as f64) * (h as f64);
+                let stages = if chunk_obstacles {
+                    self.obstacles.chunkwise(t_next, h, n).map_or(Obstacles::None, Obstacles::Chunkwise)
+                } else if has_obstacles {
+                    Obstacles::Whole(&self.obstacles)
+                } else {
+                    Obstacles::None
+                };
+                let (particles, distance) = (&mut self.particles, &mut self.distance);
+                let mut run = |motion: &[([f32; 3], f32)]| {
+                    let body = |mut c: ParticleChunk<'_>| {
+                        if let (Obstacles::Chunkwise(co), true) = (&stages, fuse_project) {
+                            timed(&obstacle_ns, || co.project(&mut c, simd));
+                        }
                         update(c.reborrow(), h, damp, simd);
-                        if has_obstacles {
-                            let t0 = std::time::Instant::now();
-                            obstacles.velocity_pass_chunk(motion, &mut c, simd);
-                            let ns = t0.elapsed().as_nanos() as u64;
-                            velocity_ns.fetch_add(ns, std::sync::atomic::Ordering::Relaxed);
+                        match &stages {
+                            Obstacles::Chunkwise(co) => timed(&obstacle_ns, || co.velocity(&mut c, simd)),
+                            Obstacles::Whole(o) => timed(&obstacle_ns, || o.velocity_pass_chunk(motion, &mut c, simd)),
+                            Obstacles::None => {}
                         }
                         if last {
                             let real = n.saturating_sub(c.start).min(c.x.len());
                             if !chunk_finite_simd(&c.state(), real) {
-                                finite.store(false, std::sync::atomic::Ordering::Relaxed);
+                                finite.store(false, Ordering::Relaxed);
                             }
                         }
                         if ahead {
                             predict(c.reborrow(), &pp_next, simd);
                             add_mean(mean_sink, &c, n, simd);
+                            if let Obstacles::Chunkwise(co) = &stages {
+                                timed(&obstacle_ns, || co.contacts(&mut c, simd));
+                            }
                         }
-                    })
-                });
-                predicted_ahead = ahead;
-                if has_obstacles {
-                    // the velocity part's time summed over chunks, shared by the threads
-                    let threads = if parallel { rayon::current_num_threads() as u64 } else { 1 };
-                    let ns = velocity_ns.into_inner() / threads.max(1);
-                    self.obstacles.add_duration(std::time::Duration::from_nanos(ns));
+                    };
+                    if wave {
+                        let raw = RawParticles::new(particles);
+                        // SAFETY: the wave hands each range to one call, once the sweep is
+                        // done with its particles and while no other task touches them.
+                        distance.solve_wave(&raw, inv_h2, parallel, &|r| body(unsafe { raw.chunk(r) }));
+                    } else {
+                        particles.for_chunks(parallel, body);
+                    }
+                };
+                match &stages {
+                    Obstacles::Whole(o) => o.with_motion(run),
+                    _ => run(&[]),
                 }
-                self.clock.lap("update, obstacle velocity, next predict");
+                predicted_ahead = ahead;
+                self.clock.lap(if wave {
+                    "distance constraints, update, obstacles, next predict (one wave)"
+                } else {
+                    "update, obstacle velocity, next predict"
+                });
                 continue;
             }
             self.particles.for_chunks(parallel, |c| update(c, h, damp, simd));
@@ -355,6 +418,13 @@ impl World {
                 checkpoint!("obstacles", p.vx, p.vy, p.vz);
                 self.clock.lap("obstacle velocity");
             }
+        }
+        if has_obstacles {
+            // the obstacle stages run inside the chunk passes: their time summed over the
+            // chunks, shared by the threads
+            let threads = if parallel { rayon::current_num_threads() as u64 } else { 1 };
+            let ns = obstacle_ns.into_inner() / threads.max(1);
+            self.obstacles.add_duration(std::time::Duration::from_nanos(ns));
         }
         if fused_mean {
             self.selfcol.mean_parts = parts;
@@ -371,6 +441,25 @@ impl World {
             Ran::NonFinite
         }
     }
+}
+
+/// How the update pass runs the obstacle stages of its chunks. It lives on the stack for one
+/// pass; boxing the large variant would allocate every substep.
+#[allow(clippy::large_enum_variant)]
+enum Obstacles<'a> {
+    /// No obstacle.
+    None,
+    /// All shapes: the projection, the velocity pass and the next contacts, chunk by chunk.
+    Chunkwise(ChunkObstacles<'a>),
+    /// The velocity pass only (the other stages run in passes of their own).
+    Whole(&'a ObstacleSet),
+}
+
+/// Runs `f` and adds the nanoseconds it took to `ns`.
+fn timed(ns: &AtomicU64, f: impl FnOnce()) {
+    let t0 = std::time::Instant::now();
+    f();
+    ns.fetch_add(t0.elapsed().as_nanos() as u64, Ordering::Relaxed);
 }
 
 /// Adds a chunk's predicted velocities to the mean-velocity sums, when they are kept, and

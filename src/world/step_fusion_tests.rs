@@ -1,5 +1,5 @@
-//! The update pass that also runs the next substep's predict gives the same bits as the two
-//! separate passes.
+//! The update pass that also runs the next substep's predict, and the obstacle stages run
+//! chunk by chunk inside the predict and update passes, give the same bits as separate passes.
 
 use crate::model::params::Backend;
 use crate::model::shapes::Shape;
@@ -9,6 +9,12 @@ use crate::{ClothDesc, Effects, Fabric, SolverParams, World};
 /// A 90 x 90 damped cloth (8100 particles: two chunks) falling onto a sphere, with gravity and
 /// drag, 4 substeps.
 fn world(threads: usize, backend: Backend, fuse: bool) -> World {
+    world_with(threads, backend, fuse, 1, false)
+}
+
+/// [`world`] with `iterations` and, with `more`, wind (so each substep predicts in a pass of
+/// its own) and a rising plane with friction beside the ball.
+fn world_with(threads: usize, backend: Backend, fuse: bool, iterations: u32, more: bool) -> World {
     let desc = ClothDesc {
         rows: 90,
         cols: 90,
@@ -26,11 +32,16 @@ fn world(threads: usize, backend: Backend, fuse: bool) -> World {
     let params = SolverParams {
         threads,
         substeps: 4,
+        iterations,
         backend,
         ..Default::default()
     };
     let effects = Effects {
         drag: Some(0.01),
+        wind: more.then(|| crate::model::effects::Wind {
+            velocity: [1.0, 0.0, 0.5],
+            ..Default::default()
+        }),
         ..Effects::gravity()
     };
     let mut w = World::new(params, effects).unwrap();
@@ -40,8 +51,34 @@ fn world(threads: usize, backend: Backend, fuse: bool) -> World {
         radius: 0.2,
     };
     w.add_obstacle(Obstacle::shape(ball).unwrap()).unwrap();
+    if more {
+        let floor = Shape::plane([0.0, 0.1, 0.0], [0.0, 1.0, 0.0]).unwrap();
+        let floor = Obstacle::shape(floor).unwrap().with_velocity([0.1, 0.3, 0.0]).unwrap();
+        w.add_obstacle(floor.with_friction(0.4).unwrap()).unwrap();
+    }
     w.fuse_predict = fuse;
     w
+}
+
+#[test]
+fn chunkwise_obstacle_stages_equal_separate_passes_bitwise() {
+    for (threads, backend) in [(1, Backend::Simd), (2, Backend::Simd), (1, Backend::Scalar)] {
+        for (iterations, more) in [(1, true), (2, false), (3, true)] {
+            let mut fused = world_with(threads, backend, true, iterations, more);
+            let mut split = world_with(threads, backend, false, iterations, more);
+            assert!(fused.obstacles.runs_chunkwise());
+            for step in 0..12 {
+                fused.step(1.0 / 60.0).unwrap();
+                split.step(1.0 / 60.0).unwrap();
+                assert_eq!(
+                    fused.state_bits(),
+                    split.state_bits(),
+                    "{threads} thread(s), {backend:?}, {iterations} iterations, more {more}, step {step}"
+                );
+            }
+            assert!(fused.obstacle_contacts() > 100, "the sheet reached the obstacles");
+        }
+    }
 }
 
 #[test]
@@ -104,4 +141,47 @@ fn self_collision_mean_summed_in_predict_equals_separate_pass_bitwise() {
             "no self-collision work"
         );
     }
+}
+
+/// A hanging cloth of 2050 columns: bands of seven rows, whose ends fall inside blocks of
+/// eight particles, in four bands (two parts of the wave, so a seam between parts), with
+/// damping; the wave (`DistanceSet::solve_wave`) against the sweep and update as passes.
+#[test]
+fn wave_over_unaligned_bands_equals_separate_passes_bitwise() {
+    let make = |threads: usize, fuse: bool| {
+        let desc = ClothDesc {
+            rows: 22,
+            cols: 2050,
+            spacing: 0.005,
+            pins: vec![crate::PinSpec::FirstRowCorners],
+            tethers: None,
+            fabric: Fabric {
+                damping: 0.3,
+                ..Fabric::preset("cotton").unwrap()
+            },
+            ..Default::default()
+        };
+        let params = SolverParams {
+            threads,
+            substeps: 3,
+            iterations: 1,
+            ..Default::default()
+        };
+        let mut w = World::new(params, Effects::gravity()).unwrap();
+        w.add_cloth(&desc).unwrap();
+        assert_eq!(crate::constraints::grid::band_rows(2050), 7);
+        assert!(w.distance.wave_ready(w.particle_count()), "one grid: the wave runs");
+        w.fuse_predict = fuse;
+        w
+    };
+    let mut split = make(1, false);
+    let mut fused: Vec<World> = [1, 2, 3].into_iter().map(|t| make(t, true)).collect();
+    for step in 0..6 {
+        split.step(1.0 / 60.0).unwrap();
+        for w in &mut fused {
+            w.step(1.0 / 60.0).unwrap();
+            assert_eq!(w.state_bits(), split.state_bits(), "{} thread(s), step {step}", w.params().threads);
+        }
+    }
+    assert!(split.metrics().max_strain > 0.0, "the cloth moved");
 }

@@ -46,7 +46,10 @@ mod simd;
 mod slots;
 pub use simd::{resolve_simd, velocity_pass_simd};
 pub(crate) use slots::skip_untouched;
-pub use slots::{block_nonzero, block_touched, normals_set, read_approach, read_slot, write_slot, Slots, SLOT_BLOCK};
+pub(crate) use slots::SlotsPtr;
+pub use slots::{
+    block_nonzero, block_touched, normals_set, read_approach, read_slot, write_slot, SlotBlocks, Slots, SlotsView, SLOT_BLOCK,
+};
 /// A particle within this distance beyond the thickness still counts as touching.
 pub const TOUCH_SLACK: f32 = 1e-4;
 
@@ -281,7 +284,7 @@ impl Div for Vec3x8 {
 /// Scalar twin of [`project_simd`]: `p += max(0, Th - n.(p - c)) n` for every slot set, in
 /// obstacle order, over the particles `start .. start + p[0].len()`; particles without any
 /// contact keep their bits.
-pub fn project_scalar(slots: &[Slots], th: &[f32], start: usize, p: [&mut [f32]; 3]) {
+pub fn project_scalar<S: SlotBlocks>(slots: &[S], th: &[f32], start: usize, p: [&mut [f32]; 3]) {
     let [px, py, pz] = p;
     let mut i = 0;
     while i < px.len() {
@@ -292,7 +295,7 @@ pub fn project_scalar(slots: &[Slots], th: &[f32], start: usize, p: [&mut [f32];
         let g = start + i;
         let mut q = [px[i], py[i], pz[i]];
         for s in slots {
-            let (c, n) = read_slot(&s.data, g);
+            let (c, n) = read_slot(s.data(), g);
             if n == [0.0; 3] {
                 continue;
             }
@@ -306,7 +309,7 @@ pub fn project_scalar(slots: &[Slots], th: &[f32], start: usize, p: [&mut [f32];
 
 /// The projection eight particles at a time (`start` and the chunk length are multiples of
 /// eight); blocks without contact are skipped, lanes without contact keep their bits.
-pub fn project_simd(slots: &[Slots], th: &[f32], start: usize, p: [&mut [f32]; 3]) {
+pub fn project_simd<S: SlotBlocks>(slots: &[S], th: &[f32], start: usize, p: [&mut [f32]; 3]) {
     let [px, py, pz] = p;
     let zero = F32s::splat(0.0);
     for j in (0..px.len()).step_by(LANES) {
@@ -318,7 +321,7 @@ pub fn project_simd(slots: &[Slots], th: &[f32], start: usize, p: [&mut [f32]; 3
         let mut q = Vec3x8::load(px, py, pz, j);
         let t = crate::data::lanes::load(th, g);
         for s in slots {
-            let (c, n, set) = simd::slot_lanes(&s.data, b);
+            let (c, n, set) = simd::slot_lanes(s.data(), b);
             let d = (t - n.dot(q - c)).max(zero);
             q = Vec3x8::select(set, q + n.scale(d), q);
         }
@@ -335,8 +338,8 @@ pub fn project_simd(slots: &[Slots], th: &[f32], start: usize, p: [&mut [f32]; 3
 /// contact is the first crossing of the path, so the point reached lies before every crossing:
 /// outside the obstacle ([`resolve_against_plane`], which [`resolve_position`](crate::obstacles::mesh::response::resolve_position) uses too).
 /// Element-wise; the parallel and serial runs give the same bits.
-pub fn resolve_along_path(
-    slots: &[Slots],
+pub fn resolve_along_path<S: SlotBlocks>(
+    slots: &[S],
     shifts: &[[f32; 3]],
     mesh: &[bool],
     th: &[f32],
@@ -354,7 +357,7 @@ pub fn resolve_along_path(
         let g = start + i;
         let mut q = [px[i], py[i], pz[i]];
         for ((s, u), &mesh) in slots.iter().zip(shifts).zip(mesh) {
-            let (c, n) = read_slot(&s.data, g);
+            let (c, n) = read_slot(s.data(), g);
             if n == [0.0; 3] {
                 continue;
             }
@@ -368,7 +371,7 @@ pub fn resolve_along_path(
 
 /// Velocity pass for particles `start .. start + v[0].len()`: for every obstacle `k` whose
 /// slot touches the particle, `v = u_k + contact_velocity(v - u_k, n, a, mu_k)`.
-pub fn velocity_pass(slots: &[Slots], motion: &[([f32; 3], f32)], th: &[f32], start: usize, x: [&[f32]; 3], v: [&mut [f32]; 3]) {
+pub fn velocity_pass<S: SlotBlocks>(slots: &[S], motion: &[([f32; 3], f32)], th: &[f32], start: usize, x: [&[f32]; 3], v: [&mut [f32]; 3]) {
     let [vx, vy, vz] = v;
     let mut i = 0;
     while i < vx.len() {
@@ -379,12 +382,12 @@ pub fn velocity_pass(slots: &[Slots], motion: &[([f32; 3], f32)], th: &[f32], st
         let g = start + i;
         let q = [x[0][i], x[1][i], x[2][i]];
         for (s, &(u, mu)) in slots.iter().zip(motion) {
-            let (c, n) = read_slot(&s.data, g);
+            let (c, n) = read_slot(s.data(), g);
             if n == [0.0; 3] || dot(n, sub(q, c)) > th[g] + TOUCH_SLACK {
                 continue;
             }
             let rel = [vx[i] - u[0], vy[i] - u[1], vz[i] - u[2]];
-            let w = contact_velocity(rel, n, read_approach(&s.data, g), mu);
+            let w = contact_velocity(rel, n, read_approach(s.data(), g), mu);
             (vx[i], vy[i], vz[i]) = (w[0] + u[0], w[1] + u[1], w[2] + u[2]);
         }
         i += 1;

@@ -15,7 +15,7 @@
 //! for bit (`obstacle_kernels_tests.rs`).
 
 use crate::data::lanes::{load, F32s, Vec3x8, LANES};
-use crate::obstacles::kernels::{block_touched, Slots, TOUCH_SLACK};
+use crate::obstacles::kernels::{block_touched, SlotBlocks, TOUCH_SLACK};
 
 /// Contact point and normal of the eight slots of block `b`, and the lanes holding a contact.
 #[inline(always)]
@@ -38,7 +38,15 @@ pub(super) fn slot_lanes(s: &[f32], b: usize) -> (Vec3x8, Vec3x8, F32s) {
 
 /// [`resolve_along_path`](crate::obstacles::kernels::resolve_along_path) eight particles at a time (bitwise equal
 /// to it); `start` and the chunk length are multiples of eight.
-pub fn resolve_simd(slots: &[Slots], shifts: &[[f32; 3]], mesh: &[bool], th: &[f32], start: usize, x: [&[f32]; 3], p: [&mut [f32]; 3]) {
+pub fn resolve_simd<S: SlotBlocks>(
+    slots: &[S],
+    shifts: &[[f32; 3]],
+    mesh: &[bool],
+    th: &[f32],
+    start: usize,
+    x: [&[f32]; 3],
+    p: [&mut [f32]; 3],
+) {
     let [px, py, pz] = p;
     let (zero, one) = (F32s::splat(0.0), F32s::splat(1.0));
     for j in (0..px.len()).step_by(LANES) {
@@ -51,7 +59,7 @@ pub fn resolve_simd(slots: &[Slots], shifts: &[[f32; 3]], mesh: &[bool], th: &[f
         let t = load(th, g);
         let x0 = Vec3x8::load(x[0], x[1], x[2], j);
         for ((s, u), &mesh) in slots.iter().zip(shifts).zip(mesh) {
-            let (c, n, set) = slot_lanes(&s.data, b);
+            let (c, n, set) = slot_lanes(s.data(), b);
             let xr = x0 - Vec3x8::splat(*u);
             let (hx, hp) = (n.dot(xr - c), n.dot(q - c));
             let back = set & hx.simd_gt(hp) & hx.simd_ge(t);
@@ -74,7 +82,14 @@ pub fn resolve_simd(slots: &[Slots], shifts: &[[f32; 3]], mesh: &[bool], th: &[f
 
 /// [`velocity_pass`](crate::obstacles::kernels::velocity_pass) eight particles at a time (bitwise equal to it);
 /// `start` and the chunk length are multiples of eight.
-pub fn velocity_pass_simd(slots: &[Slots], motion: &[([f32; 3], f32)], th: &[f32], start: usize, x: [&[f32]; 3], v: [&mut [f32]; 3]) {
+pub fn velocity_pass_simd<S: SlotBlocks>(
+    slots: &[S],
+    motion: &[([f32; 3], f32)],
+    th: &[f32],
+    start: usize,
+    x: [&[f32]; 3],
+    v: [&mut [f32]; 3],
+) {
     let [vx, vy, vz] = v;
     let zero = F32s::splat(0.0);
     for j in (0..vx.len()).step_by(LANES) {
@@ -87,9 +102,9 @@ pub fn velocity_pass_simd(slots: &[Slots], motion: &[([f32; 3], f32)], th: &[f32
         let limit = load(th, g) + F32s::splat(TOUCH_SLACK);
         let mut vel = Vec3x8::load(vx, vy, vz, j);
         for (s, &(u, mu)) in slots.iter().zip(motion) {
-            let (c, n, set) = slot_lanes(&s.data, b);
+            let (c, n, set) = slot_lanes(s.data(), b);
             let touch = set & !n.dot(q - c).simd_gt(limit);
-            let a = load(&s.data, b * crate::obstacles::kernels::SLOT_BLOCK + 6 * LANES);
+            let a = load(s.data(), b * crate::obstacles::kernels::SLOT_BLOCK + 6 * LANES);
             let uu = Vec3x8::splat(u);
             let w = vel - uu;
             let wn = w.dot(n);

@@ -68,6 +68,85 @@ impl Slots {
     }
 }
 
+/// What the passes read of one obstacle's slots: the slot blocks and their flags, owned
+/// ([`Slots`]) or a chunk's part of them ([`SlotsView`], block 0 being the chunk's first).
+pub trait SlotBlocks {
+    /// The slot blocks.
+    fn data(&self) -> &[f32];
+    /// The blocks' touched flags.
+    fn touched(&self) -> &[bool];
+}
+
+impl SlotBlocks for Slots {
+    fn data(&self) -> &[f32] {
+        &self.data
+    }
+    fn touched(&self) -> &[bool] {
+        &self.touched
+    }
+}
+
+/// A run of one obstacle's slot blocks and their flags, borrowed.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct SlotsView<'a> {
+    /// The slot blocks.
+    pub data: &'a [f32],
+    /// Their flags.
+    pub touched: &'a [bool],
+}
+
+impl SlotBlocks for SlotsView<'_> {
+    fn data(&self) -> &[f32] {
+        self.data
+    }
+    fn touched(&self) -> &[bool] {
+        self.touched
+    }
+}
+
+/// One obstacle's slots as a raw view, so that the tasks of a chunk-by-chunk pass can each
+/// take the blocks of their own chunk ([`blocks`](Self::blocks)).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct SlotsPtr {
+    data: *mut f32,
+    touched: *mut bool,
+    blocks: usize,
+}
+
+// SAFETY: two pointers and a length; blocks are handed to one task each (see `blocks`).
+unsafe impl Send for SlotsPtr {}
+// SAFETY: as above.
+unsafe impl Sync for SlotsPtr {}
+
+impl SlotsPtr {
+    /// Captures `slots` (whole blocks, one flag each).
+    pub(crate) fn new(slots: &mut Slots) -> Self {
+        assert_eq!(slots.data.len(), slots.touched.len() * SLOT_BLOCK);
+        SlotsPtr {
+            data: slots.data.as_mut_ptr(),
+            touched: slots.touched.as_mut_ptr(),
+            blocks: slots.touched.len(),
+        }
+    }
+
+    /// Blocks `first .. first + count` and their flags.
+    ///
+    /// # Safety
+    /// The captured slots outlive the slices and nothing else reads or writes them through any
+    /// other reference meanwhile, and no other live slice from this view covers these blocks
+    /// (each chunk of a pass takes its own blocks).
+    pub(crate) unsafe fn blocks<'a>(self, first: usize, count: usize) -> (&'a mut [f32], &'a mut [bool]) {
+        assert!(first + count <= self.blocks);
+        // SAFETY: in bounds (checked above) and exclusive by the caller's guarantee.
+        unsafe {
+            (
+                std::slice::from_raw_parts_mut(self.data.add(first * SLOT_BLOCK), count * SLOT_BLOCK),
+                std::slice::from_raw_parts_mut(self.touched.add(first), count),
+            )
+        }
+    }
+}
+
 /// Writes slot `i` of `blocks` (blocks start at particle `first`).
 #[inline]
 pub fn write_slot(blocks: &mut [f32], i: usize, point: [f32; 3], normal: [f32; 3]) {
@@ -96,8 +175,8 @@ pub fn read_approach(blocks: &[f32], i: usize) -> f32 {
 /// Does block `b` hold a contact in any of `slots`? (Its flag; the passes skip whole blocks
 /// that do not.)
 #[inline]
-pub fn block_touched(slots: &[Slots], b: usize) -> bool {
-    slots.iter().any(|s| s.touched[b])
+pub fn block_touched<S: SlotBlocks>(slots: &[S], b: usize) -> bool {
+    slots.iter().any(|s| s.touched()[b])
 }
 
 /// Is any float of `block` other than `+0.0` (bitwise: `-0.0` and NaN count)? The value of a
@@ -118,7 +197,7 @@ pub fn normals_set(block: &[f32]) -> bool {
 /// The next particle index from `i` (of a run starting at particle `start`, `len` long) that
 /// may hold a contact: `i` itself unless it starts a whole block without any.
 #[inline]
-pub(crate) fn skip_untouched(slots: &[Slots], start: usize, len: usize, mut i: usize) -> usize {
+pub(crate) fn skip_untouched<S: SlotBlocks>(slots: &[S], start: usize, len: usize, mut i: usize) -> usize {
     while (start + i).is_multiple_of(LANES) && i + LANES <= len && !block_touched(slots, (start + i) / LANES) {
         i += LANES;
     }
