@@ -302,7 +302,7 @@ impl DistanceSet {
     /// `finish` over all particles. Requires [`wave_ready`](Self::wave_ready).
     pub fn solve_wave(
         &mut self,
-        p: &crate::data::particles::RawParticles,
+        p: &crate::data::particles::RawParticles<'_>,
         inv_h2: f32,
         parallel: bool,
         finish: &(dyn Fn(std::ops::Range<usize>) + Sync),

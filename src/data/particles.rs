@@ -251,24 +251,27 @@ impl Particles {
 /// The particle arrays as raw pointers, for a pass whose tasks sweep constraints through a
 /// [`SharedVec3`] view of the predictions and finish ranges of particles whose constraints
 /// are done ([`chunk`](Self::chunk)) while other tasks still sweep elsewhere.
+///
+/// The view holds the particles' mutable borrow for `'a`, so nothing else touches them while
+/// it lives.
 #[derive(Clone, Copy, Debug)]
-pub struct RawParticles {
+pub struct RawParticles<'a> {
     /// `x, y, z, px, py, pz, vx, vy, vz`.
     arrays: [*mut f32; 9],
     w: *const f32,
     len: usize,
+    _borrow: std::marker::PhantomData<&'a mut Particles>,
 }
 
-// SAFETY: pointers and a length; the methods that hand out access are `unsafe`, and their
-// callers guarantee that tasks touch disjoint particles.
-unsafe impl Send for RawParticles {}
+// SAFETY: pointers and a length; the methods that hand out mutable access are `unsafe`, and
+// their callers guarantee that tasks touch disjoint particles.
+unsafe impl Send for RawParticles<'_> {}
 // SAFETY: as above.
-unsafe impl Sync for RawParticles {}
+unsafe impl Sync for RawParticles<'_> {}
 
-impl RawParticles {
-    /// Captures the arrays of `p` (padded length). `p` must outlive every use of the view and
-    /// not be touched otherwise meanwhile.
-    pub fn new(p: &mut Particles) -> Self {
+impl<'a> RawParticles<'a> {
+    /// Captures the arrays of `p` (padded length) for `'a`.
+    pub fn new(p: &'a mut Particles) -> Self {
         let len = p.padded_len();
         let arrays = [
             &mut p.x, &mut p.y, &mut p.z, &mut p.px, &mut p.py, &mut p.pz, &mut p.vx, &mut p.vy, &mut p.vz,
@@ -282,6 +285,7 @@ impl RawParticles {
             arrays,
             w: p.w.as_ptr(),
             len,
+            _borrow: std::marker::PhantomData,
         }
     }
 
@@ -295,16 +299,16 @@ impl RawParticles {
         self.len == 0
     }
 
-    /// The predictions, for the constraint sweep.
+    /// The predictions, for the constraint sweep (whose accesses are `unsafe`, under
+    /// `SharedVec3`'s rules; the view must outlive them).
     pub fn p(&self) -> SharedVec3 {
-        // SAFETY: the three arrays are valid for `len` elements while the particles live
-        // (`new`'s contract); the sweep's callers keep to `SharedVec3`'s rules.
+        // SAFETY: the three arrays are valid for `len` elements for `'a`.
         unsafe { SharedVec3::from_raw(self.arrays[3], self.arrays[4], self.arrays[5], self.len) }
     }
 
     /// The inverse masses.
-    pub fn w<'a>(&self) -> &'a [f32] {
-        // SAFETY: the inverse masses are only read while the view is used (`new`'s contract).
+    pub fn w(&self) -> &'a [f32] {
+        // SAFETY: the view borrows the particles for `'a` and never writes the inverse masses.
         unsafe { std::slice::from_raw_parts(self.w, self.len) }
     }
 
@@ -313,7 +317,7 @@ impl RawParticles {
     /// # Safety
     /// `range` is in bounds, and no other task reads or writes these particles (through
     /// another chunk or the sweep's view) while the chunk lives.
-    pub unsafe fn chunk<'a>(&self, range: std::ops::Range<usize>) -> ParticleChunk<'a> {
+    pub unsafe fn chunk(&self, range: std::ops::Range<usize>) -> ParticleChunk<'a> {
         assert!(range.start <= range.end && range.end <= self.len);
         let n = range.end - range.start;
         // SAFETY: in bounds (checked above) and exclusive by the caller's guarantee.
