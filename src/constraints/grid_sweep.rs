@@ -64,11 +64,8 @@ pub(crate) struct Sweep<'a> {
 /// colours): a task per group runs each colour's rows of that group, colour after colour.
 /// `RESET`: the multipliers read as zero; `STORE`: they are written.
 pub(crate) fn run_pass<const RESET: bool, const STORE: bool>(colours: &mut [Colour], s: &Sweep<'_>, parallel: bool) {
-    assert!(colours.len() <= MAX_COLOURS && colours.iter().all(|c| c.grid.is_some()));
-    let mut lambdas = [Multipliers::EMPTY; MAX_COLOURS];
-    for (m, c) in lambdas.iter_mut().zip(colours.iter_mut()) {
-        *m = Multipliers::new(&mut c.lambda);
-    }
+    assert!(colours.iter().all(|c| c.grid.is_some()));
+    let lambdas = multipliers(colours);
     let colours: &[Colour] = colours;
     let Some(groups) = colours.first().and_then(|c| c.grid.as_ref()).map(GridColour::group_count) else {
         return;
@@ -76,19 +73,36 @@ pub(crate) fn run_pass<const RESET: bool, const STORE: bool>(colours: &mut [Colo
     // SAFETY: a group's rows hold constraints of that group only; groups (bands, or seams of
     // boundaries at least four rows apart) share no particle, and each multiplier row
     // belongs to one group, so tasks touch disjoint particles and multipliers.
-    let task = |q: usize| {
-        for (c, lambda) in colours.iter().zip(&lambdas) {
-            let Some(g) = &c.grid else { continue };
-            for i in g.group(q) {
-                unsafe { row::<RESET, STORE>(g, i, lambda, s) };
-            }
-        }
-    };
+    let task = |q: usize| unsafe { sweep_group::<RESET, STORE>(colours, &lambdas, q, s) };
     let work: usize = colours.iter().map(|c| c.real).sum();
     if parallel && groups > 1 && work > SERIAL_MAX {
         (0..groups).into_par_iter().for_each(task);
     } else {
         (0..groups).for_each(task);
+    }
+}
+
+/// The multipliers of up to [`MAX_COLOURS`] colours as raw views, in colour order.
+fn multipliers(colours: &mut [Colour]) -> [Multipliers; MAX_COLOURS] {
+    assert!(colours.len() <= MAX_COLOURS);
+    let mut lambdas = [Multipliers::EMPTY; MAX_COLOURS];
+    for (m, c) in lambdas.iter_mut().zip(colours.iter_mut()) {
+        *m = Multipliers::new(&mut c.lambda);
+    }
+    lambdas
+}
+
+/// Runs each colour's rows of group `q`, colour after colour (`lambdas` from [`multipliers`]).
+///
+/// # Safety
+/// No other task touches the particles or multipliers of group `q`'s rows meanwhile.
+unsafe fn sweep_group<const RESET: bool, const STORE: bool>(colours: &[Colour], lambdas: &[Multipliers], q: usize, s: &Sweep<'_>) {
+    for (c, lambda) in colours.iter().zip(lambdas) {
+        let Some(g) = &c.grid else { continue };
+        for i in g.group(q) {
+            // SAFETY: the caller owns the group's rows.
+            unsafe { row::<RESET, STORE>(g, i, lambda, s) };
+        }
     }
 }
 
@@ -117,7 +131,6 @@ pub(crate) fn run_wave<const RESET: bool, const STORE: bool>(
     len: usize,
     finish: &(dyn Fn(std::ops::Range<usize>) + Sync),
 ) {
-    assert!(bands.len() <= MAX_COLOURS && seams.len() <= MAX_COLOURS);
     let Some(spec) = bands.first().and_then(|c| c.grid.as_ref()).map(|g| g.spec) else {
         finish(0..len);
         return;
@@ -125,28 +138,14 @@ pub(crate) fn run_wave<const RESET: bool, const STORE: bool>(
     let same = |c: &Colour| c.grid.as_ref().is_some_and(|g| g.spec == spec);
     assert!(spec.first == 0 && bands.iter().chain(seams.iter()).all(same));
     assert!(len.is_multiple_of(LANES) && (spec.rows * spec.cols) as usize <= len);
-    let (mut band_l, mut seam_l) = ([Multipliers::EMPTY; MAX_COLOURS], [Multipliers::EMPTY; MAX_COLOURS]);
-    for (m, c) in band_l
-        .iter_mut()
-        .zip(bands.iter_mut())
-        .chain(seam_l.iter_mut().zip(seams.iter_mut()))
-    {
-        *m = Multipliers::new(&mut c.lambda);
-    }
+    let (band_l, seam_l) = (multipliers(bands), multipliers(seams));
     let (bands, seams): (&[Colour], &[Colour]) = (bands, seams);
     // SAFETY (the three closures below): as in `run_pass`, a group's rows touch only the
     // particles of that group; a task owns its part's bands, the seams inside its part and
     // the finished ranges of its part, which the seams between parts do not reach (they
     // touch two rows on each side of a boundary); those seams and the rows around them run
     // after all tasks, one boundary a task.
-    let group = |colours: &[Colour], lambdas: &[Multipliers], q: usize| {
-        for (c, lambda) in colours.iter().zip(lambdas) {
-            let Some(g) = &c.grid else { continue };
-            for i in g.group(q) {
-                unsafe { row::<RESET, STORE>(g, i, lambda, s) };
-            }
-        }
-    };
+    let group = |colours: &[Colour], lambdas: &[Multipliers], q: usize| unsafe { sweep_group::<RESET, STORE>(colours, lambdas, q, s) };
     let (cols, b) = (spec.cols as usize, super::grid::band_rows(spec.cols) as usize);
     let nb = (spec.rows as usize).div_ceil(b);
     let down = |i: usize| i - i % LANES;

@@ -226,7 +226,9 @@ impl World {
             && !check
             && self.params.iterations == 1
             && self.tethers.is_empty()
-            && (fuse_project || (!has_obstacles && self.scalps.is_empty() && sc.is_none()))
+            && self.scalps.is_empty()
+            && sc.is_none()
+            && (!has_obstacles || chunk_obstacles)
             && self.distance.wave_ready(n);
         let obstacle_ns = AtomicU64::new(0);
         let mut predicted_ahead = false;
