@@ -167,25 +167,14 @@ mod tests {
         (p[0][0], p[0][1], p[0][2]) = (0.0, q, f32::from_bits(q.to_bits() + 1));
         (p[1][5], p[2][6]) = (f32::NAN, f32::INFINITY);
         let x = [&p[0][..], &p[1][..], &p[2][..]];
+        let near = |i: usize, j: u32, r2: f32| {
+            let j = j as usize;
+            within(x[0][i], x[1][i], x[2][i], x[0][j], x[1][j], x[2][j], r2)
+        };
         let mut cand = Neighbours::new();
         cand.fill_serial(n, |i, buf| {
             // Lists of 0 to 20 candidates: every tail length after whole lane groups.
-            buf.extend(
-                (0..n as u32)
-                    .filter(|&j| {
-                        j as usize != i
-                            && within(
-                                x[0][i],
-                                x[1][i],
-                                x[2][i],
-                                x[0][j as usize],
-                                x[1][j as usize],
-                                x[2][j as usize],
-                                4.0 * q * q,
-                            )
-                    })
-                    .take(i % 21),
-            );
+            buf.extend((0..n as u32).filter(|&j| j as usize != i && near(i, j, 4.0 * q * q)).take(i % 21));
             if i == 0 {
                 // One whole lane group holding the boundary and non-finite partners.
                 buf.extend([1, 2, 5, 6, 3, 4, 7, 8]);
@@ -194,19 +183,7 @@ mod tests {
         .unwrap();
         let mut want = Neighbours::new();
         want.fill_serial(n, |i, buf| {
-            for &j in cand.of(i) {
-                if within(
-                    x[0][i],
-                    x[1][i],
-                    x[2][i],
-                    x[0][j as usize],
-                    x[1][j as usize],
-                    x[2][j as usize],
-                    q * q,
-                ) {
-                    buf.push(j);
-                }
-            }
+            buf.extend(cand.of(i).iter().filter(|&&j| near(i, j, q * q)));
         })
         .unwrap();
         assert!(
