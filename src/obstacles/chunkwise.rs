@@ -51,17 +51,19 @@ pub struct ChunkObstacles<'a> {
 }
 
 impl ObstacleSet {
-    /// The chunk-by-chunk stages of the substep of length `h` ending at time `t_end`, when every
-    /// obstacle is a shape and there are at most [`MAX_OBSTACLES`] (else `None`: the separate
-    /// passes). The arrays must be sized ([`prepare`](Self::prepare)).
-    pub(crate) fn chunkwise(&mut self, t_end: f64, h: f32, n: usize) -> Option<ChunkObstacles<'_>> {
-        if !self.runs_chunkwise() {
-            return None;
-        }
+    /// The chunk-by-chunk stages of the substep of length `h` ending at time `t_end`. Only for a
+    /// set that [`runs_chunkwise`](Self::runs_chunkwise) (the step checks it once and then
+    /// runs no separate obstacle pass, so a set that did not would lose its stages: asserted).
+    /// The arrays must be sized ([`prepare`](Self::prepare)).
+    pub(crate) fn chunkwise(&mut self, t_end: f64, h: f32, n: usize) -> ChunkObstacles<'_> {
+        assert!(
+            self.runs_chunkwise(),
+            "chunkwise obstacle stages need at most {MAX_OBSTACLES} shapes"
+        );
         let mut list = [None; MAX_OBSTACLES];
         for ((o, slots), out) in self.list.iter().zip(&mut self.slots).zip(&mut list) {
             let Geometry::Shape(s) = &o.geometry else {
-                return None;
+                unreachable!("runs_chunkwise: every obstacle is a shape")
             };
             let u = o.velocity;
             *out = Some(Placed {
@@ -72,14 +74,14 @@ impl ObstacleSet {
                 slots: SlotsPtr::new(slots),
             });
         }
-        Some(ChunkObstacles {
+        ChunkObstacles {
             list,
             count: self.list.len(),
             th: &self.th,
             reach: &self.reach,
             n,
             _slots: PhantomData,
-        })
+        }
     }
 }
 

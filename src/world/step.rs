@@ -249,11 +249,7 @@ impl World {
                     force,
                 };
                 let t_end = self.time + ((s + 1) as f64) * (h as f64);
-                let co = if chunk_obstacles && !predicted_ahead {
-                    self.obstacles.chunkwise(t_end, h, n)
-                } else {
-                    None
-                };
+                let co = (chunk_obstacles && !predicted_ahead).then(|| self.obstacles.chunkwise(t_end, h, n));
                 let contacts = |c: &mut ParticleChunk<'_>| {
                     if let Some(co) = &co {
                         timed(&obstacle_ns, || co.contacts(c, simd));
@@ -357,7 +353,7 @@ impl World {
                 // predicted here
                 let t_next = self.time + ((s + 2) as f64) * (h as f64);
                 let stages = if chunk_obstacles {
-                    self.obstacles.chunkwise(t_next, h, n).map_or(Obstacles::None, Obstacles::Chunkwise)
+                    Obstacles::Chunkwise(self.obstacles.chunkwise(t_next, h, n))
                 } else if has_obstacles {
                     Obstacles::Whole(&self.obstacles)
                 } else {
