@@ -162,9 +162,11 @@ impl SelfCollision64 {
         for i in 0..v.len() {
             let u = sub(v[i], m);
             let s = dot(u, u).sqrt();
-            if w[i] > 0.0 && s > limit {
+            let slowed: V3 = std::array::from_fn(|k| m[k] + u[k] * limit / s);
+            // Never faster than before (the clamp only slows a particle down).
+            if w[i] > 0.0 && s > limit && dot(slowed, slowed) <= dot(v[i], v[i]) {
+                v[i] = slowed;
                 for k in 0..3 {
-                    v[i][k] = m[k] + u[k] * limit / s;
                     p[i][k] = x[i][k] + h * v[i][k];
                 }
             }

@@ -25,8 +25,9 @@
 //!   `T / substeps` a substep, so two particles close in by at most `2T` in a step: any pair
 //!   that touches during the step is in the list. (The clamp is relative so a falling cloth
 //!   still falls at full speed; Müller's version clamps absolute speed to one cell a substep.)
-//!   The clamp bounds the predicted motion; the constraint sweeps move particles further, so
-//!   the bound is the model's, not a proof.
+//!   It never speeds a particle up, so a particle slower than the mean (stopped by an obstacle)
+//!   keeps its velocity and is exempt from the bound. The clamp bounds the predicted motion;
+//!   the constraint sweeps move particles further, so the bound is the model's, not a proof.
 //! * **After the constraint sweeps** (each substep): the pair pass below over the whole list,
 //!   eight pairs at a time (`contacts`), then the velocity-correction kernel
 //!   [`crate::self_collision::response::apply`] on the blocks of eight particles that received

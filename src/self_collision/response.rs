@@ -9,8 +9,18 @@
 //! particles is limited so that it moves at most `limit` relative to the cloth in one substep:
 //!
 //! ```text
-//! u = v - m;   if |u| h > limit:  v = m + u limit / (|u| h);   p = x + h v
+//! u = v - m;   v' = m + u limit / (|u| h);
+//! if |u| h > limit and |v'| <= |v|:  v = v';   p = x + h v
 //! ```
+//!
+//! The clamp only ever slows a particle down. A particle slower than the cloth around it (one
+//! an obstacle has stopped, or one resting on the layers below) keeps its velocity: pulled up
+//! to the mean, the resting part of a pile would be driven into the ground every substep at
+//! the speed of the part still falling, and the contact pass, which splits each correction
+//! between the two particles, cannot undo that: the pile is pressed through itself. The cost
+//! is the bound: a falling particle and a
+//! stopped one close in faster than `2 T` a step, and such a pair is caught only once the
+//! list holds it.
 //!
 //! The mean is summed in fixed chunks ([`MeanParts`]); when the step has no obstacles (which
 //! change velocities between predict and the clamp), its predict pass (or the update pass
@@ -443,6 +453,8 @@ fn clamp_simd(c: crate::data::particles::ParticleChunk<'_>, cp: &ClampParams) {
             continue;
         }
         let scaled = m + u.scale(lim / u2.sqrt());
+        // Never faster than before (see the module docs).
+        let fast = fast & scaled.length_sq().simd_le(v.length_sq());
         let v = Vec3x8::select(fast, scaled, v);
         let x = Vec3x8::load(c.x, c.y, c.z, i);
         let p = x + v.scale(h);
@@ -465,6 +477,11 @@ fn clamp_scalar(c: crate::data::particles::ParticleChunk<'_>, cp: &ClampParams) 
         }
         let s = lim / u2.sqrt();
         let v = [cp.mean[0] + u[0] * s, cp.mean[1] + u[1] * s, cp.mean[2] + u[2] * s];
+        let len2 = |a: [f32; 3]| a[0] * a[0] + a[1] * a[1] + a[2] * a[2];
+        let slower = len2(v) <= len2([c.vx[i], c.vy[i], c.vz[i]]);
+        if !slower {
+            continue;
+        }
         c.vx[i] = v[0];
         c.vy[i] = v[1];
         c.vz[i] = v[2];
