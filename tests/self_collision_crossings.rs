@@ -84,23 +84,28 @@ fn a_cloth_teleported_through_another_counts() {
 
 /// The average-collision measure recomputed by the audit's own grid with the measure's rule
 /// (non-neighbours from `1.5 d` at rest, closer than `0.9 d`) gives the same share on the
-/// pile; with the response's rule (`REST_SKIP_FACTOR d`) it is smaller: the measure also
-/// counts grid-scale kinks the response leaves to the constraints (docs/performance.md).
+/// pile, every 10 steps while it lands and settles; with the response's rule
+/// (`REST_SKIP_FACTOR d`) it is no larger: the measure also counts grid-scale kinks the
+/// response leaves to the constraints (docs/performance.md).
 #[test]
 fn the_measure_equals_the_audit_with_its_rule_on_the_pile() {
     use weft::self_collision::audit::share_closer;
     let mut run = SuiteRun::load(suite_dir(), "pile", 1, true).unwrap();
-    for _ in 0..240 {
-        run.step().unwrap();
-    }
     let d = run.distance();
-    let measured = run.world.measure_self_collision().unwrap();
-    let x = run.world.positions();
-    let same_rule = share_closer(x, &run.rest_rule_with(1.5 * d).unwrap(), 0.9 * d).unwrap();
-    let response_rule = share_closer(x, &run.rest_rule().unwrap(), 0.9 * d).unwrap();
-    let within_half = share_closer(x, &run.rest_rule().unwrap(), 0.5 * d).unwrap();
-    println!("pile, 240 steps: measure {measured:.2}%, audit {same_rule:.2}% (1.5 d rule), {response_rule:.2}% (response's rule), {within_half:.2}% within d/2");
-    assert!(measured > 0.0, "the pile has close pairs to compare");
-    assert!((measured - same_rule).abs() < 1e-9, "{measured} against {same_rule}");
-    assert!(response_rule <= same_rule);
+    let mut with_close_pairs = 0;
+    for step in 1..=240 {
+        run.step().unwrap();
+        if step % 10 != 0 {
+            continue;
+        }
+        let measured = run.world.measure_self_collision().unwrap();
+        let x = run.world.positions();
+        let same_rule = share_closer(x, &run.rest_rule_with(1.5 * d).unwrap(), 0.9 * d).unwrap();
+        let response_rule = share_closer(x, &run.rest_rule().unwrap(), 0.9 * d).unwrap();
+        println!("pile, step {step}: measure {measured:.2}%, audit {same_rule:.2}% (1.5 d rule), {response_rule:.2}% (response's rule)");
+        assert!((measured - same_rule).abs() < 1e-9, "step {step}: {measured} against {same_rule}");
+        assert!(response_rule <= same_rule);
+        with_close_pairs += usize::from(measured > 0.0);
+    }
+    assert!(with_close_pairs > 0, "the pile has close pairs to compare");
 }

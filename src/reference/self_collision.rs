@@ -31,7 +31,7 @@
 
 use crate::model::description::WorldDescription;
 use crate::model::self_collision::Response;
-use crate::model::self_collision::BOX_RADIUS;
+use crate::model::self_collision::{BOX_RADIUS, RELAXATION};
 use std::collections::HashMap;
 
 type V3 = [f64; 3];
@@ -241,7 +241,9 @@ impl SelfCollision64 {
             } else {
                 k
             };
-            let mut t: V3 = std::array::from_fn(|a| p[i][a] + s.c[a] / kc + self.friction * (s.f[a] / k - (p[i][a] - x[i][a])) / 2.0);
+            let mut t: V3 = std::array::from_fn(|a| {
+                p[i][a] + s.c[a] * f64::from(RELAXATION) / kc + self.friction * (s.f[a] / k - (p[i][a] - x[i][a])) / 2.0
+            });
             if self.response == Response::Vccpbd {
                 let q = self.q[i];
                 let tq = sub(t, q);

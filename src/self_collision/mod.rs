@@ -51,7 +51,8 @@
 //! backends give the same bits); the contacts are then added to both particles' sums in list
 //! order, so every particle sums its contacts in ascending partner order, as a loop over its
 //! own sorted list would. The sums feed a Jacobi update (the kernel averages over the contact
-//! count, the movement-speed correction over the approaching contacts), and the result is the
+//! count, the movement-speed correction over the approaching contacts, and over-relaxes the
+//! average by [`RELAXATION`]), and the result is the
 //! same on any number of threads; the serial loop is the twin.
 //!
 //! **Movement speed.** The VcCPBD paper names this response only as the velocity-based
@@ -92,7 +93,7 @@ use crate::self_collision::reuse::Reuse;
 use crate::self_collision::tree::{ParticleTree, TreeShape};
 
 pub use crate::model::self_collision::{
-    Response, SelfBroadphase, SelfCollision, BOX_RADIUS, CELL_FACTOR, MAX_TRAVEL, QUERY_FACTOR, REST_SKIP_FACTOR, TRAVEL_FACTOR,
+    Response, SelfBroadphase, SelfCollision, BOX_RADIUS, CELL_FACTOR, MAX_TRAVEL, QUERY_FACTOR, RELAXATION, REST_SKIP_FACTOR, TRAVEL_FACTOR,
 };
 pub use crate::self_collision::config::{SelfCollisionPhases, SelfCollisionStats, PENETRATION_TOLERANCE};
 

@@ -33,10 +33,11 @@
 //! contacts of: the position correction `c`, the partners' displacements `f = Σ (p_j - x_j)`,
 //! the unit contact normals `n` (pointing away from the partners), the signed gaps `g`
 //! (`dist - min_dist`, negative in contact) and the contact count `k`. This kernel applies them
-//! to a free particle with `k > 0` (Jacobi, averaged over the contacts):
+//! to a free particle with `k > 0` (Jacobi, averaged over the contacts and over-relaxed by
+//! `ω =` [`RELAXATION`]):
 //!
 //! ```text
-//! t = p + c / k + μ (f / k - (p - x)) / 2          projection + friction (all responses)
+//! t = p + ω c / k + μ (f / k - (p - x)) / 2        projection + friction (all responses)
 //! VcCPBD only, with q the predicted position (after the clamp), r the box radius (the
 //! collision distance d), n̂ = n / |n|, e = g / k:
 //!   if |t - q| >= r:  p = q                          back to the centre of the particle's box
@@ -65,7 +66,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use rayon::prelude::*;
 
 use crate::data::lanes::{load, load_unchecked, store, store_unchecked, F32s, Vec3x8, LANES};
-use crate::model::self_collision::Response;
+use crate::model::self_collision::{Response, RELAXATION};
 
 /// Per-particle contact sums from the pair pass, padded to the lane width.
 #[derive(Clone, Debug, Default)]
@@ -347,7 +348,7 @@ unsafe fn lanes<const VC: bool, const CHECKED: bool>(c: &Consts, inp: &ApplyInpu
     let cs = ld3([&s.c[0], &s.c[1], &s.c[2]], g);
     let f = ld3([&s.f[0], &s.f[1], &s.f[2]], g);
     let disp = p0 - x;
-    let mut t = p0 + cs.scale(inv) + (f.scale(inv) - disp).scale(F32s::splat(0.5)).scale(c.mu);
+    let mut t = p0 + cs.scale(inv * F32s::splat(RELAXATION)) + (f.scale(inv) - disp).scale(F32s::splat(0.5)).scale(c.mu);
     if VC {
         let n = ld3([&s.n[0], &s.n[1], &s.n[2]], g);
         let nl = n.length_sq().sqrt();
@@ -382,12 +383,13 @@ fn apply_scalar(inp: &ApplyInput<'_>, p: [&mut [f32]; 3], vc: bool) {
             continue;
         }
         let inv = 1.0 / k.max(1.0);
+        let relaxed = inv * RELAXATION;
         let x = [inp.x[0][i], inp.x[1][i], inp.x[2][i]];
         let p0 = [px[i], py[i], pz[i]];
         let mut t = [0.0f32; 3];
         for a in 0..3 {
             let disp = p0[a] - x[a];
-            t[a] = p0[a] + s.c[a][g] * inv + (s.f[a][g] * inv - disp) * 0.5 * mu;
+            t[a] = p0[a] + s.c[a][g] * relaxed + (s.f[a][g] * inv - disp) * 0.5 * mu;
         }
         if vc {
             let n = [s.n[0][g], s.n[1][g], s.n[2][g]];
