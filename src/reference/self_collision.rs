@@ -162,9 +162,12 @@ impl SelfCollision64 {
         for i in 0..v.len() {
             let u = sub(v[i], m);
             let s = dot(u, u).sqrt();
+            if !(w[i] > 0.0 && s > limit) {
+                continue;
+            }
             let slowed: V3 = std::array::from_fn(|k| m[k] + u[k] * limit / s);
             // Never faster than before (the clamp only slows a particle down).
-            if w[i] > 0.0 && s > limit && dot(slowed, slowed) <= dot(v[i], v[i]) {
+            if dot(slowed, slowed) <= dot(v[i], v[i]) {
                 v[i] = slowed;
                 for k in 0..3 {
                     p[i][k] = x[i][k] + h * v[i][k];

@@ -52,8 +52,8 @@
 //! order, so every particle sums its contacts in ascending partner order, as a loop over its
 //! own sorted list would. The sums feed a Jacobi update (the kernel averages over the contact
 //! count, the movement-speed correction over the approaching contacts, and over-relaxes the
-//! average by [`RELAXATION`]), and the result is the
-//! same on any number of threads; the serial loop is the twin.
+//! average by [`RELAXATION`]), and the result is the same on any number of threads; the
+//! serial loop is the twin.
 //!
 //! **Movement speed.** The VcCPBD paper names this response only as the velocity-based
 //! technique of current software it compares against and gives no algorithm for it. Our

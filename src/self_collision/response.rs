@@ -18,9 +18,8 @@
 //! to the mean, the resting part of a pile would be driven into the ground every substep at
 //! the speed of the part still falling, and the contact pass, which splits each correction
 //! between the two particles, cannot undo that: the pile is pressed through itself. The cost
-//! is the bound: a falling particle and a
-//! stopped one close in faster than `2 T` a step, and such a pair is caught only once the
-//! list holds it.
+//! is the bound: a falling particle and a stopped one close in faster than `2 T` a step, and
+//! such a pair is caught only once the list holds it.
 //!
 //! The mean is summed in fixed chunks ([`MeanParts`]); when the step has no obstacles (which
 //! change velocities between predict and the clamp), its predict pass (or the update pass
