@@ -171,8 +171,7 @@ fn f64_self_collision_agrees_with_the_world_on_two_stacked_sheets() {
         assert!(upper - lower > 0.01, "{response}: the upper sheet must rest on the lower one");
         // The over-relaxed contact average (`RELAXATION`) turns a contact that f32 and f64
         // decide differently at the threshold into a larger move: the two drift apart by up to
-        // about 5e-4 m over the 30 steps (2e-5 m with the plain average); the bound is 5% of
-        // the 2 cm spacing.
+        // about 5e-4 m over the 30 steps; the bound is 5% of the 2 cm spacing.
         assert!(gap < 1e-3, "{response}: f32 world and f64 reference differ by {gap:.3e} m");
         last.push(w.positions()[1].to_vec());
     }

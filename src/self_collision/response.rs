@@ -66,6 +66,7 @@ use rayon::prelude::*;
 
 use crate::data::lanes::{load, load_unchecked, store, store_unchecked, F32s, Vec3x8, LANES};
 use crate::model::self_collision::{Response, RELAXATION};
+use crate::model::shapes::dot;
 
 /// Per-particle contact sums from the pair pass, padded to the lane width.
 #[derive(Clone, Debug, Default)]
@@ -374,7 +375,6 @@ fn apply_scalar(inp: &ApplyInput<'_>, p: [&mut [f32]; 3], vc: bool) {
     let [px, py, pz] = p;
     let s = inp.sums;
     let (mu, h, r2) = (inp.friction, inp.h, inp.r * inp.r);
-    let dot = |a: [f32; 3], b: [f32; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
     for i in 0..px.len() {
         let g = inp.start + i;
         let k = s.count[g];
@@ -478,8 +478,8 @@ fn clamp_scalar(c: crate::data::particles::ParticleChunk<'_>, cp: &ClampParams) 
         }
         let s = lim / u2.sqrt();
         let v = [cp.mean[0] + u[0] * s, cp.mean[1] + u[1] * s, cp.mean[2] + u[2] * s];
-        let len2 = |a: [f32; 3]| a[0] * a[0] + a[1] * a[1] + a[2] * a[2];
-        let slower = len2(v) <= len2([c.vx[i], c.vy[i], c.vz[i]]);
+        let old = [c.vx[i], c.vy[i], c.vz[i]];
+        let slower = dot(v, v) <= dot(old, old);
         if !slower {
             continue;
         }
