@@ -22,7 +22,8 @@ struct SelfCollisionFigure {
     collision_share: f64,
     step_ms_median: f64,
     step_ms_p95: f64,
-    /// The same scene, same threads, self-collision off, in the same run of the command.
+    /// The same scene, same threads, self-collision off, in the same run of the command (the
+    /// two runs step in alternating blocks of 30 steps).
     step_ms_median_without: f64,
     step_ms_p95_without: f64,
     /// The paper's average collision: mean over the steps of the share of particles with a
@@ -72,10 +73,13 @@ fn median_p95(mut ms: Vec<f64>) -> (f64, f64) {
     (at(0.5), at(0.95))
 }
 
-/// States kept between two audits: the audits run between steps, and a pause between steps
-/// lets the pool's workers sleep (waking them costs the next step), so they run once every
-/// `AUDIT_CHUNK` steps, on the kept states, rather than after every step.
-const AUDIT_CHUNK: usize = 30;
+/// Steps each run takes before the other takes its turn, and states kept between two audits.
+/// The run with self-collision and the run without alternate in blocks, so that both are
+/// timed under the same conditions of the machine and the ratio of their medians does not
+/// follow a drift between two separate runs. The audits run between steps, and a pause
+/// between steps lets the pool's workers sleep (waking them costs the next step), so they run
+/// once a block, on the kept states, rather than after every step.
+const BLOCK: usize = 30;
 
 /// Deepest violation and crossings over consecutive `states` (positions of one run).
 fn audit_states(run: &weft::suite::SuiteRun, states: &[[Vec<f32>; 3]]) -> weft::Result<(f64, u64)> {
@@ -93,31 +97,57 @@ fn audit_states(run: &weft::suite::SuiteRun, states: &[[Vec<f32>; 3]]) -> weft::
     Ok((deepest, crossings))
 }
 
-/// Step times (ms, the measure's stage subtracted) of `steps` steps; with `audit`, also the
-/// deepest violation and the crossings of every step (outside the timed steps).
-fn timed_run(run: &mut weft::suite::SuiteRun, steps: u32, audit: bool) -> weft::Result<(Vec<f64>, f64, u64)> {
-    let mut ms = Vec::with_capacity(steps as usize);
-    let (mut deepest, mut crossings) = (0.0f64, 0u64);
-    let copy = |run: &weft::suite::SuiteRun| run.world.positions().map(|a| a.to_vec());
-    let mut states = if audit { vec![copy(run)] } else { Vec::new() };
-    for k in 0..steps {
+/// Times `count` steps of `run` into `ms` (the measure's stage subtracted); with `states`, keeps
+/// the positions after each step for the audit.
+fn timed_steps(
+    run: &mut weft::suite::SuiteRun,
+    count: usize,
+    ms: &mut Vec<f64>,
+    mut states: Option<&mut Vec<[Vec<f32>; 3]>>,
+) -> weft::Result<()> {
+    for _ in 0..count {
         run.prepare_step()?;
         let m0 = stage_s(&run.world, MEASURE_STAGE);
         let t0 = std::time::Instant::now();
         run.world_step()?;
         let wall = t0.elapsed().as_secs_f64();
         ms.push((wall - (stage_s(&run.world, MEASURE_STAGE) - m0)) * 1e3);
-        if audit {
-            states.push(copy(run));
-            if states.len() > AUDIT_CHUNK || k + 1 == steps {
-                let (dv, c) = audit_states(run, &states)?;
-                deepest = deepest.max(dv);
-                crossings += c;
-                states.drain(..states.len() - 1);
-            }
+        if let Some(st) = states.as_deref_mut() {
+            st.push(run.world.positions().map(|a| a.to_vec()));
         }
     }
-    Ok((ms, deepest, crossings))
+    Ok(())
+}
+
+/// Step times (ms) with and without self-collision, deepest violation (m) and crossings.
+type Timed = (Vec<f64>, Vec<f64>, f64, u64);
+
+/// The step times (ms) of `on` and of `off`, `steps` steps each in alternating blocks of
+/// [`BLOCK`]; with `audit`, also the deepest violation and the crossings of every step of
+/// `on` (outside the timed steps).
+fn timed_pair(on: &mut weft::suite::SuiteRun, off: &mut weft::suite::SuiteRun, steps: u32, audit: bool) -> weft::Result<Timed> {
+    let steps = steps as usize;
+    let (mut ms_on, mut ms_off) = (Vec::with_capacity(steps), Vec::with_capacity(steps));
+    let (mut deepest, mut crossings) = (0.0f64, 0u64);
+    let mut states = if audit {
+        vec![on.world.positions().map(|a| a.to_vec())]
+    } else {
+        Vec::new()
+    };
+    let mut done = 0;
+    while done < steps {
+        let count = BLOCK.min(steps - done);
+        timed_steps(on, count, &mut ms_on, audit.then_some(&mut states))?;
+        if audit {
+            let (dv, c) = audit_states(on, &states)?;
+            deepest = deepest.max(dv);
+            crossings += c;
+            states.drain(..states.len() - 1);
+        }
+        timed_steps(off, count, &mut ms_off, None)?;
+        done += count;
+    }
+    Ok((ms_on, ms_off, deepest, crossings))
 }
 
 /// `weft bench --self-collision`: each suite scene on 1 and 2 threads, with and without
@@ -160,7 +190,9 @@ pub fn bench_self_collision(
             }
             let span = crate::pictures::plane_span(&run.world);
             run.world.set_stage_clock(true);
-            let (ms, deepest, crossings) = timed_run(&mut run, steps, threads == 1)?;
+            let mut off = SuiteRun::load(dir, name, threads, false)?;
+            off.world.set_stage_clock(true);
+            let (ms, ms_off, deepest, crossings) = timed_pair(&mut run, &mut off, steps, threads == 1)?;
             if threads == 1 {
                 audit = (deepest, crossings);
             }
@@ -169,9 +201,6 @@ pub fn bench_self_collision(
             let clock_s = w.stage_clock().total().as_secs_f64() - stage_s(w, MEASURE_STAGE);
             let (n, substeps) = (w.particle_count(), w.params().substeps);
             let (median, p95) = median_p95(ms);
-            let mut off = SuiteRun::load(dir, name, threads, false)?;
-            off.world.set_stage_clock(true);
-            let (ms_off, _, _) = timed_run(&mut off, steps, false)?;
             let (median_off, p95_off) = median_p95(ms_off);
             rows.push(SelfCollisionFigure {
                 scene: name.to_string(),
