@@ -113,10 +113,15 @@ fn timed_steps(
         let wall = t0.elapsed().as_secs_f64();
         ms.push((wall - (stage_s(&run.world, MEASURE_STAGE) - m0)) * 1e3);
         if let Some(st) = states.as_deref_mut() {
-            st.push(run.world.positions().map(|a| a.to_vec()));
+            st.push(snapshot(run));
         }
     }
     Ok(())
+}
+
+/// A copy of the positions of `run` (one state for the audit).
+fn snapshot(run: &weft::suite::SuiteRun) -> [Vec<f32>; 3] {
+    run.world.positions().map(|a| a.to_vec())
 }
 
 /// Step times (ms) with and without self-collision, deepest violation (m) and crossings.
@@ -129,20 +134,16 @@ fn timed_pair(on: &mut weft::suite::SuiteRun, off: &mut weft::suite::SuiteRun, s
     let steps = steps as usize;
     let (mut ms_on, mut ms_off) = (Vec::with_capacity(steps), Vec::with_capacity(steps));
     let (mut deepest, mut crossings) = (0.0f64, 0u64);
-    let mut states = if audit {
-        vec![on.world.positions().map(|a| a.to_vec())]
-    } else {
-        Vec::new()
-    };
+    let mut states = audit.then(|| vec![snapshot(on)]);
     let mut done = 0;
     while done < steps {
         let count = BLOCK.min(steps - done);
-        timed_steps(on, count, &mut ms_on, audit.then_some(&mut states))?;
-        if audit {
-            let (dv, c) = audit_states(on, &states)?;
+        timed_steps(on, count, &mut ms_on, states.as_mut())?;
+        if let Some(st) = &mut states {
+            let (dv, c) = audit_states(on, st)?;
             deepest = deepest.max(dv);
             crossings += c;
-            states.drain(..states.len() - 1);
+            st.drain(..st.len() - 1);
         }
         timed_steps(off, count, &mut ms_off, None)?;
         done += count;
