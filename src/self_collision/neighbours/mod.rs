@@ -54,7 +54,12 @@ pub struct Neighbours {
     pub ids: Vec<u32>,
     /// Per-chunk output buffers of the parallel fill, kept to avoid allocation.
     scratch: Vec<Vec<u32>>,
-    /// Pair assembly (`neighbours_pairs`): list starts by partner, then smaller ids by partner.
+    /// Pair assembly ([`pairs`]): pairs before each buffer, each part's counts (a particle
+    /// each) and marks (a particle each), group starts by partner, then the smaller ids by
+    /// partner.
+    starts: Vec<usize>,
+    counts: Vec<u32>,
+    marks: Vec<u32>,
     by_j: Vec<u32>,
     order: Vec<u32>,
     /// Most entries a fill may write (see the module docs).
@@ -143,6 +148,9 @@ impl Neighbours {
             first: vec![0],
             ids: Vec::new(),
             scratch: Vec::new(),
+            starts: Vec::new(),
+            counts: Vec::new(),
+            marks: Vec::new(),
             by_j: Vec::new(),
             order: Vec::new(),
             limit: MAX_ENTRIES,

@@ -3,27 +3,28 @@
 //!
 //! # Method
 //! Tasks append pairs `(i, j)`, `i < j`, as two `u32` each, to their own kept buffers (in
-//! parallel, a fixed number of tasks, so the split does not depend on the thread count). Then:
-//! 1. count the pairs of each `i` (serial over the buffers) and prefix-sum the counts into
-//!    `first`;
-//! 2. group the smaller ids by partner `j` (a stable counting sort on `j`), then walk the
-//!    partners in ascending order, appending each `j` to the lists of its smaller ids (a
-//!    counting sort on `i`): every list comes out ascending with no comparison sort (a radix
-//!    sort of the pairs, least significant key first);
-//! 3. drop repeated ids (adjacent now), the lists being compacted in one serial pass.
+//! parallel, a fixed number of tasks, so the split does not depend on the thread count). Then
+//! two stable counting sorts, least significant key first, make every list ascending with no
+//! comparison sort:
+//! 1. by partner `j`: the smaller ids are grouped by partner;
+//! 2. by owner `i`: the partners are walked in ascending order, each `j` appended to the
+//!    lists of its smaller ids. A repeated pair (emitted twice: hash collisions, particles on
+//!    a cell face) falls in one group; it is dropped when the second sort counts the lists, so
+//!    the lists come out without repeats and no pass compacts them.
 //!
-//! The two counting sorts cost a fraction of a scatter followed by a comparison sort of every
-//! list (a folded cloth emits hundreds of thousands of pairs).
-//!
-//! Sorting and de-duplicating make the lists canonical: they do not depend on the order the
+//! Sorting and dropping repeats make the lists canonical: they do not depend on the order the
 //! pairs were emitted in, nor on the number of threads, so they equal the lists of any other
 //! upper query (each pair once, in the list of its smaller id).
 //!
-//! The assembly is serial: filing the pairs into ranges of particles assembled in parallel
-//! was no faster on two threads (a folded cloth's pairs crowd into a few ranges, and joining
-//! the ranges' lists costs what the parallel sorts save).
+//! # Parts
+//! From [`PARALLEL_PAIRS`] pairs each sort runs in parts, one a thread: the first over equal
+//! runs of the emitted pairs, the second over shares of the partners holding about as many
+//! pairs each. A part counts its keys in counts of its own (a particle each); the counts are
+//! prefix-summed key by key and part by part, so each part writes its keys to places no other
+//! part writes (a parallel radix pass). The output is the same whatever the number of parts,
+//! so the parts may follow the threads.
 
-use crate::self_collision::neighbours::{prefix_sum, too_many, Budget, Meter, Neighbours};
+use crate::self_collision::neighbours::{too_many, Budget, Meter, Neighbours, MAX_ENTRIES};
 use crate::Result;
 use rayon::prelude::*;
 
@@ -50,7 +51,7 @@ impl Neighbours {
                 meter.flush();
             }
         });
-        self.assemble_within(n, tasks, &budget)
+        self.assemble_within(n, tasks, &budget, true)
     }
 
     /// Serial twin of [`Neighbours::fill_pairs_parallel`]: one task appends every pair.
@@ -66,11 +67,11 @@ impl Neighbours {
         let mut meter = budget.meter();
         f(&mut self.scratch[0], &mut meter);
         meter.flush();
-        self.assemble_within(n, 1, &budget)
+        self.assemble_within(n, 1, &budget, false)
     }
 
     /// [`Neighbours::assemble`], or the limit's error when the emitting passed it.
-    fn assemble_within(&mut self, n: usize, tasks: usize, budget: &Budget) -> Result<()> {
+    fn assemble_within(&mut self, n: usize, tasks: usize, budget: &Budget, parallel: bool) -> Result<()> {
         self.limited = budget.over();
         if self.limited {
             for b in &mut self.scratch[..tasks] {
@@ -79,84 +80,221 @@ impl Neighbours {
             self.clear();
             return Err(too_many(self.limit, n));
         }
-        self.assemble(n, tasks)
+        self.assemble(n, tasks, parallel)
     }
 
     /// Counts and places the pairs of the first `tasks` buffers (two stable counting sorts,
-    /// by `j` then by `i`, so every list comes out ascending), then drops repeats.
-    fn assemble(&mut self, n: usize, tasks: usize) -> Result<()> {
+    /// by `j` then by `i`, so every list comes out ascending), then drops repeats; over
+    /// parts on their own threads when `parallel` and the pairs are many (see the module
+    /// docs).
+    fn assemble(&mut self, n: usize, tasks: usize, parallel: bool) -> Result<()> {
         let bufs = &self.scratch[..tasks];
+        self.starts.clear();
+        self.starts.push(0);
+        let mut m = 0usize;
+        for b in bufs {
+            m += b.len() / 2;
+            self.starts.push(m);
+        }
         self.first.clear();
         self.first.resize(n + 1, 0);
-        self.by_j.clear();
-        self.by_j.resize(n + 1, 0);
-        for b in bufs {
-            for p in b.chunks_exact(2) {
-                self.first[p[0] as usize + 1] += 1;
-                self.by_j[p[1] as usize + 1] += 1;
-            }
-        }
-        let total = match prefix_sum(&mut self.first) {
-            Ok(t) => t,
-            Err(e) => {
-                self.clear();
-                return Err(e);
-            }
-        };
         self.ids.clear();
-        if total == 0 {
+        if m > MAX_ENTRIES {
+            self.clear();
+            return Err(too_many(MAX_ENTRIES, n));
+        }
+        if m == 0 || n == 0 {
             return Ok(());
         }
-        // The same total, so no overflow here.
-        prefix_sum(&mut self.by_j)?;
-        // Pass 1: the smaller ids grouped by partner `j` (`by_j[j]` is the cursor of group `j`;
-        // afterwards it holds the group's end, the start of group `j + 1`).
-        self.order.clear();
-        self.order.resize(total, 0);
-        for b in bufs {
-            for p in b.chunks_exact(2) {
-                let c = &mut self.by_j[p[1] as usize];
-                self.order[*c as usize] = p[0];
-                *c += 1;
-            }
-        }
-        // Pass 2: partners in ascending order into the lists (`first[i]` the cursor of list
-        // `i`; afterwards shifted back by one to the offsets).
-        self.ids.resize(total, 0);
-        let mut k = 0usize;
+        let parts = if parallel && m >= PARALLEL_PAIRS {
+            rayon::current_num_threads().clamp(1, MAX_PARTS)
+        } else {
+            1
+        };
+        let src = PairSource {
+            bufs,
+            starts: &self.starts,
+        };
+        // Part `p` reads the pairs `range(p)`.
+        let range = |p: usize| p * m / parts..(p + 1) * m / parts;
+        let counts = &mut self.counts;
+        counts.clear();
+        counts.resize(parts * n, 0);
+        // 1. Each part counts its partners.
+        each_part(parts, counts, n, |p, c| src.each(range(p), |_, j| c[j as usize] += 1));
+        // 2. Group `j` starts at `group[j]`; part `p` places its smaller ids of partner `j`
+        //    from `counts[p n + j]` on.
+        let group = &mut self.by_j;
+        group.clear();
+        group.resize(n + 1, 0);
+        let mut acc = 0u32;
         for j in 0..n {
-            let end = self.by_j[j] as usize;
-            for &i in &self.order[k..end] {
-                let c = &mut self.first[i as usize];
-                self.ids[*c as usize] = j as u32;
-                *c += 1;
+            group[j] = acc;
+            for p in 0..parts {
+                let c = &mut counts[p * n + j];
+                (*c, acc) = (acc, acc + *c);
             }
-            k = end;
         }
-        self.first.copy_within(0..n, 1);
-        self.first[0] = 0;
-        self.dedup_sorted();
-        Ok(())
-    }
-
-    /// Drops repeated ids from every (sorted) list, compacting in place.
-    fn dedup_sorted(&mut self) {
-        let mut w = 0usize;
-        let mut start = 0usize;
-        for i in 0..self.len() {
-            let end = self.first[i + 1] as usize;
-            let head = w;
-            for r in start..end {
-                let j = self.ids[r];
-                if w == head || self.ids[w - 1] != j {
-                    self.ids[w] = j;
-                    w += 1;
+        group[n] = acc;
+        // 3. The smaller ids grouped by partner, each part its own places.
+        self.order.clear();
+        self.order.resize(m, 0);
+        let out = Out::new(&mut self.order);
+        // SAFETY: the cursors of step 2 give each (part, partner) its own span of places, as
+        // long as that part's count of the partner; the part writes each place once.
+        each_part(parts, counts, n, |p, c| {
+            src.each(range(p), |i, j| {
+                let k = &mut c[j as usize];
+                unsafe { out.put(*k as usize, i) };
+                *k += 1;
+            })
+        });
+        // 4. The partners are cut into shares of about as many pairs; each share counts its
+        //    smaller ids, once each: a repeat of `(i, j)` (in the same group, `mark[i] == j`)
+        //    is overwritten with `NONE`.
+        let group = &self.by_j[..];
+        let mut cut = [n; MAX_PARTS + 1];
+        for (s, c) in cut.iter_mut().enumerate().take(parts) {
+            *c = group.partition_point(|&g| (g as usize) < s * m / parts).min(n);
+        }
+        cut[0] = 0;
+        let mut shares: [&mut [u32]; MAX_PARTS] = Default::default();
+        let mut rest = &mut self.order[..];
+        for (s, share) in shares.iter_mut().enumerate().take(parts) {
+            let (mine, tail) = rest.split_at_mut((group[cut[s + 1]] - group[cut[s]]) as usize);
+            (*share, rest) = (mine, tail);
+        }
+        counts.fill(0);
+        self.marks.clear();
+        self.marks.resize(parts * n, NONE);
+        let count = |s: usize, c: &mut [u32], mark: &mut [u32], order: &mut [u32]| {
+            let base = group[cut[s]];
+            for j in cut[s]..cut[s + 1] {
+                for i in &mut order[(group[j] - base) as usize..(group[j + 1] - base) as usize] {
+                    let at = *i as usize;
+                    if mark[at] == j as u32 {
+                        *i = NONE;
+                    } else {
+                        mark[at] = j as u32;
+                        c[at] += 1;
+                    }
                 }
             }
-            start = end;
-            self.first[i + 1] = w as u32;
+        };
+        if parts > 1 {
+            counts
+                .par_chunks_mut(n)
+                .zip(self.marks.par_chunks_mut(n))
+                .zip(shares[..parts].par_iter_mut())
+                .enumerate()
+                .for_each(|(s, ((c, mark), order))| count(s, c, mark, order));
+        } else {
+            count(0, counts, &mut self.marks, shares[0]);
         }
-        self.ids.truncate(w);
+        // 5. List `i` starts at `first[i]`; share `s` places its partners of `i` from
+        //    `counts[s n + i]` on.
+        let mut acc = 0u32;
+        for i in 0..n {
+            self.first[i] = acc;
+            for s in 0..parts {
+                let c = &mut counts[s * n + i];
+                (*c, acc) = (acc, acc + *c);
+            }
+        }
+        self.first[n] = acc;
+        // 6. The partners in ascending order into the lists, each share its own places.
+        self.ids.resize(acc as usize, 0);
+        let out = Out::new(&mut self.ids);
+        let order = &self.order[..];
+        // SAFETY: as in step 3, with the cursors of step 5.
+        each_part(parts, counts, n, |s, c| {
+            for j in cut[s]..cut[s + 1] {
+                for &i in &order[group[j] as usize..group[j + 1] as usize] {
+                    if i != NONE {
+                        let k = &mut c[i as usize];
+                        unsafe { out.put(*k as usize, j as u32) };
+                        *k += 1;
+                    }
+                }
+            }
+        });
+        Ok(())
+    }
+}
+
+/// An id no particle has: a mark not yet set, a repeat dropped.
+const NONE: u32 = u32::MAX;
+
+/// Pairs from which the assembly runs in parts (fewer cost more to fork than the parts save).
+const PARALLEL_PAIRS: usize = 1 << 15;
+
+/// Most parts of the assembly (one a thread; each holds a count a particle).
+const MAX_PARTS: usize = 8;
+
+/// Runs `f(p, counts of part p)` for each part: on their own threads when there are several,
+/// else on this thread without entering rayon.
+fn each_part(parts: usize, counts: &mut [u32], n: usize, f: impl Fn(usize, &mut [u32]) + Sync) {
+    if parts > 1 {
+        counts.par_chunks_mut(n).enumerate().for_each(|(p, c)| f(p, c));
+    } else {
+        f(0, counts);
+    }
+}
+
+/// The flattened pairs `[i, j, i, j, ...]` of several buffers, read as one sequence.
+struct PairSource<'a> {
+    bufs: &'a [Vec<u32>],
+    /// Pairs before each buffer (one more entry than buffers).
+    starts: &'a [usize],
+}
+
+impl PairSource<'_> {
+    /// Calls `f(i, j)` for the pairs `range` of the sequence, in order.
+    #[inline(always)]
+    fn each(&self, range: std::ops::Range<usize>, mut f: impl FnMut(u32, u32)) {
+        let b0 = self.starts.partition_point(|&s| s <= range.start).saturating_sub(1);
+        for (b, buf) in self.bufs.iter().enumerate().skip(b0) {
+            let s = self.starts[b];
+            if s >= range.end {
+                break;
+            }
+            let (from, to) = (range.start.max(s) - s, range.end.min(self.starts[b + 1]) - s);
+            for p in buf[2 * from..2 * to].chunks_exact(2) {
+                f(p[0], p[1]);
+            }
+        }
+    }
+}
+
+/// A raw view of an id array that the parts of a sort write at disjoint places.
+#[derive(Clone, Copy)]
+struct Out {
+    ptr: *mut u32,
+    len: usize,
+}
+
+// SAFETY: a pointer and a length; `put` is unsafe and its callers write disjoint places.
+unsafe impl Send for Out {}
+// SAFETY: as above.
+unsafe impl Sync for Out {}
+
+impl Out {
+    fn new(v: &mut [u32]) -> Self {
+        Out {
+            ptr: v.as_mut_ptr(),
+            len: v.len(),
+        }
+    }
+
+    /// Writes `v` at `at`.
+    ///
+    /// # Safety
+    /// Nothing else reads or writes place `at` while the view is in use.
+    #[inline(always)]
+    unsafe fn put(self, at: usize, v: u32) {
+        assert!(at < self.len);
+        // SAFETY: in bounds (checked) and exclusive by the caller's guarantee.
+        unsafe { self.ptr.add(at).write(v) }
     }
 }
 
@@ -166,47 +304,49 @@ mod tests {
 
     #[test]
     fn pairs_become_sorted_unique_upper_lists_on_any_split() {
-        // 600 particles, pairs (i, j) with j - i in {1, 7, 300} emitted in scrambled order,
-        // some twice, split over a varying number of tasks.
-        let n = 600usize;
-        let mut pairs = Vec::new();
-        for i in 0..n {
-            for s in [300usize, 1, 7] {
-                if i + s < n {
-                    pairs.push((i as u32, (i + s) as u32));
-                    if (i * s) % 5 == 0 {
+        // Pairs (i, j) with j - i in a few strides emitted in scrambled order, some twice,
+        // split over a varying number of tasks and threads; the second size has enough pairs
+        // for the assembly to run in parts.
+        for (n, strides) in [(600usize, vec![300usize, 1, 7]), (20_000, vec![4001, 300, 1, 7])] {
+            let mut pairs = Vec::new();
+            for i in 0..n {
+                for &s in &strides {
+                    if i + s < n {
                         pairs.push((i as u32, (i + s) as u32));
+                        if (i * s) % 5 == 0 {
+                            pairs.push((i as u32, (i + s) as u32));
+                        }
                     }
                 }
             }
-        }
-        pairs.reverse();
-        let mut want = Neighbours::new();
-        want.fill_serial(n, |i, buf| {
-            for s in [1usize, 7, 300] {
-                if i + s < n {
-                    buf.push((i + s) as u32);
-                }
-            }
-        })
-        .unwrap();
-        let mut got = Neighbours::new();
-        for tasks in [1usize, 3, 8] {
-            let per = pairs.len().div_ceil(tasks);
-            let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
-            pool.install(|| {
-                got.fill_pairs_parallel(n, tasks, |t, buf, _| {
-                    for &(i, j) in pairs.iter().skip(t * per).take(per) {
-                        buf.extend([i, j]);
-                    }
-                })
+            pairs.reverse();
+            assert_eq!(pairs.len() >= PARALLEL_PAIRS, n > 600);
+            let mut want = Neighbours::new();
+            want.fill_serial(n, |i, buf| {
+                let mut s = strides.clone();
+                s.sort_unstable();
+                buf.extend(s.iter().filter(|&&s| i + s < n).map(|&s| (i + s) as u32));
             })
             .unwrap();
-            assert_eq!(got, want, "{tasks} tasks");
+            let mut got = Neighbours::new();
+            for (tasks, threads) in [(1usize, 2usize), (3, 2), (8, 2), (8, 3), (5, 1)] {
+                let per = pairs.len().div_ceil(tasks);
+                let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+                pool.install(|| {
+                    got.fill_pairs_parallel(n, tasks, |t, buf, _| {
+                        for &(i, j) in pairs.iter().skip(t * per).take(per) {
+                            buf.extend([i, j]);
+                        }
+                    })
+                })
+                .unwrap();
+                assert_eq!(got, want, "{n} particles, {tasks} tasks, {threads} threads");
+            }
+            got.fill_pairs_serial(n, |buf, _| pairs.iter().for_each(|&(i, j)| buf.extend([i, j])))
+                .unwrap();
+            assert_eq!(got, want);
         }
-        got.fill_pairs_serial(n, |buf, _| pairs.iter().for_each(|&(i, j)| buf.extend([i, j])))
-            .unwrap();
-        assert_eq!(got, want);
+        let mut got = Neighbours::new();
         got.fill_pairs_serial(5, |_, _| {}).unwrap();
         assert_eq!((got.len(), got.total()), (5, 0));
     }
