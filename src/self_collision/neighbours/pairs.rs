@@ -124,18 +124,9 @@ impl Neighbours {
         each_part(parts, counts, n, |p, c| src.each(range(p), |_, j| c[j as usize] += 1));
         // 2. Group `j` starts at `group[j]`; part `p` places its smaller ids of partner `j`
         //    from `counts[p n + j]` on.
-        let group = &mut self.by_j;
-        group.clear();
-        group.resize(n + 1, 0);
-        let mut acc = 0u32;
-        for j in 0..n {
-            group[j] = acc;
-            for p in 0..parts {
-                let c = &mut counts[p * n + j];
-                (*c, acc) = (acc, acc + *c);
-            }
-        }
-        group[n] = acc;
+        self.by_j.clear();
+        self.by_j.resize(n + 1, 0);
+        cursors(counts, n, &mut self.by_j);
         // 3. The smaller ids grouped by partner, each part its own places.
         self.order.clear();
         self.order.resize(m, 0);
@@ -193,17 +184,9 @@ impl Neighbours {
         }
         // 5. List `i` starts at `first[i]`; share `s` places its partners of `i` from
         //    `counts[s n + i]` on.
-        let mut acc = 0u32;
-        for i in 0..n {
-            self.first[i] = acc;
-            for s in 0..parts {
-                let c = &mut counts[s * n + i];
-                (*c, acc) = (acc, acc + *c);
-            }
-        }
-        self.first[n] = acc;
+        cursors(counts, n, &mut self.first);
         // 6. The partners in ascending order into the lists, each share its own places.
-        self.ids.resize(acc as usize, 0);
+        self.ids.resize(self.first[n] as usize, 0);
         let out = Out::new(&mut self.ids);
         let order = &self.order[..];
         // SAFETY: as in step 3, with the cursors of step 5.
@@ -230,6 +213,22 @@ const PARALLEL_PAIRS: usize = 1 << 15;
 
 /// Most parts of the assembly (one a thread; each holds a count a particle).
 const MAX_PARTS: usize = 8;
+
+/// Turns the parts' counts (`n` keys a part, part after part) into cursors: key `k` starts at
+/// `starts[k]` (`starts[n]` the total), and part `p` places its keys `k` from
+/// `counts[p n + k]` on, after the earlier parts' keys `k`.
+fn cursors(counts: &mut [u32], n: usize, starts: &mut [u32]) {
+    let parts = counts.len() / n;
+    let mut acc = 0u32;
+    for k in 0..n {
+        starts[k] = acc;
+        for p in 0..parts {
+            let c = &mut counts[p * n + k];
+            (*c, acc) = (acc, acc + *c);
+        }
+    }
+    starts[n] = acc;
+}
 
 /// Runs `f(p, counts of part p)` for each part: on their own threads when there are several,
 /// else on this thread without entering rayon.
@@ -322,10 +321,10 @@ mod tests {
             pairs.reverse();
             assert_eq!(pairs.len() >= PARALLEL_PAIRS, n > 600);
             let mut want = Neighbours::new();
+            let mut ascending = strides.clone();
+            ascending.sort_unstable();
             want.fill_serial(n, |i, buf| {
-                let mut s = strides.clone();
-                s.sort_unstable();
-                buf.extend(s.iter().filter(|&&s| i + s < n).map(|&s| (i + s) as u32));
+                buf.extend(ascending.iter().filter(|&&s| i + s < n).map(|&s| (i + s) as u32))
             })
             .unwrap();
             let mut got = Neighbours::new();
