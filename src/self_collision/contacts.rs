@@ -10,9 +10,9 @@
 //! The list is ordered by `i` then `j`, so every particle receives its contacts in ascending
 //! partner order, as a loop over its own sorted list would, however the particles are split;
 //! the chunks are fixed, so nothing depends on the thread count. The sums live in per-particle
-//! arrays that are zero outside the blocks the last pass touched, which the next pass zeroes
-//! first: a pass writes whole blocks (a run of each of the eleven arrays), only those it
-//! touches, each part its own.
+//! arrays that are zero outside the blocks the last pass touched: a pass writes whole blocks
+//! (a run of each of the eleven arrays), those it touches and, back to zero, those of the
+//! last pass it does not touch, each part its own.
 
 use crate::data::exec::Exec;
 use rayon::prelude::*;
@@ -192,8 +192,8 @@ impl ContactPass {
         let part = |part: usize, acc: &mut [([f32; 11], f32)], hit: &mut [bool], mut rows: SumRows<'_>, touched: &mut Vec<u32>| {
             let b0 = part * blocks;
             let mine = old.partition_point(|&b| (b as usize) < b0)..old.partition_point(|&b| (b as usize) < b0 + hit.len());
-            for &b in &old[mine] {
-                rows.set_block(b as usize - b0, |_| [0.0; 11]);
+            let mine = &old[mine];
+            for &b in mine {
                 hit[b as usize - b0] = false;
             }
             let first_id = b0 * LANES;
@@ -206,6 +206,12 @@ impl ContactPass {
                     if c.add_to(side, out, approaching) {
                         hit[(a - first_id) / LANES] = true;
                     }
+                }
+            }
+            // The last pass's blocks that this one does not overwrite below go back to zero.
+            for &b in mine {
+                if !hit[b as usize - b0] {
+                    rows.set_block(b as usize - b0, |_| [0.0; 11]);
                 }
             }
             touched.clear();
