@@ -176,10 +176,10 @@ impl ContactPass {
         } else {
             bufs.0.iter_mut().zip(bufs.1.iter_mut()).enumerate().for_each(|(c, b)| find(c, b));
         }
-        // The particles are split into parts of whole blocks, each (on its own thread) zeroing
-        // the sums the last pass left in its blocks, adding the contacts of its own particles
-        // in list order (every part reads the whole contact list) and storing the sums of the
-        // blocks it touched: the same sums whatever the split, so it follows the threads.
+        // The particles are split into parts of whole blocks, each (on its own thread) adding
+        // the contacts of its own particles in list order (every part reads the whole contact
+        // list), zeroing the blocks of its last pass it did not touch now and storing the sums
+        // of the blocks it touched: the same sums whatever the split, so it follows the threads.
         let contacts: usize = self.near[..chunks].iter().map(Vec::len).sum();
         let parts = if exec.parallel() && contacts >= PARALLEL_CONTACTS {
             rayon::current_num_threads().clamp(1, MAX_PARTS)
