@@ -115,8 +115,8 @@ const MAX_PARTS: usize = 16;
 /// `len` (the padded particle count, a multiple of eight) must cover it. The particles
 /// beyond the grid are finished with the last band.
 ///
-/// The bands are cut into parts of consecutive bands (at least two, at most [`MAX_PARTS`]
-/// parts, by the band count alone). A task runs its part band after band: the band's
+/// The bands are cut into parts of consecutive bands ([`part_bounds`]: a multiple of the
+/// pool's threads, about as many rows in each). A task runs its part band after band: the band's
 /// colours, then the seam above it, then finishes the rows that no later constraint of
 /// the sweep touches (all but the two rows on each side of a seam still to come). After
 /// the tasks, the seams between parts and the rows around them. A particle meets its
@@ -151,16 +151,16 @@ pub(crate) fn run_wave<const RESET: bool, const STORE: bool>(
     let down = |i: usize| i - i % LANES;
     let up = |i: usize| down(i + LANES - 1).min(len);
     let work: usize = bands.iter().chain(seams.iter()).map(|c| c.real).sum();
-    let per_part = if parallel && work > SERIAL_MAX {
-        nb.div_ceil(MAX_PARTS).max(2)
+    let threads = if parallel && work > SERIAL_MAX {
+        rayon::current_num_threads()
     } else {
-        nb
+        1
     };
-    let parts = nb.div_ceil(per_part);
+    let (first, parts) = part_bounds(nb, b, spec.rows as usize, threads);
     // where part `k`'s own finished range starts
-    let start = |k: usize| if k == 0 { 0 } else { up((k * per_part * b + 2) * cols) };
+    let start = |k: usize| if k == 0 { 0 } else { up((first[k] * b + 2) * cols) };
     let run_part = |k: usize| -> usize {
-        let (q0, q1) = (k * per_part, ((k + 1) * per_part).min(nb));
+        let (q0, q1) = (first[k], first[k + 1]);
         let mut done = start(k);
         for q in q0..q1 {
             group(bands, &band_l, q);
@@ -176,7 +176,7 @@ pub(crate) fn run_wave<const RESET: bool, const STORE: bool>(
         done
     };
     let fix = |k: usize, from: usize| {
-        group(seams, &seam_l, k * per_part - 1);
+        group(seams, &seam_l, first[k] - 1);
         let to = start(k);
         if to > from {
             finish(from..to);
@@ -193,6 +193,32 @@ pub(crate) fn run_wave<const RESET: bool, const STORE: bool>(
     (1..parts)
         .into_par_iter()
         .for_each(|k| fix(k, ends[k - 1].load(std::sync::atomic::Ordering::Relaxed)));
+}
+
+/// The first band of each part of a wave over `nb` bands of `b` rows (the last band holds the
+/// rest of `rows`) on a pool of `threads`, and the number of parts: the largest multiple of
+/// the threads that leaves each part two bands or more, at most [`MAX_PARTS`] (two bands a
+/// part keep the seams of one boundary and the rows around it apart from the next
+/// boundary's); the part boundaries where the rows split most evenly. One thread, or fewer
+/// than four bands: one part. Parts only decide which task runs a band; the bits do not
+/// depend on them.
+fn part_bounds(nb: usize, b: usize, rows: usize, threads: usize) -> ([usize; MAX_PARTS + 1], usize) {
+    let mut first = [nb; MAX_PARTS + 1];
+    first[0] = 0;
+    let most = (nb / 2).min(MAX_PARTS);
+    if threads < 2 || most < 2 {
+        return (first, 1);
+    }
+    let t = threads.min(most);
+    let parts = most / t * t;
+    // part k starts at the band boundary nearest k / parts of the rows, at least two bands
+    // after the last start and early enough to leave two bands to each later part
+    for k in 1..parts {
+        let want = (k * rows + parts / 2) / parts;
+        let q = (want + b / 2) / b;
+        first[k] = q.max(first[k - 1] + 2).min(nb - 2 * (parts - k));
+    }
+    (first, parts)
 }
 
 /// Solves the row at position `at` of a grid colour: whole blocks in SIMD, the rest one at a
@@ -272,6 +298,48 @@ unsafe fn row<const RESET: bool, const STORE: bool>(g: &GridColour, at: usize, l
         }
         if STORE {
             *l = l1;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{part_bounds, MAX_PARTS};
+
+    /// Parts cover the bands in order, two bands or more each, a multiple of the threads, and
+    /// split the rows about evenly: with four bands a part or more, no part is a band above or
+    /// below its even share of the rows.
+    #[test]
+    fn parts_are_whole_bands_a_multiple_of_the_threads_and_even_in_rows() {
+        assert_eq!(part_bounds(7, 16, 100, 2), ([0, 3, 7, 7, 7, 7, 7, 7, 7, 7, 7, 7, 7, 7, 7, 7, 7], 2));
+        for threads in 1..=5 {
+            for nb in 1..=70 {
+                for b in [4usize, 7, 16] {
+                    for last in [1, b] {
+                        let rows = (nb - 1) * b + last;
+                        let (first, parts) = part_bounds(nb, b, rows, threads);
+                        let bands = |k: usize| first[k]..first[k + 1];
+                        let rows_of = |k: usize| bands(k).map(|q| if q + 1 == nb { last } else { b }).sum::<usize>();
+                        assert_eq!((first[0], first[parts]), (0, nb));
+                        if threads == 1 || nb < 4 {
+                            assert_eq!(parts, 1);
+                            continue;
+                        }
+                        assert!(parts <= MAX_PARTS && parts.is_multiple_of(threads.min(nb / 2)));
+                        assert!((0..parts).all(|k| bands(k).len() >= 2), "{nb} bands, {threads} threads: {first:?}");
+                        let share = rows.div_ceil(parts);
+                        let most = (0..parts).map(rows_of).max().unwrap();
+                        let few = (0..parts).map(rows_of).min().unwrap();
+                        // the clamps to two bands a part may leave a part above its share
+                        if nb >= 4 * parts {
+                            assert!(
+                                most <= share + b && few + b >= rows / parts,
+                                "{nb} bands of {b}, {threads} threads: {first:?}"
+                            );
+                        }
+                    }
+                }
+            }
         }
     }
 }
