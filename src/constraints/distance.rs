@@ -240,15 +240,45 @@ impl DistanceSet {
     /// `parallel` (on the current rayon pool).
     pub fn solve_simd(&mut self, px: &mut [f32], py: &mut [f32], pz: &mut [f32], w: &[f32], inv_h2: f32, parallel: bool) {
         let p = SharedVec3::new(px, py, pz);
-        let (solve, pass): (Solve, GridPass) = match self.take_reset() {
-            (true, true) => (solve_block_simd::<true, true>, grid_sweep::run_pass::<true, true>),
-            (true, false) => (solve_block_simd::<true, false>, grid_sweep::run_pass::<true, false>),
-            _ => (solve_block_simd::<false, true>, grid_sweep::run_pass::<false, true>),
+        let (solve, pass, wave): (Solve, GridPass, GridWave) = match self.take_reset() {
+            (true, true) => (
+                solve_block_simd::<true, true>,
+                grid_sweep::run_pass::<true, true>,
+                grid_sweep::run_wave::<true, true>,
+            ),
+            (true, false) => (
+                solve_block_simd::<true, false>,
+                grid_sweep::run_pass::<true, false>,
+                grid_sweep::run_wave::<true, false>,
+            ),
+            _ => (
+                solve_block_simd::<false, true>,
+                grid_sweep::run_pass::<false, true>,
+                grid_sweep::run_wave::<false, true>,
+            ),
         };
         let sweep = Sweep { p, w, inv_h2 };
+        let mut after_wave = false;
         for pass_k in 0..self.passes.len() {
+            if std::mem::take(&mut after_wave) {
+                continue;
+            }
             match &self.passes[pass_k] {
-                Pass::Grid(range) => pass(&mut self.colours[range.clone()], &sweep, parallel),
+                Pass::Grid(range) => match self.seams_of(pass_k) {
+                    // a grid's bands and then its seams: one wave
+                    Some(seams) => {
+                        let (bands, rest) = self.colours[range.start..].split_at_mut(range.len());
+                        wave(
+                            bands,
+                            &mut rest[seams.start - range.end..seams.end - range.end],
+                            &sweep,
+                            parallel,
+                            None,
+                        );
+                        after_wave = true;
+                    }
+                    None => pass(&mut self.colours[range.clone()], &sweep, parallel),
+                },
                 &Pass::Planned(k) => {
                     let col = &mut self.colours[k];
                     if parallel && col.a.len() > CHUNK {
@@ -276,6 +306,17 @@ impl DistanceSet {
                 }
             }
         }
+    }
+
+    /// The seam colours of the grid whose band colours are pass `k`, when they are the next
+    /// pass.
+    fn seams_of(&self, k: usize) -> Option<std::ops::Range<usize>> {
+        let grid = |k: usize| match self.passes.get(k)? {
+            Pass::Grid(r) => Some((r.clone(), self.colours[r.start].grid.as_ref()?)),
+            Pass::Planned(_) => None,
+        };
+        let ((_, bands), (seams, s)) = (grid(k)?, grid(k + 1)?);
+        (!bands.seam && s.seam && s.spec == bands.spec).then_some(seams)
     }
 
     /// Whether [`solve_wave`](Self::solve_wave) can run this set over `count` particles: every
@@ -322,7 +363,7 @@ impl DistanceSet {
             Pass::Planned(k) => *k,
         });
         let (bands, seams) = self.colours.split_at_mut(split);
-        wave(bands, seams, &sweep, parallel, p.len(), finish);
+        wave(bands, seams, &sweep, parallel, Some((p.len(), finish)));
     }
 
     /// The scalar f32 twin of [`solve_simd`](Self::solve_simd): one constraint at a time,
@@ -352,6 +393,8 @@ impl DistanceSet {
 type Solve = fn(&Cons<'_>, &mut [f32], &[Window], &SharedVec3, &[f32], f32);
 /// The kernel of one grid pass (see [`grid_sweep::run_pass`]).
 type GridPass = fn(&mut [Colour], &Sweep<'_>, bool);
+/// The kernel of one grid's bands and seams as a wave (see [`grid_sweep::run_wave`]).
+type GridWave = fn(&mut [Colour], &mut [Colour], &Sweep<'_>, bool, Option<grid_sweep::Finish<'_>>);
 
 /// One chunk of a colour's constraint arrays (a multiple of the lane width long).
 struct Cons<'a> {

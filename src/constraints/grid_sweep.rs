@@ -109,11 +109,17 @@ unsafe fn sweep_group<const RESET: bool, const STORE: bool>(colours: &[Colour], 
 /// Most parts a wave is cut into (see [`run_wave`]).
 const MAX_PARTS: usize = 16;
 
-/// One sweep of a grid's band colours and seam colours as a wave that hands every particle to
-/// `finish` (ranges of whole blocks of eight, each particle once) as soon as the sweep is done
-/// with it, while the particle is still in cache; the grid must start at particle 0 and
-/// `len` (the padded particle count, a multiple of eight) must cover it. The particles
-/// beyond the grid are finished with the last band.
+/// What a wave hands the particles to once the sweep is done with them: the padded particle
+/// count (a multiple of eight, covering the grid, which must start at particle 0) and the
+/// function that takes ranges of them.
+pub(crate) type Finish<'a> = (usize, &'a (dyn Fn(std::ops::Range<usize>) + Sync));
+
+/// One sweep of a grid's band colours and seam colours as a wave. With `finish`, every
+/// particle is handed to it (ranges of whole blocks of eight, each particle once) as soon as
+/// the sweep is done with it, while the particle is still in cache; the particles beyond the
+/// grid are finished with the last band. Without, the wave is just the sweep: each seam runs
+/// right after the bands on both its sides, and a pass needs one fork and join where
+/// [`run_pass`] over the bands and then over the seams needs two.
 ///
 /// The bands are cut into parts of consecutive bands ([`part_bounds`]: a multiple of the
 /// pool's threads, about as many rows in each). A task runs its part band after band: the band's
@@ -128,16 +134,25 @@ pub(crate) fn run_wave<const RESET: bool, const STORE: bool>(
     seams: &mut [Colour],
     s: &Sweep<'_>,
     parallel: bool,
-    len: usize,
-    finish: &(dyn Fn(std::ops::Range<usize>) + Sync),
+    finish: Option<Finish<'_>>,
 ) {
     let Some(spec) = bands.first().and_then(|c| c.grid.as_ref()).map(|g| g.spec) else {
-        finish(0..len);
+        if let Some((len, f)) = finish {
+            f(0..len);
+        }
         return;
     };
     let same = |c: &Colour| c.grid.as_ref().is_some_and(|g| g.spec == spec);
-    assert!(spec.first == 0 && bands.iter().chain(seams.iter()).all(same));
-    assert!(len.is_multiple_of(LANES) && (spec.rows * spec.cols) as usize <= len);
+    assert!(bands.iter().chain(seams.iter()).all(same));
+    let len = finish.map_or(0, |(len, _)| len);
+    if finish.is_some() {
+        assert!(spec.first == 0 && len.is_multiple_of(LANES) && (spec.rows * spec.cols) as usize <= len);
+    }
+    let finish = |r: std::ops::Range<usize>| {
+        if let Some((_, f)) = finish {
+            f(r);
+        }
+    };
     let (band_l, seam_l) = (multipliers(bands), multipliers(seams));
     let (bands, seams): (&[Colour], &[Colour]) = (bands, seams);
     // SAFETY (the three closures below): as in `run_pass`, a group's rows touch only the
@@ -196,27 +211,30 @@ pub(crate) fn run_wave<const RESET: bool, const STORE: bool>(
 }
 
 /// The first band of each part of a wave over `nb` bands of `b` rows (the last band holds the
-/// rest of `rows`) on a pool of `threads`, and the number of parts: the largest multiple of
-/// the threads that leaves each part two bands or more, at most [`MAX_PARTS`] (two bands a
-/// part keep the seams of one boundary and the rows around it apart from the next
-/// boundary's); the part boundaries where the rows split most evenly. One thread, or fewer
-/// than four bands: one part. Parts only decide which task runs a band; the bits do not
-/// depend on them.
+/// rest of `rows`) on a pool of `threads`, and the number of parts: a multiple of the threads,
+/// about two bands a thread or more, at most [`MAX_PARTS`], with the part boundaries where
+/// the rows split most evenly. A part between two others holds two bands or more, so that
+/// the seams of its two boundaries and the rows around them stay apart; the first and the
+/// last part may hold one. One thread, or one band: one part. Parts only decide which task
+/// runs a band; the bits do not depend on them.
 fn part_bounds(nb: usize, b: usize, rows: usize, threads: usize) -> ([usize; MAX_PARTS + 1], usize) {
     let mut first = [nb; MAX_PARTS + 1];
     first[0] = 0;
-    let most = (nb / 2).min(MAX_PARTS);
-    if threads < 2 || most < 2 {
+    let most = ((nb + 2) / 2).min(MAX_PARTS);
+    if threads < 2 || nb < 2 {
         return (first, 1);
     }
     let t = threads.min(most);
-    let parts = most / t * t;
-    // part k starts at the band boundary nearest k / parts of the rows, at least two bands
-    // after the last start and early enough to leave two bands to each later part
+    let parts = (t * (nb / (2 * t)).max(1)).min(most / t * t);
+    // bands that parts k.. need: two each, one for the last
+    let need = |k: usize| 2 * (parts - k) - 1;
+    // part k starts at the band boundary nearest k / parts of the rows, after the bands the
+    // previous part needs and early enough to leave the later parts theirs
     for k in 1..parts {
         let want = (k * rows + parts / 2) / parts;
         let q = (want + b / 2) / b;
-        first[k] = q.max(first[k - 1] + 2).min(nb - 2 * (parts - k));
+        let after = first[k - 1] + if k == 1 { 1 } else { 2 };
+        first[k] = q.max(after).min(nb - need(k));
     }
     (first, parts)
 }
@@ -306,12 +324,18 @@ unsafe fn row<const RESET: bool, const STORE: bool>(g: &GridColour, at: usize, l
 mod tests {
     use super::{part_bounds, MAX_PARTS};
 
-    /// Parts cover the bands in order, two bands or more each, a multiple of the threads, and
-    /// split the rows about evenly: with four bands a part or more, no part is a band above or
-    /// below its even share of the rows.
+    /// Parts cover the bands in order, two bands or more each but the first and the last, a
+    /// multiple of the threads, and split the rows about evenly: with four bands a part or
+    /// more, no part is a band above or below its even share of the rows.
     #[test]
     fn parts_are_whole_bands_a_multiple_of_the_threads_and_even_in_rows() {
-        assert_eq!(part_bounds(7, 16, 100, 2), ([0, 3, 7, 7, 7, 7, 7, 7, 7, 7, 7, 7, 7, 7, 7, 7, 7], 2));
+        let bounds = |nb, b, rows, t| {
+            let (first, parts) = part_bounds(nb, b, rows, t);
+            first[..=parts].to_vec()
+        };
+        assert_eq!(bounds(7, 16, 100, 2), [0, 3, 7]);
+        assert_eq!(bounds(3, 16, 40, 2), [0, 1, 3]);
+        assert_eq!(bounds(2, 16, 20, 3), [0, 1, 2]);
         for threads in 1..=5 {
             for nb in 1..=70 {
                 for b in [4usize, 7, 16] {
@@ -321,12 +345,22 @@ mod tests {
                         let bands = |k: usize| first[k]..first[k + 1];
                         let rows_of = |k: usize| bands(k).map(|q| if q + 1 == nb { last } else { b }).sum::<usize>();
                         assert_eq!((first[0], first[parts]), (0, nb));
-                        if threads == 1 || nb < 4 {
+                        if threads == 1 || nb < 2 {
                             assert_eq!(parts, 1);
                             continue;
                         }
-                        assert!(parts <= MAX_PARTS && parts.is_multiple_of(threads.min(nb / 2)));
-                        assert!((0..parts).all(|k| bands(k).len() >= 2), "{nb} bands, {threads} threads: {first:?}");
+                        // as many parts as bands allow when that is fewer than the threads
+                        let most = ((nb + 2) / 2).min(MAX_PARTS);
+                        assert!(
+                            parts <= most
+                                && if threads <= most {
+                                    parts.is_multiple_of(threads)
+                                } else {
+                                    parts == most
+                                }
+                        );
+                        let fits = |k: usize| bands(k).len() >= if k == 0 || k + 1 == parts { 1 } else { 2 };
+                        assert!((0..parts).all(fits), "{nb} bands, {threads} threads: {first:?}");
                         let share = rows.div_ceil(parts);
                         let most = (0..parts).map(rows_of).max().unwrap();
                         let few = (0..parts).map(rows_of).min().unwrap();
