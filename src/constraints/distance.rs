@@ -319,6 +319,14 @@ impl DistanceSet {
         (!bands.seam && s.seam && s.spec == bands.spec).then_some(seams)
     }
 
+    /// Whether the grid's bands start on whole blocks of eight particles, so that
+    /// [`solve_wave`](Self::solve_wave) can hand them to a `before` (a set for which
+    /// [`wave_ready`](Self::wave_ready) holds).
+    pub fn bands_on_blocks(&self) -> bool {
+        let cols = self.colours.first().and_then(|c| c.grid.as_ref()).map(|g| g.spec.cols);
+        cols.is_some_and(grid_sweep::bands_on_blocks)
+    }
+
     /// Whether [`solve_wave`](Self::solve_wave) can run this set over `count` particles: every
     /// constraint is in the structured colours of one grid cloth that starts at particle 0 and
     /// holds all `count` particles.
@@ -338,15 +346,18 @@ impl DistanceSet {
     }
 
     /// One sweep of [`solve_simd`](Self::solve_simd) as a wave over the grid that hands each
-    /// range of particles to `finish` as soon as the sweep is done with it, all `p`'s
-    /// particles once ([`grid_sweep::run_wave`]); the same bits as the sweep followed by
-    /// `finish` over all particles. Requires [`wave_ready`](Self::wave_ready).
+    /// range of particles to `after` as soon as the sweep is done with it, all `p`'s
+    /// particles once ([`grid_sweep::run_wave`]), and with `before`, each band's particles
+    /// to it just before the sweep reaches them; the same bits as `before` over all
+    /// particles, the sweep, then `after` over all particles. Requires
+    /// [`wave_ready`](Self::wave_ready), and for `before`, [`bands_on_blocks`](Self::bands_on_blocks).
     pub fn solve_wave(
         &mut self,
         p: &crate::data::particles::RawParticles<'_>,
         inv_h2: f32,
         parallel: bool,
-        finish: &(dyn Fn(std::ops::Range<usize>) + Sync),
+        before: Option<&(dyn Fn(std::ops::Range<usize>) + Sync)>,
+        after: &(dyn Fn(std::ops::Range<usize>) + Sync),
     ) {
         let wave = match self.take_reset() {
             (true, true) => grid_sweep::run_wave::<true, true>,
@@ -363,7 +374,12 @@ impl DistanceSet {
             Pass::Planned(k) => *k,
         });
         let (bands, seams) = self.colours.split_at_mut(split);
-        wave(bands, seams, &sweep, parallel, Some((p.len(), finish)));
+        let finish = grid_sweep::Finish {
+            len: p.len(),
+            before,
+            after,
+        };
+        wave(bands, seams, &sweep, parallel, Some(finish));
     }
 
     /// The scalar f32 twin of [`solve_simd`](Self::solve_simd): one constraint at a time,

@@ -109,15 +109,29 @@ unsafe fn sweep_group<const RESET: bool, const STORE: bool>(colours: &[Colour], 
 /// Most parts a wave is cut into (see [`run_wave`]).
 const MAX_PARTS: usize = 16;
 
-/// What a wave hands the particles to once the sweep is done with them: the padded particle
-/// count (a multiple of eight, covering the grid, which must start at particle 0) and the
-/// function that takes ranges of them.
-pub(crate) type Finish<'a> = (usize, &'a (dyn Fn(std::ops::Range<usize>) + Sync));
+/// What a wave hands the particles to around the sweep (the grid must start at particle 0).
+#[derive(Clone, Copy)]
+pub(crate) struct Finish<'a> {
+    /// The padded particle count (a multiple of eight, covering the grid).
+    pub len: usize,
+    /// Takes each band's particles (the last band's up to `len`) just before the sweep
+    /// reaches the band; requires band edges on whole blocks of eight ([`bands_on_blocks`]).
+    pub before: Option<&'a (dyn Fn(std::ops::Range<usize>) + Sync)>,
+    /// Takes every particle once, in ranges of whole blocks, once the sweep is done with it.
+    pub after: &'a (dyn Fn(std::ops::Range<usize>) + Sync),
+}
+
+/// Whether every band of a grid of `cols` columns starts on a whole block of eight particles
+/// (the grid starting at particle 0), as [`Finish::before`] requires.
+pub(crate) fn bands_on_blocks(cols: u32) -> bool {
+    (super::grid::band_rows(cols) as usize * cols as usize).is_multiple_of(LANES)
+}
 
 /// One sweep of a grid's band colours and seam colours as a wave. With `finish`, every
-/// particle is handed to it (ranges of whole blocks of eight, each particle once) as soon as
-/// the sweep is done with it, while the particle is still in cache; the particles beyond the
-/// grid are finished with the last band. Without, the wave is just the sweep: each seam runs
+/// particle is handed to its `after` (ranges of whole blocks of eight, each particle once) as
+/// soon as the sweep is done with it, while the particle is still in cache, and each band to
+/// its `before` just before the sweep reaches the band; the particles beyond the grid go with
+/// the last band. Without, the wave is just the sweep: each seam runs
 /// right after the bands on both its sides, and a pass needs one fork and join where
 /// [`run_pass`] over the bands and then over the seams needs two.
 ///
@@ -137,20 +151,25 @@ pub(crate) fn run_wave<const RESET: bool, const STORE: bool>(
     finish: Option<Finish<'_>>,
 ) {
     let Some(spec) = bands.first().and_then(|c| c.grid.as_ref()).map(|g| g.spec) else {
-        if let Some((len, f)) = finish {
-            f(0..len);
+        if let Some(f) = finish {
+            if let Some(before) = f.before {
+                before(0..f.len);
+            }
+            (f.after)(0..f.len);
         }
         return;
     };
     let same = |c: &Colour| c.grid.as_ref().is_some_and(|g| g.spec == spec);
     assert!(bands.iter().chain(seams.iter()).all(same));
-    let len = finish.map_or(0, |(len, _)| len);
-    if finish.is_some() {
+    let len = finish.map_or(0, |f| f.len);
+    if let Some(f) = finish {
         assert!(spec.first == 0 && len.is_multiple_of(LANES) && (spec.rows * spec.cols) as usize <= len);
+        assert!(f.before.is_none() || bands_on_blocks(spec.cols));
     }
+    let before = finish.and_then(|f| f.before);
     let finish = |r: std::ops::Range<usize>| {
-        if let Some((_, f)) = finish {
-            f(r);
+        if let Some(f) = finish {
+            (f.after)(r);
         }
     };
     let (band_l, seam_l) = (multipliers(bands), multipliers(seams));
@@ -178,6 +197,9 @@ pub(crate) fn run_wave<const RESET: bool, const STORE: bool>(
         let (q0, q1) = (first[k], first[k + 1]);
         let mut done = start(k);
         for q in q0..q1 {
+            if let Some(before) = before {
+                before(q * b * cols..if q + 1 == nb { len } else { (q + 1) * b * cols });
+            }
             group(bands, &band_l, q);
             if q > q0 {
                 group(seams, &seam_l, q - 1);

@@ -339,6 +339,47 @@ impl<'a> RawParticles<'a> {
     }
 }
 
+/// A raw view of six saved arrays (see [`Particles::for_chunks_saving`]) that tasks fill by
+/// disjoint ranges, beside a [`RawParticles`] view.
+pub struct RawSaved<'a> {
+    arrays: [*mut f32; 6],
+    len: usize,
+    _borrow: std::marker::PhantomData<&'a mut [f32]>,
+}
+
+// SAFETY: pointers and a length; `range` is `unsafe`, and its callers hand each range to one
+// task.
+unsafe impl Send for RawSaved<'_> {}
+// SAFETY: as above.
+unsafe impl Sync for RawSaved<'_> {}
+
+impl<'a> RawSaved<'a> {
+    /// Resizes `saved` to `len` values each (allocating only when not yet sized) and captures
+    /// the arrays for `'a`.
+    pub fn new(saved: &'a mut [Vec<f32>; 6], len: usize) -> Self {
+        let arrays = saved.each_mut().map(|s| {
+            s.resize(len, 0.0);
+            s.as_mut_ptr()
+        });
+        RawSaved {
+            arrays,
+            len,
+            _borrow: std::marker::PhantomData,
+        }
+    }
+
+    /// Values `range` of the six arrays.
+    ///
+    /// # Safety
+    /// No other task reads or writes `range` of these arrays while the slices live.
+    pub unsafe fn range(&self, range: std::ops::Range<usize>) -> [&'a mut [f32]; 6] {
+        assert!(range.start <= range.end && range.end <= self.len);
+        // SAFETY: in bounds (checked above) and exclusive by the caller's guarantee.
+        self.arrays
+            .map(|a| unsafe { std::slice::from_raw_parts_mut(a.add(range.start), range.end - range.start) })
+    }
+}
+
 impl ParticleChunk<'_> {
     /// The same chunk, borrowed again (to hand it to one kernel and keep it for the next).
     pub fn reborrow(&mut self) -> ParticleChunk<'_> {

@@ -21,7 +21,9 @@
 //!   Fused forms, the same bits: obstacles that are all shapes run their contacts after each
 //!   chunk's predict, their last projection before its update and their velocity pass after
 //!   it (`obstacles::chunkwise`); a world that is one grid cloth swept once a substep runs
-//!   the sweep and the update pass as one wave (`DistanceSet::solve_wave`).
+//!   the sweep and the update pass as one wave (`DistanceSet::solve_wave`), which also
+//!   predicts each band just before sweeping it when the world has no obstacle and the
+//!   bands start on whole blocks.
 //!   (solver.method = symplectic-euler | leapfrog | implicit-euler: the force-based step of
 //!    integrate::mass_spring / integrate::implicit replaces the substep loop above; its drift
 //!    feeds the obstacle and self-collision stages as the prediction p, world::contacts)
@@ -37,7 +39,7 @@
 
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use crate::data::particles::{chunk_finite_simd, ParticleChunk, RawParticles};
+use crate::data::particles::{chunk_finite_simd, ParticleChunk, RawParticles, RawSaved};
 use crate::error::{positive, Result, WeftError};
 use crate::integrate::{predict, update, PredictParams};
 use crate::model::params::Method;
@@ -233,6 +235,11 @@ impl World {
         let obstacle_ns = AtomicU64::new(0);
         let mut predicted_ahead = false;
         for s in 0..n_sub {
+            // The wave predicts each band just before it sweeps it, when bands start on whole
+            // blocks (elementwise, so the same bits as a pass before the sweep). Not with
+            // obstacles: their contacts of this substep and the update's stages of the next
+            // would need the contact slots at once.
+            let wave_predicts = wave && !predicted_ahead && !has_obstacles && self.distance.bands_on_blocks();
             let t = self.time + (s as f64) * (h as f64);
             if let (Some(w), Some(state)) = (&self.effects.wind, &mut self.wind) {
                 let p = &self.particles;
@@ -255,8 +262,8 @@ impl World {
                         timed(&obstacle_ns, || co.contacts(c, simd));
                     }
                 };
-                if predicted_ahead {
-                    // done by the previous substep's update pass
+                if predicted_ahead || wave_predicts {
+                    // done by the previous substep's update pass, or by the wave below
                 } else if fused_guard && s == 0 {
                     self.particles.for_chunks_saving(parallel, &mut self.backup, |mut c, saved| {
                         for (dst, src) in saved.into_iter().zip(c.state()) {
@@ -359,7 +366,14 @@ impl World {
                 } else {
                     Obstacles::None
                 };
-                let (particles, distance) = (&mut self.particles, &mut self.distance);
+                let (particles, distance, backup) = (&mut self.particles, &mut self.distance, &mut self.backup);
+                // this substep's predict, when the wave runs it (see `wave_predicts`)
+                let pp_now = PredictParams {
+                    h,
+                    gravity: self.effects.gravity,
+                    drag: self.effects.drag,
+                    force: self.wind.as_ref().map(|w| [&w.fx[..], &w.fy[..], &w.fz[..]]),
+                };
                 let mut run = |motion: &[([f32; 3], f32)]| {
                     let body = |mut c: ParticleChunk<'_>| {
                         if let (Obstacles::Chunkwise(co), true) = (&stages, fuse_project) {
@@ -386,10 +400,24 @@ impl World {
                         }
                     };
                     if wave {
+                        let len = particles.padded_len();
+                        let saved = (wave_predicts && fused_guard && s == 0).then(|| RawSaved::new(backup, len));
                         let raw = RawParticles::new(particles);
-                        // SAFETY: the wave hands each range to one call, once the sweep is
-                        // done with its particles and while no other task touches them.
-                        distance.solve_wave(&raw, inv_h2, parallel, &|r| body(unsafe { raw.chunk(r) }));
+                        // SAFETY (both closures): the wave hands each range to one call, before
+                        // the sweep reaches its particles or once it is done with them, while no
+                        // other task touches them.
+                        let predict_band = |r: std::ops::Range<usize>| {
+                            let mut c = unsafe { raw.chunk(r.clone()) };
+                            if let Some(saved) = &saved {
+                                for (dst, src) in unsafe { saved.range(r) }.into_iter().zip(c.state()) {
+                                    dst.copy_from_slice(src);
+                                }
+                            }
+                            predict(c.reborrow(), &pp_now, simd);
+                        };
+                        let before: Option<&(dyn Fn(std::ops::Range<usize>) + Sync)> =
+                            if wave_predicts { Some(&predict_band) } else { None };
+                        distance.solve_wave(&raw, inv_h2, parallel, before, &|r| body(unsafe { raw.chunk(r) }));
                     } else {
                         particles.for_chunks(parallel, body);
                     }

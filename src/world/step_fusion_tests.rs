@@ -164,3 +164,89 @@ fn wave_over_unaligned_bands_equals_separate_passes_bitwise() {
     }
     assert!(split.metrics().max_strain > 0.0, "the cloth moved");
 }
+
+/// A damped 40 x 1024 cloth with drag and wind (bands of 16 rows start on whole blocks of
+/// eight, so the wave predicts each band itself; with wind every substep does, without only
+/// the first), two parts on two and three threads: the same bits as the passes.
+#[test]
+fn wave_predicting_its_bands_equals_separate_passes_bitwise() {
+    for wind in [false, true] {
+        let make = |threads: usize, fuse: bool| {
+            let desc = ClothDesc {
+                rows: 40,
+                cols: 1024,
+                spacing: 0.005,
+                pins: vec![crate::PinSpec::FirstRowCorners],
+                tethers: None,
+                fabric: Fabric {
+                    damping: 0.3,
+                    ..Fabric::preset("cotton").unwrap()
+                },
+                ..Default::default()
+            };
+            let params = SolverParams {
+                threads,
+                substeps: 3,
+                iterations: 1,
+                ..Default::default()
+            };
+            let mut effects = Effects::gravity();
+            effects.drag = Some(0.2);
+            if wind {
+                effects.wind = Some(crate::model::effects::Wind {
+                    velocity: [1.5, 0.0, 0.5],
+                    ..Default::default()
+                });
+            }
+            let mut w = World::new(params, effects).unwrap();
+            w.add_cloth(&desc).unwrap();
+            assert!(w.distance.wave_ready(w.particle_count()) && w.distance.bands_on_blocks());
+            w.fuse_predict = fuse;
+            w
+        };
+        let mut split = make(1, false);
+        let mut fused: Vec<World> = [1, 2, 3].into_iter().map(|t| make(t, true)).collect();
+        for step in 0..6 {
+            split.step(1.0 / 60.0).unwrap();
+            for w in &mut fused {
+                w.step(1.0 / 60.0).unwrap();
+                let t = w.params().threads;
+                assert_eq!(w.state_bits(), split.state_bits(), "wind {wind}, {t} thread(s), step {step}");
+            }
+        }
+        assert!(split.metrics().max_strain > 0.0, "the cloth moved");
+    }
+}
+
+/// The guard's copy, made band by band when the wave predicts: a step that diverges leaves
+/// the state of before the step, bit for bit, on one and two threads.
+#[test]
+fn wave_predicting_its_bands_keeps_the_guard_copy() {
+    for threads in [1, 2] {
+        let desc = ClothDesc {
+            rows: 40,
+            cols: 1024,
+            spacing: 0.005,
+            tethers: None,
+            ..Default::default()
+        };
+        let params = SolverParams {
+            threads,
+            substeps: 2,
+            iterations: 1,
+            ..Default::default()
+        };
+        let mut w = World::new(params, Effects::gravity()).unwrap();
+        w.add_cloth(&desc).unwrap();
+        assert!(w.distance.bands_on_blocks());
+        w.step(1.0 / 60.0).unwrap();
+        let n = w.particle_count();
+        let mut vx = vec![0.0f32; n];
+        vx[30_000] = 3e38;
+        let zero = vec![0.0f32; n];
+        w.set_velocities([&vx, &zero, &zero]).unwrap();
+        let before = w.state_bits();
+        assert!(matches!(w.step(1e3), Err(crate::WeftError::Diverged { .. })), "{threads} threads");
+        assert_eq!(w.state_bits(), before, "{threads} threads");
+    }
+}
