@@ -56,32 +56,43 @@ impl ObstacleSet {
     /// runs no separate obstacle pass, so a set that did not would lose its stages: asserted).
     /// The arrays must be sized ([`prepare`](Self::prepare)).
     pub(crate) fn chunkwise(&mut self, t_end: f64, h: f32, n: usize) -> ChunkObstacles<'_> {
+        let [c] = self.chunkwise_at([t_end], h, n);
+        c
+    }
+
+    /// [`chunkwise`](Self::chunkwise) for the substeps ending at each of `t_ends`, on the same
+    /// contact slots: for a pass that runs one substep's contacts and the next substep's
+    /// stages on the same particles, one after the other, each chunk's blocks in one task
+    /// (the views' own rule).
+    pub(crate) fn chunkwise_at<const K: usize>(&mut self, t_ends: [f64; K], h: f32, n: usize) -> [ChunkObstacles<'_>; K] {
         assert!(
             self.runs_chunkwise(),
             "chunkwise obstacle stages need at most {MAX_OBSTACLES} shapes"
         );
-        let mut list = [None; MAX_OBSTACLES];
-        for ((o, slots), out) in self.list.iter().zip(&mut self.slots).zip(&mut list) {
+        let mut lists = [[None; MAX_OBSTACLES]; K];
+        for (k, (o, slots)) in self.list.iter().zip(&mut self.slots).enumerate() {
             let Geometry::Shape(s) = &o.geometry else {
                 unreachable!("runs_chunkwise: every obstacle is a shape")
             };
-            let u = o.velocity;
-            *out = Some(Placed {
-                shape: s.translated(displacement(u, t_end)),
-                u,
-                shift: u.map(|c| c * h),
-                mu: o.friction.unwrap_or(self.friction),
-                slots: SlotsPtr::new(slots),
-            });
+            let (u, slots) = (o.velocity, SlotsPtr::new(slots));
+            for (list, &t_end) in lists.iter_mut().zip(&t_ends) {
+                list[k] = Some(Placed {
+                    shape: s.translated(displacement(u, t_end)),
+                    u,
+                    shift: u.map(|c| c * h),
+                    mu: o.friction.unwrap_or(self.friction),
+                    slots,
+                });
+            }
         }
-        ChunkObstacles {
+        lists.map(|list| ChunkObstacles {
             list,
             count: self.list.len(),
             th: &self.th,
             reach: &self.reach,
             n,
             _slots: PhantomData,
-        }
+        })
     }
 }
 

@@ -22,7 +22,7 @@
 //!   chunk's predict, their last projection before its update and their velocity pass after
 //!   it (`obstacles::chunkwise`); a world that is one grid cloth swept once a substep runs
 //!   the sweep and the update pass as one wave (`DistanceSet::solve_wave`), which also
-//!   predicts each band just before sweeping it when the world has no obstacle and the
+//!   predicts each band (and runs its obstacle contacts) just before sweeping it when the
 //!   bands start on whole blocks.
 //!   (solver.method = symplectic-euler | leapfrog | implicit-euler: the force-based step of
 //!    integrate::mass_spring / integrate::implicit replaces the substep loop above; its drift
@@ -235,11 +235,10 @@ impl World {
         let obstacle_ns = AtomicU64::new(0);
         let mut predicted_ahead = false;
         for s in 0..n_sub {
-            // The wave predicts each band just before it sweeps it, when bands start on whole
-            // blocks (elementwise, so the same bits as a pass before the sweep). Not with
-            // obstacles: their contacts of this substep and the update's stages of the next
-            // would need the contact slots at once.
-            let wave_predicts = wave && !predicted_ahead && !has_obstacles && self.distance.bands_on_blocks();
+            // The wave predicts each band (and runs its obstacle contacts) just before it
+            // sweeps it, when bands start on whole blocks: element-wise, so the same bits as a
+            // pass before the sweep.
+            let wave_predicts = wave && !predicted_ahead && self.distance.bands_on_blocks();
             let t = self.time + (s as f64) * (h as f64);
             if let (Some(w), Some(state)) = (&self.effects.wind, &mut self.wind) {
                 let p = &self.particles;
@@ -359,7 +358,15 @@ impl World {
                 // the next substep's contacts (the shapes placed at its end) when it is
                 // predicted here
                 let t_next = self.time + ((s + 2) as f64) * (h as f64);
-                let stages = if chunk_obstacles {
+                // and this substep's contacts (the shapes placed at its end) when the wave
+                // predicts it, on the same slots
+                let t_now = self.time + ((s + 1) as f64) * (h as f64);
+                let mut co_now = None;
+                let stages = if chunk_obstacles && wave_predicts {
+                    let [now, next] = self.obstacles.chunkwise_at([t_now, t_next], h, n);
+                    co_now = Some(now);
+                    Obstacles::Chunkwise(next)
+                } else if chunk_obstacles {
                     Obstacles::Chunkwise(self.obstacles.chunkwise(t_next, h, n))
                 } else if has_obstacles {
                     Obstacles::Whole(&self.obstacles)
@@ -414,6 +421,9 @@ impl World {
                                 }
                             }
                             predict(c.reborrow(), &pp_now, simd);
+                            if let Some(co) = &co_now {
+                                timed(&obstacle_ns, || co.contacts(&mut c, simd));
+                            }
                         };
                         let before: Option<&(dyn Fn(std::ops::Range<usize>) + Sync)> =
                             if wave_predicts { Some(&predict_band) } else { None };
