@@ -122,34 +122,38 @@ fn self_collision_mean_summed_in_predict_equals_separate_pass_bitwise() {
     }
 }
 
-/// A hanging cloth of 2050 columns: bands of seven rows, whose ends fall inside blocks of
-/// eight particles, in four bands (two parts of the wave, so a seam between parts), with
-/// damping; the wave (`DistanceSet::solve_wave`) against the sweep and update as passes.
-#[test]
-fn wave_over_unaligned_bands_equals_separate_passes_bitwise() {
+/// A damped `rows x cols` cloth hanging from two corners under `effects`, 3 substeps of one
+/// sweep: a world that runs the wave (`DistanceSet::solve_wave`).
+fn grid_world(rows: u32, cols: u32, threads: usize, effects: &Effects) -> World {
+    let desc = ClothDesc {
+        rows,
+        cols,
+        spacing: 0.005,
+        pins: vec![crate::PinSpec::FirstRowCorners],
+        tethers: None,
+        fabric: Fabric {
+            damping: 0.3,
+            ..Fabric::preset("cotton").unwrap()
+        },
+        ..Default::default()
+    };
+    let params = SolverParams {
+        threads,
+        substeps: 3,
+        iterations: 1,
+        ..Default::default()
+    };
+    let mut w = World::new(params, effects.clone()).unwrap();
+    w.add_cloth(&desc).unwrap();
+    assert!(w.distance.wave_ready(w.particle_count()), "one grid: the wave runs");
+    w
+}
+
+/// [`grid_world`]: the wave on 1, 2 and 3 threads against the sweep and update as passes,
+/// bit for bit over six steps.
+fn wave_equals_passes(rows: u32, cols: u32, effects: &Effects) {
     let make = |threads: usize, fuse: bool| {
-        let desc = ClothDesc {
-            rows: 22,
-            cols: 2050,
-            spacing: 0.005,
-            pins: vec![crate::PinSpec::FirstRowCorners],
-            tethers: None,
-            fabric: Fabric {
-                damping: 0.3,
-                ..Fabric::preset("cotton").unwrap()
-            },
-            ..Default::default()
-        };
-        let params = SolverParams {
-            threads,
-            substeps: 3,
-            iterations: 1,
-            ..Default::default()
-        };
-        let mut w = World::new(params, Effects::gravity()).unwrap();
-        w.add_cloth(&desc).unwrap();
-        assert_eq!(crate::constraints::grid::band_rows(2050), 7);
-        assert!(w.distance.wave_ready(w.particle_count()), "one grid: the wave runs");
+        let mut w = grid_world(rows, cols, threads, effects);
         w.fuse_predict = fuse;
         w
     };
@@ -159,62 +163,37 @@ fn wave_over_unaligned_bands_equals_separate_passes_bitwise() {
         split.step(1.0 / 60.0).unwrap();
         for w in &mut fused {
             w.step(1.0 / 60.0).unwrap();
-            assert_eq!(w.state_bits(), split.state_bits(), "{} thread(s), step {step}", w.params().threads);
+            let t = w.params().threads;
+            assert_eq!(w.state_bits(), split.state_bits(), "{rows} x {cols}, {t} thread(s), step {step}");
         }
     }
     assert!(split.metrics().max_strain > 0.0, "the cloth moved");
 }
 
-/// A damped 40 x 1024 cloth with drag and wind (bands of 16 rows start on whole blocks of
-/// eight, so the wave predicts each band itself; with wind every substep does, without only
-/// the first), two parts on two and three threads: the same bits as the passes.
+/// 2050 columns: bands of seven rows, whose ends fall inside blocks of eight particles, in
+/// four bands (two parts of the wave, so a seam between parts).
+#[test]
+fn wave_over_unaligned_bands_equals_separate_passes_bitwise() {
+    assert_eq!(crate::constraints::grid::band_rows(2050), 7);
+    assert!(!crate::constraints::grid_sweep::bands_on_blocks(2050));
+    wave_equals_passes(22, 2050, &Effects::gravity());
+}
+
+/// 1024 columns: bands of 16 rows start on whole blocks, so the wave predicts each band
+/// itself; with wind every substep does, without only the first. With drag.
 #[test]
 fn wave_predicting_its_bands_equals_separate_passes_bitwise() {
+    assert!(crate::constraints::grid_sweep::bands_on_blocks(1024));
     for wind in [false, true] {
-        let make = |threads: usize, fuse: bool| {
-            let desc = ClothDesc {
-                rows: 40,
-                cols: 1024,
-                spacing: 0.005,
-                pins: vec![crate::PinSpec::FirstRowCorners],
-                tethers: None,
-                fabric: Fabric {
-                    damping: 0.3,
-                    ..Fabric::preset("cotton").unwrap()
-                },
+        let mut effects = Effects::gravity();
+        effects.drag = Some(0.2);
+        if wind {
+            effects.wind = Some(crate::model::effects::Wind {
+                velocity: [1.5, 0.0, 0.5],
                 ..Default::default()
-            };
-            let params = SolverParams {
-                threads,
-                substeps: 3,
-                iterations: 1,
-                ..Default::default()
-            };
-            let mut effects = Effects::gravity();
-            effects.drag = Some(0.2);
-            if wind {
-                effects.wind = Some(crate::model::effects::Wind {
-                    velocity: [1.5, 0.0, 0.5],
-                    ..Default::default()
-                });
-            }
-            let mut w = World::new(params, effects).unwrap();
-            w.add_cloth(&desc).unwrap();
-            assert!(w.distance.wave_ready(w.particle_count()) && w.distance.bands_on_blocks());
-            w.fuse_predict = fuse;
-            w
-        };
-        let mut split = make(1, false);
-        let mut fused: Vec<World> = [1, 2, 3].into_iter().map(|t| make(t, true)).collect();
-        for step in 0..6 {
-            split.step(1.0 / 60.0).unwrap();
-            for w in &mut fused {
-                w.step(1.0 / 60.0).unwrap();
-                let t = w.params().threads;
-                assert_eq!(w.state_bits(), split.state_bits(), "wind {wind}, {t} thread(s), step {step}");
-            }
+            });
         }
-        assert!(split.metrics().max_strain > 0.0, "the cloth moved");
+        wave_equals_passes(40, 1024, &effects);
     }
 }
 
@@ -223,21 +202,7 @@ fn wave_predicting_its_bands_equals_separate_passes_bitwise() {
 #[test]
 fn wave_predicting_its_bands_keeps_the_guard_copy() {
     for threads in [1, 2] {
-        let desc = ClothDesc {
-            rows: 40,
-            cols: 1024,
-            spacing: 0.005,
-            tethers: None,
-            ..Default::default()
-        };
-        let params = SolverParams {
-            threads,
-            substeps: 2,
-            iterations: 1,
-            ..Default::default()
-        };
-        let mut w = World::new(params, Effects::gravity()).unwrap();
-        w.add_cloth(&desc).unwrap();
+        let mut w = grid_world(40, 1024, threads, &Effects::gravity());
         assert!(w.distance.bands_on_blocks());
         w.step(1.0 / 60.0).unwrap();
         let n = w.particle_count();
