@@ -258,14 +258,11 @@ impl DistanceSet {
             ),
         };
         let sweep = Sweep { p, w, inv_h2 };
-        let mut after_wave = false;
-        for pass_k in 0..self.passes.len() {
-            if std::mem::take(&mut after_wave) {
-                continue;
-            }
+        let mut pass_k = 0;
+        while pass_k < self.passes.len() {
             match &self.passes[pass_k] {
                 Pass::Grid(range) => match self.seams_of(pass_k) {
-                    // a grid's bands and then its seams: one wave
+                    // a grid's bands and then its seams (the next pass): one wave
                     Some(seams) => {
                         let (bands, rest) = self.colours[range.start..].split_at_mut(range.len());
                         wave(
@@ -275,7 +272,7 @@ impl DistanceSet {
                             parallel,
                             None,
                         );
-                        after_wave = true;
+                        pass_k += 1;
                     }
                     None => pass(&mut self.colours[range.clone()], &sweep, parallel),
                 },
@@ -305,6 +302,7 @@ impl DistanceSet {
                     }
                 }
             }
+            pass_k += 1;
         }
     }
 

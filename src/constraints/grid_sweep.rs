@@ -384,12 +384,12 @@ mod tests {
                         let fits = |k: usize| bands(k).len() >= if k == 0 || k + 1 == parts { 1 } else { 2 };
                         assert!((0..parts).all(fits), "{nb} bands, {threads} threads: {first:?}");
                         let share = rows.div_ceil(parts);
-                        let most = (0..parts).map(rows_of).max().unwrap();
-                        let few = (0..parts).map(rows_of).min().unwrap();
+                        let largest = (0..parts).map(rows_of).max().unwrap();
+                        let smallest = (0..parts).map(rows_of).min().unwrap();
                         // the clamps to two bands a part may leave a part above its share
                         if nb >= 4 * parts {
                             assert!(
-                                most <= share + b && few + b >= rows / parts,
+                                largest <= share + b && smallest + b >= rows / parts,
                                 "{nb} bands of {b}, {threads} threads: {first:?}"
                             );
                         }

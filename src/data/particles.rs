@@ -402,6 +402,13 @@ impl ParticleChunk<'_> {
     pub fn state(&self) -> [&[f32]; 6] {
         [&*self.x, &*self.y, &*self.z, &*self.vx, &*self.vy, &*self.vz]
     }
+
+    /// Copies the chunk's [`state`](Self::state) into `saved` (six arrays of its length).
+    pub fn save_state(&self, saved: [&mut [f32]; 6]) {
+        for (dst, src) in saved.into_iter().zip(self.state()) {
+            dst.copy_from_slice(src);
+        }
+    }
 }
 
 impl Particles {

@@ -57,9 +57,7 @@ fn saving_pass_keeps_the_state_before_the_kernel() {
         let mut saved: [Vec<f32>; 6] = Default::default();
         pool.install(|| {
             q.for_chunks_saving(parallel, &mut saved, |mut c, s| {
-                for (dst, src) in s.into_iter().zip(c.state()) {
-                    dst.copy_from_slice(src);
-                }
+                c.save_state(s);
                 let c = c.reborrow();
                 c.x.iter_mut().for_each(|x| *x += 1.0);
                 c.vz.iter_mut().for_each(|v| *v = -*v);

@@ -232,13 +232,14 @@ impl World {
             && sc.is_none()
             && (!has_obstacles || chunk_obstacles)
             && self.distance.wave_ready(n);
+        // The wave predicts each band (and runs its obstacle contacts) just before it sweeps
+        // it, when bands start on whole blocks: element-wise, so the same bits as a pass
+        // before the sweep.
+        let wave_can_predict = wave && self.distance.bands_on_blocks();
         let obstacle_ns = AtomicU64::new(0);
         let mut predicted_ahead = false;
         for s in 0..n_sub {
-            // The wave predicts each band (and runs its obstacle contacts) just before it
-            // sweeps it, when bands start on whole blocks: element-wise, so the same bits as a
-            // pass before the sweep.
-            let wave_predicts = wave && !predicted_ahead && self.distance.bands_on_blocks();
+            let wave_predicts = wave_can_predict && !predicted_ahead;
             let t = self.time + (s as f64) * (h as f64);
             if let (Some(w), Some(state)) = (&self.effects.wind, &mut self.wind) {
                 let p = &self.particles;
@@ -265,9 +266,7 @@ impl World {
                     // done by the previous substep's update pass, or by the wave below
                 } else if fused_guard && s == 0 {
                     self.particles.for_chunks_saving(parallel, &mut self.backup, |mut c, saved| {
-                        for (dst, src) in saved.into_iter().zip(c.state()) {
-                            dst.copy_from_slice(src);
-                        }
+                        c.save_state(saved);
                         predict(c.reborrow(), &pp, simd);
                         add_mean(mean_sink, &c, n, simd);
                         contacts(&mut c);
@@ -416,9 +415,7 @@ impl World {
                         let predict_band = |r: std::ops::Range<usize>| {
                             let mut c = unsafe { raw.chunk(r.clone()) };
                             if let Some(saved) = &saved {
-                                for (dst, src) in unsafe { saved.range(r) }.into_iter().zip(c.state()) {
-                                    dst.copy_from_slice(src);
-                                }
+                                c.save_state(unsafe { saved.range(r) });
                             }
                             predict(c.reborrow(), &pp_now, simd);
                             if let Some(co) = &co_now {
