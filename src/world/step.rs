@@ -41,6 +41,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use crate::data::particles::{chunk_finite_simd, ParticleChunk, RawParticles, RawSaved};
 use crate::error::{positive, Result, WeftError};
+use crate::integrate::wind::WindState;
 use crate::integrate::{predict, update, PredictParams};
 use crate::model::params::Method;
 use crate::obstacles::chunkwise::ChunkObstacles;
@@ -248,15 +249,9 @@ impl World {
                 self.clock.lap("wind");
             }
             {
-                let force = self.wind.as_ref().map(|w| [&w.fx[..], &w.fy[..], &w.fz[..]]);
-                let pp = PredictParams {
-                    h,
-                    gravity: self.effects.gravity,
-                    drag: self.effects.drag,
-                    force,
-                };
+                let pp = substep_predict(h, &self.effects, self.wind.as_ref());
                 let t_end = self.time + ((s + 1) as f64) * (h as f64);
-                let co = (chunk_obstacles && !predicted_ahead).then(|| self.obstacles.chunkwise(t_end, h, n));
+                let co = (chunk_obstacles && !predicted_ahead && !wave_predicts).then(|| self.obstacles.chunkwise(t_end, h, n));
                 let contacts = |c: &mut ParticleChunk<'_>| {
                     if let Some(co) = &co {
                         timed(&obstacle_ns, || co.contacts(c, simd));
@@ -347,12 +342,6 @@ impl World {
                 // chunk by chunk: element-wise, so the same bits as three passes
                 let last = fused_guard && s + 1 == n_sub;
                 let ahead = fuse_next && s + 1 < n_sub;
-                let pp_next = PredictParams {
-                    h,
-                    gravity: self.effects.gravity,
-                    drag: self.effects.drag,
-                    force: None,
-                };
                 let finite = &all_finite;
                 // the next substep's contacts (the shapes placed at its end) when it is
                 // predicted here
@@ -373,13 +362,9 @@ impl World {
                     Obstacles::None
                 };
                 let (particles, distance, backup) = (&mut self.particles, &mut self.distance, &mut self.backup);
-                // this substep's predict, when the wave runs it (see `wave_predicts`)
-                let pp_now = PredictParams {
-                    h,
-                    gravity: self.effects.gravity,
-                    drag: self.effects.drag,
-                    force: self.wind.as_ref().map(|w| [&w.fx[..], &w.fy[..], &w.fz[..]]),
-                };
+                // this substep's predict when the wave runs it (see `wave_predicts`), and the
+                // next substep's when this pass runs it (only without wind: the same settings)
+                let pp = substep_predict(h, &self.effects, self.wind.as_ref());
                 let mut run = |motion: &[([f32; 3], f32)]| {
                     let body = |mut c: ParticleChunk<'_>| {
                         if let (Obstacles::Chunkwise(co), true) = (&stages, fuse_project) {
@@ -398,7 +383,7 @@ impl World {
                             }
                         }
                         if ahead {
-                            predict(c.reborrow(), &pp_next, simd);
+                            predict(c.reborrow(), &pp, simd);
                             add_mean(mean_sink, &c, n, simd);
                             if let Obstacles::Chunkwise(co) = &stages {
                                 timed(&obstacle_ns, || co.contacts(&mut c, simd));
@@ -417,7 +402,7 @@ impl World {
                             if let Some(saved) = &saved {
                                 c.save_state(unsafe { saved.range(r) });
                             }
-                            predict(c.reborrow(), &pp_now, simd);
+                            predict(c.reborrow(), &pp, simd);
                             if let Some(co) = &co_now {
                                 timed(&obstacle_ns, || co.contacts(&mut c, simd));
                             }
@@ -486,6 +471,16 @@ enum Obstacles<'a> {
     Chunkwise(ChunkObstacles<'a>),
     /// The velocity pass only (the other stages run in passes of their own).
     Whole(&'a ObstacleSet),
+}
+
+/// A substep's predict settings: gravity, drag and, when wind blows, its forces.
+fn substep_predict<'a>(h: f32, effects: &crate::Effects, wind: Option<&'a WindState>) -> PredictParams<'a> {
+    PredictParams {
+        h,
+        gravity: effects.gravity,
+        drag: effects.drag,
+        force: wind.map(|w| [&w.fx[..], &w.fy[..], &w.fz[..]]),
+    }
 }
 
 /// Runs `f` and adds the nanoseconds it took to `ns`.
