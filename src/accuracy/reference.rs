@@ -193,6 +193,8 @@ impl Reference {
 
     /// Loads the reference from `dir/reference-<key>.bin` if present and matching, else
     /// computes it and writes the file. Returns the reference and whether it came from the cache.
+    /// The key names the reference's version (`v3`: the self-collision travel of each step),
+    /// raised whenever what the reference computes changes, so an older file is not read.
     pub fn cached(
         make: MakeWorld<'_>,
         key_text: &str,
@@ -204,7 +206,7 @@ impl Reference {
         let world = make()?;
         let kind = ReferenceKind::for_world(&world);
         let key = fnv1a(
-            format!("{key_text}\n--reference v2 steps={steps} substeps={substeps} extrapolate={extrapolate} kind={kind:?}").as_bytes(),
+            format!("{key_text}\n--reference v3 steps={steps} substeps={substeps} extrapolate={extrapolate} kind={kind:?}").as_bytes(),
         );
         let path = Self::path(dir, key);
         let expected = (steps as u64 + 2) * world.particle_count() as u64 * 24 + 32;

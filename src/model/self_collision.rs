@@ -34,6 +34,15 @@ pub const RELAXATION: f32 = 1.5;
 /// ([`SelfCollision::travel`]).
 pub const TRAVEL_FACTOR: f32 = 1.0;
 
+/// A step's travel over the largest speed relative to the mean at its start (see
+/// [`SelfCollision::travel`]): a particle may speed up by half, relative to the others, from
+/// one step to the next before the clamp holds it.
+pub const TRAVEL_GROWTH: f32 = 1.5;
+
+/// Least travel over `d` a step (see [`SelfCollision::travel`]): what particles at rest
+/// relative to each other may start to move in one step.
+pub const TRAVEL_FLOOR: f32 = 0.25;
+
 /// Largest [`SelfCollision::travel`]: the pair lists grow with the cube of the query radius.
 pub const MAX_TRAVEL: f32 = 2.0;
 
@@ -103,9 +112,13 @@ pub struct SelfCollision {
     pub measure: bool,
     /// The travel bound `T / d`, in `(0, MAX_TRAVEL]` (default [`TRAVEL_FACTOR`], 1): the speed
     /// clamp lets a particle move at most `travel d` a step relative to the mean velocity of
-    /// the free particles, and the step's pair lists reach `(1 + 2 travel) d`. Lower is
-    /// cheaper (the lists shrink with the cube of the reach) and clamps relative motion harder;
-    /// docs/performance.md measures what it costs and what it saves on the suite.
+    /// the free particles, and the pair lists reach at most `(1 + 2 travel) d`. Each step
+    /// uses the travel its velocities call for, up to this bound ([`TRAVEL_GROWTH`] times the
+    /// largest relative speed, at least [`TRAVEL_FLOOR`]; see `self_collision`), so a settled
+    /// cloth lists fewer pairs. Lower is cheaper (the lists shrink with the cube of the
+    /// reach) and clamps relative motion harder; docs/performance.md measures what it costs
+    /// and what it saves on the suite. The rest-neighbour rule follows this bound, not the
+    /// step's travel.
     #[serde(default = "default_travel")]
     pub travel: f32,
 }

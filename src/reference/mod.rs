@@ -155,7 +155,7 @@ impl ReferenceWorld {
         let h = dt / self.substeps as f64;
         let n = self.x.len();
         if let Some(sc) = &mut self.selfcol {
-            sc.begin_step(&self.x);
+            sc.begin_step(&self.x, &self.v, &self.w, dt);
         }
         let mut contacts = vec![vec![Contact::default(); n]; self.obstacles.len()];
         for s in 0..self.substeps {

@@ -4,14 +4,17 @@
 //!
 //! With `d` the collision distance and `r_i` the rest (initial grid) position of particle `i`:
 //!
-//! * **Once per step**, from the positions `x` at its start: every pair closer than the query
-//!   radius `3 d` (a plain uniform grid of cell `3 d` in f64 and a 27-cell search), each pair once,
-//!   leaving out **rest neighbours** (one cloth and `|r_i - r_j| <= 3.003 d`: the cloth's own
+//! * **Once per step**, from the positions `x` and velocities `v` at its start: the step's
+//!   travel `t = min(travel, max(0.25, 1.5 u dt / d))`, `u` the largest of `|v_i - m|` over all
+//!   particles and `|m|`, `m` the mean velocity of the free particles; then every pair closer
+//!   than the query radius `(1 + 2 t) d` (a plain uniform grid of that cell in f64 and a
+//!   27-cell search), each pair once, leaving out **rest neighbours** (one cloth and
+//!   `|r_i - r_j| <= 1.001 (1 + 2 travel) d`, the setting's travel: the cloth's own
 //!   constraints hold them).
-//! * **After predict** (each substep), the speed clamp: with `m` the mean velocity of the free
-//!   particles, `u = v - m` is limited to `|u| <= d / (substeps h)` (a relative travel of `d`
-//!   per step), and a clamped particle's prediction is redone, `p = x + h v`. The clamped
-//!   predictions `q` are the VcCPBD box centres.
+//! * **After predict** (each substep), the speed clamp: `u = v - m` is limited to
+//!   `|u| <= t d / (substeps h)` (a relative travel of `t d` per step), and a clamped
+//!   particle's prediction is redone, `p = x + h v`. The clamped predictions `q` are the
+//!   VcCPBD box centres.
 //! * **After the constraint sweeps** (each substep), for every listed pair, for each end `i`
 //!   that is free, using the predictions `p` of all particles (Jacobi):
 //!
@@ -31,7 +34,7 @@
 
 use crate::model::description::WorldDescription;
 use crate::model::self_collision::Response;
-use crate::model::self_collision::{BOX_RADIUS, RELAXATION};
+use crate::model::self_collision::{BOX_RADIUS, RELAXATION, TRAVEL_FLOOR, TRAVEL_GROWTH};
 use std::collections::HashMap;
 
 type V3 = [f64; 3];
@@ -52,11 +55,11 @@ pub(super) struct SelfCollision64 {
     d: f64,
     response: Response,
     friction: f64,
-    /// The travel bound `T / d`, and the query and rest-skip radii over `d` (the world's
-    /// settings, read as the world reads them).
+    /// The travel bound `T / d` and the rest-skip radius over `d` (the world's settings, read
+    /// as the world reads them), and this step's travel over `d`.
     travel: f64,
-    query: f64,
     skip: f64,
+    step_travel: f64,
     /// Rest positions and cloth of every particle.
     rest: Vec<V3>,
     cloth_of: Vec<usize>,
@@ -64,6 +67,21 @@ pub(super) struct SelfCollision64 {
     pub(super) lists: Vec<Vec<usize>>,
     /// The clamped predictions (box centres) of the current substep.
     q: Vec<V3>,
+}
+
+/// The mean velocity of the free particles (`w > 0`), zero when there are none.
+fn mean_free(v: &[V3], w: &[f64]) -> V3 {
+    let (mut m, mut free) = ([0.0; 3], 0.0);
+    for (vi, _) in v.iter().zip(w).filter(|(_, &wi)| wi > 0.0) {
+        for k in 0..3 {
+            m[k] += vi[k];
+        }
+        free += 1.0;
+    }
+    if free > 0.0 {
+        m = m.map(|c| c / free);
+    }
+    m
 }
 
 /// Contact sums of one particle.
@@ -103,8 +121,8 @@ impl SelfCollision64 {
             response: cfg.response,
             friction: cfg.friction as f64,
             travel: cfg.travel as f64,
-            query: cfg.query_factor() as f64,
             skip: cfg.rest_skip_factor() as f64,
+            step_travel: cfg.travel as f64,
             rest: desc.positions.iter().map(|p| p.map(f64::from)).collect(),
             cloth_of,
             lists: vec![Vec::new(); n],
@@ -112,9 +130,24 @@ impl SelfCollision64 {
         }))
     }
 
-    /// Builds the pair lists from the positions `x` at the start of a step.
-    pub(super) fn begin_step(&mut self, x: &[V3]) {
-        let reach = self.query * self.d;
+    /// Sets the step's travel from the velocities `v` (inverse masses `w`) at the start of a
+    /// step of `dt` and builds the pair lists from the positions `x`.
+    pub(super) fn begin_step(&mut self, x: &[V3], v: &[V3], w: &[f64], dt: f64) {
+        let m = mean_free(v, w);
+        let mut top = dot(m, m);
+        for &vi in v {
+            let u2 = dot(sub(vi, m), sub(vi, m));
+            if u2 > top || u2.is_nan() {
+                top = u2;
+            }
+        }
+        let rel = top.sqrt() * dt / self.d;
+        self.step_travel = if rel.is_finite() {
+            (TRAVEL_GROWTH as f64 * rel).max(TRAVEL_FLOOR as f64).min(self.travel)
+        } else {
+            self.travel
+        };
+        let reach = (1.0 + 2.0 * self.step_travel) * self.d;
         let skip = self.skip * self.d;
         let cell = |p: V3| p.map(|c| (c / reach).floor() as i64);
         let mut grid: HashMap<[i64; 3], Vec<usize>> = HashMap::new();
@@ -146,19 +179,8 @@ impl SelfCollision64 {
 
     /// The speed clamp after predict, for a step of `substeps` substeps of length `h`.
     pub(super) fn clamp(&mut self, x: &[V3], v: &mut [V3], p: &mut [V3], w: &[f64], substeps: u32, h: f64) {
-        let (mut m, mut free) = ([0.0; 3], 0.0);
-        for i in 0..v.len() {
-            if w[i] > 0.0 {
-                for k in 0..3 {
-                    m[k] += v[i][k];
-                }
-                free += 1.0;
-            }
-        }
-        if free > 0.0 {
-            m = m.map(|c| c / free);
-        }
-        let limit = self.travel * self.d / (substeps as f64 * h);
+        let m = mean_free(v, w);
+        let limit = self.step_travel * self.d / (substeps as f64 * h);
         for i in 0..v.len() {
             let u = sub(v[i], m);
             let s = dot(u, u).sqrt();

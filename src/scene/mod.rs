@@ -26,7 +26,7 @@
 //! broadphase = "hash"         # or "aabb-tree"
 //! friction = 0.3
 //! measure = false             # true: average collision over the steps (a query a step)
-//! travel = 1.0                # T / d in (0, 2]: lower is cheaper, clamps relative motion harder
+//! travel = 1.0                # most T / d a step, in (0, 2]: lower is cheaper, clamps harder
 //!
 //! [output]
 //! steps = 300

@@ -477,3 +477,37 @@ fn contacts_added_in_parallel_parts_equal_the_serial_pass() {
         assert_same_bits(&got, &want, Some((&got_p, &want_p)), n, &format!("{threads} threads"));
     }
 }
+
+/// The step's travel: the floor at rest; `TRAVEL_GROWTH` times the largest speed relative to
+/// the free particles' mean over a step (a pinned particle at rest while the others fall
+/// counts, at the mean's speed); the setting's bound for fast or non-finite velocities; and
+/// the query reach follows it while the rest-neighbour radius keeps the setting's.
+#[test]
+fn step_travel_follows_the_velocities() {
+    let mut rng = signed(7);
+    let (mut data, _) = folded(4, 4, 0.01, 0.02, 0.0, &mut rng);
+    data.config = Some(SelfCollision::default());
+    let n = 16;
+    let d = data.distance();
+    let mut w = vec![1.0f32; n];
+    w[0] = 0.0;
+    let travel = |data: &mut SelfCollisionData, vy: &[f32], dt: f32| {
+        let zero = vec![0.0f32; n];
+        data.adapt_travel([&zero, vy, &zero], &w, n, dt, Exec::Parallel);
+        data.step_travel().unwrap()
+    };
+    assert_eq!(data.step_travel(), None);
+    assert_eq!(travel(&mut data, &[0.0; 16], 0.01), TRAVEL_FLOOR);
+    // The free particles fall at 1 m/s, the pinned one stays: u = 1 m/s.
+    let mut vy = vec![-1.0f32; n];
+    vy[0] = 0.0;
+    let t = travel(&mut data, &vy, 0.004);
+    assert!((t - TRAVEL_GROWTH * 0.004 / d).abs() < 1e-5, "{t}");
+    let a = data.active().unwrap();
+    assert_eq!(a.travel, t);
+    assert_eq!(a.q, (1.0 + 2.0 * t) * d);
+    assert_eq!(a.skip, SelfCollision::default().rest_skip_factor() * d);
+    assert_eq!(travel(&mut data, &vy, 1.0), SelfCollision::default().travel);
+    vy[5] = f32::NAN;
+    assert_eq!(travel(&mut data, &vy, 0.004), SelfCollision::default().travel);
+}

@@ -2,19 +2,25 @@
 //! Sulaiman & Bade 2016, VcCPBD).
 //!
 //! # The pipeline
-//! Constants: travel `T = travel d` (the setting [`SelfCollision::travel`], 1 by default), query
-//! radius `q = d + 2 T` (3 d by default), hash cell `CELL_FACTOR q` (1), VcCPBD box radius
-//! `r = BOX_RADIUS d` (1: with `r = d/2` the box test put particles back into contact, 1.27%
-//! average collision on the 100x100 fold against 0.0007% with `r = d`).
+//! Constants: the travel bound `T_max = travel d` (the setting [`SelfCollision::travel`], 1 by
+//! default), hash cell `CELL_FACTOR q` (1), VcCPBD box radius `r = BOX_RADIUS d` (1: with
+//! `r = d/2` the box test put particles back into contact, 1.27% average collision on the
+//! 100x100 fold against 0.0007% with `r = d`).
 //!
-//! * **Once a step** ([`SelfCollisionData::begin_step`]), the paper's "generate collision
-//!   constraints" line of Algorithm 1: the broadphase (the spatial hash, a counting sort of the
+//! * **Once a step** ([`SelfCollisionData::adapt_travel`], [`SelfCollisionData::begin_step`]),
+//!   the paper's "generate collision constraints" line of Algorithm 1. First the step's
+//!   travel `T`, the distance two particles may close in by half during the step: with `m`
+//!   the mean velocity of the free particles and `u` the largest of `|v_i - m|` over all
+//!   particles and of `|m|` (a particle stopped by an obstacle moves at `-m` relative to the
+//!   mean), `T = min(T_max, max(TRAVEL_FLOOR d, TRAVEL_GROWTH u dt))` ([`TRAVEL_FLOOR`]
+//!   0.25, [`TRAVEL_GROWTH`] 1.5): a scene at rest lists pairs within `1.5 d`, a fast one
+//!   within `(1 + 2 travel) d`. Then the broadphase (the spatial hash, a counting sort of the
 //!   particles over cells, or the AABB tree, refitted) lists, from the positions `x` at the
 //!   start of the step, every pair closer than the query radius `q = d + 2 T`, `d` the
-//!   collision distance and `T` the relative travel the speed clamp allows a particle in one
-//!   step. **Rest neighbours** are dropped as the list is written: pairs of one cloth whose
-//!   rest distance is at most `q` (plus 0.1%, [`SelfCollision::rest_skip_factor`]), held
-//!   apart by the cloth's own constraints (in a flat cloth every pair the query finds is
+//!   collision distance. **Rest neighbours** are dropped as the list is written: pairs of one
+//!   cloth whose rest distance is at most `d + 2 T_max` (plus 0.1%,
+//!   [`SelfCollision::rest_skip_factor`]: the rule does not change with the step's travel),
+//!   held apart by the cloth's own constraints (in a flat cloth every pair the query finds is
 //!   one). The lists hold at most [`MAX_PAIRS_PER_PARTICLE`] pairs a particle on average.
 //!   Each pair is listed once, `(i, j)` with `i < j`, ordered by `i` then `j`, and read as a
 //!   structure-of-arrays pair list: the lists' ids are the `j`, and each entry's `i` is
@@ -28,6 +34,9 @@
 //!   It never speeds a particle up, so a particle slower than the mean (stopped by an obstacle)
 //!   keeps its velocity and is exempt from the bound. The clamp bounds the predicted motion;
 //!   the constraint sweeps move particles further, so the bound is the model's, not a proof.
+//!   With the step's travel a particle may gain half its relative speed from one step to the
+//!   next (or `TRAVEL_FLOOR d` a step from rest) before the clamp holds it; the lists of a
+//!   settled cloth are then a fraction of those at `T_max`.
 //! * **After the constraint sweeps** (each substep): the pair pass below over the whole list,
 //!   eight pairs at a time (`contacts`), then the velocity-correction kernel
 //!   [`crate::self_collision::response::apply`] on the blocks of eight particles that received
@@ -37,7 +46,7 @@
 //! For each particle `i`, over its list (sorted ids, fixed order), with predicted positions `p`:
 //!
 //! ```text
-//! rest neighbours (above): same cloth and |r_i - r_j| <= q: never in the lists
+//! rest neighbours (above): same cloth and |r_i - r_j| <= 1.001 (d + 2 T_max): never in the lists
 //! rest rule (Müller): same cloth and |p_i - p_j| > |r_i - r_j| (rest grid positions): skip
 //! min_dist = min(d, |r_i - r_j|);   contact if |p_i - p_j| < min_dist
 //! n = (p_i - p_j) / |p_i - p_j|, or for coincident particles (distance 0) the rest direction
@@ -93,7 +102,8 @@ use crate::self_collision::reuse::Reuse;
 use crate::self_collision::tree::{ParticleTree, TreeShape};
 
 pub use crate::model::self_collision::{
-    Response, SelfBroadphase, SelfCollision, BOX_RADIUS, CELL_FACTOR, MAX_TRAVEL, QUERY_FACTOR, RELAXATION, REST_SKIP_FACTOR, TRAVEL_FACTOR,
+    Response, SelfBroadphase, SelfCollision, BOX_RADIUS, CELL_FACTOR, MAX_TRAVEL, QUERY_FACTOR, RELAXATION, REST_SKIP_FACTOR,
+    TRAVEL_FACTOR, TRAVEL_FLOOR, TRAVEL_GROWTH,
 };
 pub use crate::self_collision::config::{SelfCollisionPhases, SelfCollisionStats, PENETRATION_TOLERANCE};
 
@@ -142,6 +152,8 @@ pub struct SelfCollisionData {
     /// Copy the box centres in the clamp even when the correction could derive them (tests
     /// compare both).
     pub(crate) copy_centres: bool,
+    /// This step's travel over `d` (at most the setting's), from the velocities at its start.
+    travel_now: Option<f32>,
 }
 
 #[derive(Clone, Debug, Default)]
@@ -172,9 +184,10 @@ pub(crate) struct Active {
     pub d: f32,
     pub response: Response,
     pub friction: f32,
-    /// The travel bound over `d` ([`SelfCollision::travel`]).
+    /// This step's travel over `d` (at most [`SelfCollision::travel`]).
     pub travel: f32,
-    /// The query radius `q` and the rest-skip radius, m.
+    /// The query radius `q = (1 + 2 travel) d` and the rest-skip radius (of the setting's
+    /// travel), m.
     pub q: f32,
     pub skip: f32,
 }
@@ -220,12 +233,13 @@ impl SelfCollisionData {
     pub(crate) fn active(&self) -> Option<Active> {
         let c = self.config.as_ref()?;
         let d = self.distance();
+        let travel = self.travel_now.map_or(c.travel, |t| t.min(c.travel));
         (d > 0.0 && d.is_finite()).then_some(Active {
             d,
             response: c.response,
             friction: c.friction,
-            travel: c.travel,
-            q: c.query_factor() * d,
+            travel,
+            q: (1.0 + 2.0 * travel) * d,
             skip: c.rest_skip_factor() * d,
         })
     }
@@ -272,7 +286,7 @@ impl SelfCollisionData {
         let mut r = Ok(());
         let mut t1 = t0;
         st.fresh = false;
-        if !st.reuse.holds(x, n, a.d, broadphase) {
+        if !st.reuse.holds(x, n, a.d, q, broadphase) {
             let skin = st.reuse.next_skin(a.d);
             let reach = q + skin;
             r = self.build_structure(&mut st, x, n, reach, broadphase, exec);
@@ -288,7 +302,7 @@ impl SelfCollisionData {
                 _ => st.hash.query_upper_unskipped_cells_exec(reach, a.skip, out, exec),
             });
             if r.is_ok() {
-                st.reuse.built(x, n, a.d, broadphase, skin);
+                st.reuse.built(x, n, a.d, q, broadphase, skin);
                 st.fresh = true;
             }
         }
@@ -311,6 +325,34 @@ impl SelfCollisionData {
         }
         self.state = Some(st);
         r.map(|_| true)
+    }
+
+    /// Sets this step's travel from the velocities `v` of the `n` particles (inverse masses
+    /// `w`) at its start and the step `dt` (see the module docs): the largest speed relative
+    /// to the free particles' mean, or the mean's own speed if larger, over a step, times
+    /// [`TRAVEL_GROWTH`], at least [`TRAVEL_FLOOR`] and at most the setting's travel. A
+    /// non-finite velocity gives the setting's travel.
+    pub(crate) fn adapt_travel(&mut self, v: [&[f32]; 3], w: &[f32], n: usize, dt: f32, exec: Exec) {
+        let Some(c) = self.config.as_ref() else { return };
+        let d = self.distance();
+        let m = crate::self_collision::response::mean_velocity_in(&mut self.mean_parts, v, w, n, exec);
+        // A particle stopped by an obstacle moves at minus the mean relative to it.
+        let mut top = m[0] * m[0] + m[1] * m[1] + m[2] * m[2];
+        for ((vx, vy), vz) in v[0].iter().zip(v[1]).zip(v[2]).take(n) {
+            let u = [vx - m[0], vy - m[1], vz - m[2]];
+            let u2 = u[0] * u[0] + u[1] * u[1] + u[2] * u[2];
+            // A NaN is kept (and gives the setting's travel below).
+            if u2 > top || u2.is_nan() {
+                top = u2;
+            }
+        }
+        let rel = top.sqrt() * dt / d;
+        let t = if rel.is_finite() {
+            (TRAVEL_GROWTH * rel).max(TRAVEL_FLOOR)
+        } else {
+            c.travel
+        };
+        self.travel_now = Some(t.min(c.travel));
     }
 
     /// The cloths' rest positions.
@@ -384,6 +426,12 @@ impl SelfCollisionData {
             st.pass.apply(x, w, v, p, ap, exec);
         }
         self.stats.phases.correction_s += t0.elapsed().as_secs_f64();
+    }
+
+    /// This step's travel over `d`, once a step has set it.
+    pub fn step_travel(&self) -> Option<f32> {
+        let c = self.config.as_ref()?;
+        self.travel_now.map(|t| t.min(c.travel))
     }
 
     /// Number of pairs in the step's list.

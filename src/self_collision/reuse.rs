@@ -1,9 +1,9 @@
 //! Candidate lists kept across steps (Verlet lists with a skin).
 //!
 //! The broadphase may run with the reach `q + s`, `s` the skin, and its candidates be kept
-//! while no particle has moved more than `s / 2` (less a rounding margin) since: two particles
-//! then closed in by less than `s`, so every pair within `q` now was within `q + s` at the
-//! build. Each step's lists are the candidates within `q` of each other at the step's start
+//! while no particle has moved more than `s / 2` (less a rounding margin) since and the step's
+//! reach is at most `q` (it follows the step's travel): two particles then closed in by less
+//! than `s`, so every pair within the step's reach now was within `q + s` at the build. Each step's lists are the candidates within `q` of each other at the step's start
 //! (the broadphase's own predicate), exactly the lists of a fresh query: the reuse changes the
 //! cost, never the result.
 //!
@@ -28,6 +28,8 @@ pub(crate) struct Reuse {
     at: [Vec<f32>; 3],
     /// What the candidates were built for: particle count, distance (bits), broadphase.
     key: Option<(usize, u32, SelfBroadphase)>,
+    /// The reach `q` they were built for (the skin comes on top).
+    reach: f32,
     skin: f32,
     /// Steps since the build.
     age: u32,
@@ -39,11 +41,11 @@ pub(crate) struct Reuse {
 }
 
 impl Reuse {
-    /// Whether candidates built for distance `d` still hold every pair within `q` of the
-    /// positions `x` (the first `n`); else forgets them.
-    pub(crate) fn holds(&mut self, x: [&[f32]; 3], n: usize, d: f32, broadphase: SelfBroadphase) -> bool {
+    /// Whether candidates built for distance `d` still hold every pair within the reach `q` of
+    /// the positions `x` (the first `n`); else forgets them.
+    pub(crate) fn holds(&mut self, x: [&[f32]; 3], n: usize, d: f32, q: f32, broadphase: SelfBroadphase) -> bool {
         self.age += 1;
-        if self.key != Some((n, d.to_bits(), broadphase)) {
+        if self.key != Some((n, d.to_bits(), broadphase)) || q > self.reach {
             self.key = None;
             return false;
         }
@@ -67,8 +69,9 @@ impl Reuse {
         }
     }
 
-    /// Records a build from `x` with `skin` for distance `d`.
-    pub(crate) fn built(&mut self, x: [&[f32]; 3], n: usize, d: f32, broadphase: SelfBroadphase, skin: f32) {
+    /// Records a build from `x` with `skin` for distance `d` and reach `q`.
+    pub(crate) fn built(&mut self, x: [&[f32]; 3], n: usize, d: f32, q: f32, broadphase: SelfBroadphase, skin: f32) {
+        self.reach = q;
         for (a, src) in self.at.iter_mut().zip(x) {
             a.clear();
             a.extend_from_slice(&src[..n.min(src.len())]);
@@ -149,6 +152,26 @@ fn keep_within(js: &[u32], x: [&[f32]; 3], i: usize, q2: f32, simd: bool, buf: &
 mod tests {
     use super::*;
     use crate::test_rng::signed;
+
+    /// Kept candidates hold while the particles stay within half the skin and the step's
+    /// reach within the reach of the build; a wider reach forgets them.
+    #[test]
+    fn candidates_hold_only_within_their_reach() {
+        let x = [vec![0.0f32, 0.01], vec![0.0; 2], vec![0.0; 2]];
+        let xs = [&x[0][..], &x[1][..], &x[2][..]];
+        let moved = [vec![0.0f32, 0.0145], vec![0.0; 2], vec![0.0; 2]];
+        let ms = [&moved[0][..], &moved[1][..], &moved[2][..]];
+        let mut r = Reuse::default();
+        r.built(xs, 2, 0.01, 0.03, SelfBroadphase::Hash, 0.01);
+        assert!(r.holds(xs, 2, 0.01, 0.03, SelfBroadphase::Hash));
+        assert!(r.holds(ms, 2, 0.01, 0.02, SelfBroadphase::Hash));
+        assert!(!r.holds(xs, 2, 0.01, 0.031, SelfBroadphase::Hash));
+        // forgotten: the same reach no longer holds
+        assert!(!r.holds(xs, 2, 0.01, 0.03, SelfBroadphase::Hash));
+        r.built(xs, 2, 0.01, 0.03, SelfBroadphase::Hash, 0.01);
+        let far = [vec![0.0f32, 0.0151], vec![0.0; 2], vec![0.0; 2]];
+        assert!(!r.holds([&far[0][..], &far[1][..], &far[2][..]], 2, 0.01, 0.03, SelfBroadphase::Hash));
+    }
 
     /// The lane filter keeps exactly the scalar loop's candidates: a random cloud whose
     /// candidates reach twice the radius, with partners exactly at the radius (kept: the rule

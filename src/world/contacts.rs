@@ -51,9 +51,9 @@ impl Contacts {
 }
 
 impl World {
-    /// Step start: places the obstacles' particle data and builds the self-collision pair lists
-    /// from `x` (as the XPBD step does).
-    pub(crate) fn begin_force_contacts(&mut self, parallel: bool) -> Contacts {
+    /// Start of a step of `dt`: places the obstacles' particle data, sets the self-collision
+    /// travel from `v` and builds its pair lists from `x` (as the XPBD step does).
+    pub(crate) fn begin_force_contacts(&mut self, dt: f32, parallel: bool) -> Contacts {
         let n = self.particles.count();
         let obstacles = !self.obstacles.is_empty();
         if obstacles {
@@ -61,6 +61,7 @@ impl World {
         }
         let selfcol = {
             let p = &self.particles;
+            self.selfcol.adapt_travel([&p.vx, &p.vy, &p.vz], &p.w, n, dt, self.exec());
             let on = self.selfcol.begin_step([&p.x, &p.y, &p.z], n, &self.damping_rate, self.exec());
             on.unwrap_or(false).then(|| self.selfcol.active()).flatten()
         };

@@ -52,7 +52,7 @@ impl World {
         let (simd, parallel) = (exec.simd(), exec.parallel());
         self.damping_for(h);
         self.last_h = h;
-        let contacts = self.begin_force_contacts(parallel);
+        let contacts = self.begin_force_contacts(dt, parallel);
         let keep_x = contacts.any();
         let leap = method == Method::Leapfrog;
         if leap {

@@ -180,6 +180,7 @@ impl World {
         let sc_start = std::time::Instant::now();
         let sc = {
             let p = &self.particles;
+            self.selfcol.adapt_travel([&p.vx, &p.vy, &p.vz], &p.w, n, h * n_sub as f32, exec);
             let on = self.selfcol.begin_step([&p.x, &p.y, &p.z], n, &self.damping_rate, exec);
             on.unwrap_or(false).then(|| self.selfcol.active()).flatten()
         };
