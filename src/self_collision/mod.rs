@@ -9,7 +9,7 @@
 //!
 //! * **Once a step** ([`SelfCollisionData::adapt_travel`], [`SelfCollisionData::begin_step`]),
 //!   the paper's "generate collision constraints" line of Algorithm 1. First the step's
-//!   travel `T`, the distance two particles may close in by half during the step: with `m`
+//!   travel `T`, how far a particle may move relative to the mean during the step: with `m`
 //!   the mean velocity of the free particles and `u` the largest of `|v_i - m|` over all
 //!   particles and of `|m|` (a particle stopped by an obstacle moves at `-m` relative to the
 //!   mean), `T = min(T_max, max(TRAVEL_FLOOR d, TRAVEL_GROWTH u dt))` ([`TRAVEL_FLOOR`]
