@@ -100,8 +100,8 @@ typedef struct WeftSelfCollision {
   // Measure the percentage of particles in penetration after every step (costs time).
   bool measure;
   // The travel bound over the collision distance, above 0 and at most 2 (default 1): how
-  // far a particle may move in a step relative to the mean motion at most (each step uses
-  // what its velocities call for, up to it). Lower is cheaper and clamps harder.
+  // far a particle may move in a step relative to the mean motion at most (each particle uses
+  // what its velocity calls for, up to it). Lower is cheaper and clamps harder.
   float travel;
 } WeftSelfCollision;
 

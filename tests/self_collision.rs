@@ -122,12 +122,12 @@ proptest! {
     }
 }
 
-/// The lists the step used are the brute-force pairs within `q = (1 + 2 t) d` of the step's
-/// start positions, `t` the step's travel, minus the rest neighbours (rest distance at most
+/// The lists the step used are the brute-force pairs within `d + (t_i + t_j) d` of the step's
+/// start positions, `t_i` the particles' travels that step, minus the rest neighbours (rest distance at most
 /// `1.001 (1 + 2 travel) d`, the setting's travel), each pair once (in the list of its smaller
 /// id), for both broadphases and three travel bounds. The upper layer first moves fast enough
-/// for each bound to hold the step's travel (a lower bound lists fewer pairs); once it is
-/// stopped, the steps' travel follows the velocities down to `TRAVEL_FLOOR`.
+/// for every particle's travel to be the bound (a lower bound lists fewer pairs); once it is
+/// stopped, the travels follow the velocities down to `TRAVEL_FLOOR`.
 #[test]
 fn step_pairs_equal_brute_force() {
     let (rows, cols, s) = (16u32, 12u32, 0.02f32);
@@ -159,14 +159,24 @@ fn step_pairs_equal_brute_force() {
             let (x, y, z) = (x.to_vec(), y.to_vec(), z.to_vec());
             w.step(1.0 / 60.0).unwrap();
             let t = w.self_collision_travel().expect("a step ran");
+            let each = w.self_collision_travels().to_vec();
+            assert_eq!(each.len(), n);
             match step {
-                0 => assert_eq!(t, travel),
-                1 => assert_eq!(t, TRAVEL_FLOOR),
-                _ => assert!((TRAVEL_FLOOR..=travel).contains(&t), "step {step}: travel {t}"),
+                0 => assert!(each.iter().all(|&e| e == travel)),
+                1 => assert!(each.iter().all(|&e| e == TRAVEL_FLOOR)),
+                _ => assert!(each.iter().all(|e| (TRAVEL_FLOOR..=travel).contains(e)), "step {step}"),
             }
+            assert_eq!(t, each.iter().copied().fold(0.0, f32::max));
             let mut brute = Neighbours::new();
             let d = w.self_collision_distance();
-            brute.fill_brute_force(&x, &y, &z, x.len(), (1.0 + 2.0 * t) * d).unwrap();
+            brute.fill_brute_force(&x, &y, &z, x.len(), d + (t + t) * d).unwrap();
+            // each pair within its own reach
+            brute.retain(|i, j| {
+                let r = d + (each[i] + each[j as usize]) * d;
+                let k = j as usize;
+                let (dx, dy, dz) = (x[k] - x[i], y[k] - y[i], z[k] - z[i]);
+                (dx * dx + dy * dy) + dz * dz <= r * r
+            });
             // Rest positions on the grid, computed like the library (f32 differences).
             let rest = |i: u32| [(i % cols) as f32 * s, 0.0f32, (i / cols) as f32 * s];
             let skip = skip * d;

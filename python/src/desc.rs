@@ -244,7 +244,7 @@ impl PyWind {
 /// `"movement-speed"`), `broadphase` (`"hash"` or `"aabb-tree"`; both find the same pairs),
 /// `measure` (record the percentage of particles in penetration after every step) and `travel`
 /// (how far a particle may move in a step relative to the mean motion at most, in collision
-/// distances, above 0 and at most 2; each step uses what its velocities call for, up to it:
+/// distances, above 0 and at most 2; each particle uses what its velocity calls for, up to it:
 /// lower is cheaper and clamps harder).
 #[pyclass(module = "weft", name = "SelfCollision", frozen)]
 #[derive(Clone)]

@@ -34,7 +34,7 @@ pub const RELAXATION: f32 = 1.5;
 /// ([`SelfCollision::travel`]).
 pub const TRAVEL_FACTOR: f32 = 1.0;
 
-/// A step's travel over the largest speed relative to the mean at its start (see
+/// A particle's travel in a step over its speed relative to the mean at the step's start (see
 /// [`SelfCollision::travel`]): a particle may speed up by half, relative to the others, from
 /// one step to the next before the clamp holds it.
 pub const TRAVEL_GROWTH: f32 = 1.5;
@@ -112,10 +112,10 @@ pub struct SelfCollision {
     pub measure: bool,
     /// The travel bound `T / d`, in `(0, MAX_TRAVEL]` (default [`TRAVEL_FACTOR`], 1): the speed
     /// clamp lets a particle move at most `travel d` a step relative to the mean velocity of
-    /// the free particles, and the pair lists reach at most `(1 + 2 travel) d`. Each step
-    /// uses the travel its velocities call for, up to this bound ([`TRAVEL_GROWTH`] times the
-    /// largest relative speed, at least [`TRAVEL_FLOOR`]; see `self_collision`), so a settled
-    /// cloth lists fewer pairs. Lower is cheaper (the lists shrink with the cube of the
+    /// the free particles, and the pair lists reach at most `(1 + 2 travel) d`. Each step gives
+    /// every particle the travel its velocity calls for, up to this bound ([`TRAVEL_GROWTH`]
+    /// times its relative speed, at least [`TRAVEL_FLOOR`]; see `self_collision`), so slow
+    /// particles list fewer pairs. Lower is cheaper (the lists shrink with the cube of the
     /// reach) and clamps relative motion harder; docs/performance.md measures what it costs
     /// and what it saves on the suite. The rest-neighbour rule follows this bound, not the
     /// step's travel.

@@ -4,15 +4,15 @@
 //!
 //! With `d` the collision distance and `r_i` the rest (initial grid) position of particle `i`:
 //!
-//! * **Once per step**, from the positions `x` and velocities `v` at its start: the step's
-//!   travel `t = min(travel, max(0.25, 1.5 u dt / d))`, `u` the largest of `|v_i - m|` over all
-//!   particles and `|m|`, `m` the mean velocity of the free particles; then every pair closer
-//!   than the query radius `(1 + 2 t) d` (a plain uniform grid of that cell in f64 and a
-//!   27-cell search), each pair once, leaving out **rest neighbours** (one cloth and
-//!   `|r_i - r_j| <= 1.001 (1 + 2 travel) d`, the setting's travel: the cloth's own
+//! * **Once per step**, from the positions `x` and velocities `v` at its start: each
+//!   particle's travel `t_i = min(travel, max(0.25, 1.5 u_i dt / d))`, `u_i` the larger of
+//!   `|v_i - m|` and `|m|`, `m` the mean velocity of the free particles; then every pair
+//!   closer than its reach `d + (t_i + t_j) d` (a plain uniform grid of cell `(1 + 2 max t) d`
+//!   in f64 and a 27-cell search), each pair once, leaving out **rest neighbours** (one cloth
+//!   and `|r_i - r_j| <= 1.001 (1 + 2 travel) d`, the setting's travel: the cloth's own
 //!   constraints hold them).
-//! * **After predict** (each substep), the speed clamp: `u = v - m` is limited to
-//!   `|u| <= t d / (substeps h)` (a relative travel of `t d` per step), and a clamped
+//! * **After predict** (each substep), the speed clamp: `u = v_i - m` is limited to
+//!   `|u| <= t_i d / (substeps h)` (a relative travel of `t_i d` per step), and a clamped
 //!   particle's prediction is redone, `p = x + h v`. The clamped predictions `q` are the
 //!   VcCPBD box centres.
 //! * **After the constraint sweeps** (each substep), for every listed pair, for each end `i`
@@ -56,10 +56,10 @@ pub(super) struct SelfCollision64 {
     response: Response,
     friction: f64,
     /// The travel bound `T / d` and the rest-skip radius over `d` (the world's settings, read
-    /// as the world reads them), and this step's travel over `d`.
+    /// as the world reads them), and each particle's travel over `d` this step.
     travel: f64,
     skip: f64,
-    step_travel: f64,
+    step_travel: Vec<f64>,
     /// Rest positions and cloth of every particle.
     rest: Vec<V3>,
     cloth_of: Vec<usize>,
@@ -122,7 +122,7 @@ impl SelfCollision64 {
             friction: cfg.friction as f64,
             travel: cfg.travel as f64,
             skip: cfg.rest_skip_factor() as f64,
-            step_travel: cfg.travel as f64,
+            step_travel: vec![cfg.travel as f64; n],
             rest: desc.positions.iter().map(|p| p.map(f64::from)).collect(),
             cloth_of,
             lists: vec![Vec::new(); n],
@@ -134,20 +134,22 @@ impl SelfCollision64 {
     /// step of `dt` and builds the pair lists from the positions `x`.
     pub(super) fn begin_step(&mut self, x: &[V3], v: &[V3], w: &[f64], dt: f64) {
         let m = mean_free(v, w);
-        let mut top = dot(m, m);
-        for &vi in v {
-            let u2 = dot(sub(vi, m), sub(vi, m));
-            if u2 > top || u2.is_nan() {
-                top = u2;
-            }
-        }
-        let rel = top.sqrt() * dt / self.d;
-        self.step_travel = if rel.is_finite() {
-            (TRAVEL_GROWTH as f64 * rel).max(TRAVEL_FLOOR as f64).min(self.travel)
-        } else {
-            self.travel
-        };
-        let reach = (1.0 + 2.0 * self.step_travel) * self.d;
+        let bound = self.travel;
+        self.step_travel = v
+            .iter()
+            .map(|&vi| {
+                let u2 = dot(sub(vi, m), sub(vi, m));
+                let u2 = if u2.is_nan() { u2 } else { u2.max(dot(m, m)) };
+                let rel = u2.sqrt() * dt / self.d;
+                if rel.is_finite() {
+                    (TRAVEL_GROWTH as f64 * rel).max(TRAVEL_FLOOR as f64).min(bound)
+                } else {
+                    bound
+                }
+            })
+            .collect();
+        let top = self.step_travel.iter().copied().fold(0.0, f64::max);
+        let reach = self.d + 2.0 * top * self.d;
         let skip = self.skip * self.d;
         let cell = |p: V3| p.map(|c| (c / reach).floor() as i64);
         let mut grid: HashMap<[i64; 3], Vec<usize>> = HashMap::new();
@@ -166,7 +168,8 @@ impl SelfCollision64 {
                         for &j in bucket {
                             let near = |a: V3, b: V3, r: f64| dot(sub(a, b), sub(a, b)) <= r * r;
                             let rest_neighbour = self.cloth_of[i] == self.cloth_of[j] && near(self.rest[i], self.rest[j], skip);
-                            if j > i && near(x[i], x[j], reach) && !rest_neighbour {
+                            let pair = self.d + (self.step_travel[i] + self.step_travel[j]) * self.d;
+                            if j > i && near(x[i], x[j], pair) && !rest_neighbour {
                                 list.push(j);
                             }
                         }
@@ -180,8 +183,8 @@ impl SelfCollision64 {
     /// The speed clamp after predict, for a step of `substeps` substeps of length `h`.
     pub(super) fn clamp(&mut self, x: &[V3], v: &mut [V3], p: &mut [V3], w: &[f64], substeps: u32, h: f64) {
         let m = mean_free(v, w);
-        let limit = self.step_travel * self.d / (substeps as f64 * h);
         for i in 0..v.len() {
+            let limit = self.step_travel[i] * self.d / (substeps as f64 * h);
             let u = sub(v[i], m);
             let s = dot(u, u).sqrt();
             if !(w[i] > 0.0 && s > limit) {

@@ -391,7 +391,7 @@ fn fold_with_parallel_pair_chunks_is_bitwise_on_any_thread_count() {
             response: Response::Vccpbd,
             ..SelfCollision::default()
         };
-        crate::perf::fold_world(48, crate::Fabric::preset("basic").unwrap(), params, sc).unwrap()
+        crate::perf::fold_world(64, crate::Fabric::preset("basic").unwrap(), params, sc).unwrap()
     };
     let (mut one, dt) = make(1, crate::Backend::Simd);
     let mut others = [make(2, crate::Backend::Simd).0, make(1, crate::Backend::Scalar).0];
@@ -503,11 +503,19 @@ fn step_travel_follows_the_velocities() {
     vy[0] = 0.0;
     let t = travel(&mut data, &vy, 0.004);
     assert!((t - TRAVEL_GROWTH * 0.004 / d).abs() < 1e-5, "{t}");
+    assert!(data.step_travels(n).iter().all(|&e| e == t));
     let a = data.active().unwrap();
     assert_eq!(a.travel, t);
-    assert_eq!(a.q, (1.0 + 2.0 * t) * d);
+    assert_eq!(a.q, d + (t + t) * d);
     assert_eq!(a.skip, SelfCollision::default().rest_skip_factor() * d);
     assert_eq!(travel(&mut data, &vy, 1.0), SelfCollision::default().travel);
+    // One fast particle: its own travel is the bound, the others keep theirs (the mean's
+    // speed, 5/3 m/s, above theirs relative to it).
+    vy[3] = -11.0;
+    assert_eq!(travel(&mut data, &vy, 0.002), SelfCollision::default().travel);
+    let each = data.step_travels(n).to_vec();
+    assert!(each[3] == 1.0 && each[4] < 1.0 && each[4] > TRAVEL_FLOOR, "{each:?}");
     vy[5] = f32::NAN;
     assert_eq!(travel(&mut data, &vy, 0.004), SelfCollision::default().travel);
+    assert_eq!(data.step_travels(n)[5], 1.0);
 }

@@ -8,15 +8,19 @@
 //! 100x100 fold against 0.0007% with `r = d`).
 //!
 //! * **Once a step** ([`SelfCollisionData::adapt_travel`], [`SelfCollisionData::begin_step`]),
-//!   the paper's "generate collision constraints" line of Algorithm 1. First the step's
-//!   travel `T`, how far a particle may move relative to the mean during the step: with `m`
-//!   the mean velocity of the free particles and `u` the largest of `|v_i - m|` over all
-//!   particles and of `|m|` (a particle stopped by an obstacle moves at `-m` relative to the
-//!   mean), `T = min(T_max, max(TRAVEL_FLOOR d, TRAVEL_GROWTH u dt))` ([`TRAVEL_FLOOR`]
-//!   0.25, [`TRAVEL_GROWTH`] 1.5): a scene at rest lists pairs within `1.5 d`, a fast one
-//!   within `(1 + 2 travel) d`. Then the broadphase (the spatial hash, a counting sort of the
-//!   particles over cells, or the AABB tree, refitted) lists, from the positions `x` at the
-//!   start of the step, every pair closer than the query radius `q = d + 2 T`, `d` the
+//!   the paper's "generate collision constraints" line of Algorithm 1. First each particle's
+//!   travel `T_i`, how far it may move relative to the mean during the step: with `m` the
+//!   mean velocity of the free particles and `u_i` the larger of `|v_i - m|` and `|m|` (a
+//!   particle stopped by an obstacle moves at `-m` relative to the mean),
+//!   `T_i = min(T_max, max(TRAVEL_FLOOR d, TRAVEL_GROWTH u_i dt))` ([`TRAVEL_FLOOR`] 0.25,
+//!   [`TRAVEL_GROWTH`] 1.5). Two particles then close in by at most `T_i + T_j`, so the pair
+//!   is listed when closer than its reach `d + T_i + T_j`: two particles at rest within
+//!   `1.5 d`, two fast ones within `(1 + 2 travel) d`. The broadphase (the spatial hash, a
+//!   counting sort of the particles over cells, or the AABB tree, refitted) lists, from the
+//!   positions `x` at the start of the step, every pair closer than the step's query radius
+//!   `q = d + 2 max T_i` and keeps each pair within its own reach (the hash with the travels
+//!   attached, [`SpatialHash::attach_travel`], the tree in its filter; kept candidates through
+//!   `reuse::within_reach`), `d` the
 //!   collision distance. **Rest neighbours** are dropped as the list is written: pairs of one
 //!   cloth whose rest distance is at most `d + 2 T_max` (plus 0.1%,
 //!   [`SelfCollision::rest_skip_factor`]: the rule does not change with the step's travel),
@@ -28,15 +32,16 @@
 //!   and to a brute force).
 //! * **After predict** (each substep): the speed clamp ([`crate::self_collision::response`])
 //!   limits a free particle's velocity relative to the mean velocity of the free particles to
-//!   `T / substeps` a substep, so two particles close in by at most `2T` in a step: any pair
-//!   that touches during the step is in the list. (The clamp is relative so a falling cloth
+//!   `T_i / substeps` a substep, so two particles close in by at most `T_i + T_j` in a step:
+//!   any pair that touches during the step is in the list. (The clamp is relative so a falling cloth
 //!   still falls at full speed; Müller's version clamps absolute speed to one cell a substep.)
 //!   It never speeds a particle up, so a particle slower than the mean (stopped by an obstacle)
 //!   keeps its velocity and is exempt from the bound. The clamp bounds the predicted motion;
 //!   the constraint sweeps move particles further, so the bound is the model's, not a proof.
-//!   With the step's travel a particle may gain half its relative speed from one step to the
+//!   With its own travel a particle may gain half its relative speed from one step to the
 //!   next (or `TRAVEL_FLOOR d` a step from rest) before the clamp holds it; the lists of a
-//!   settled cloth are then a fraction of those at `T_max`.
+//!   settled cloth, or of the slow particles of a busy one, are then a fraction of those at
+//!   `T_max`.
 //! * **After the constraint sweeps** (each substep): the pair pass below over the whole list,
 //!   eight pairs at a time (`contacts`), then the velocity-correction kernel
 //!   [`crate::self_collision::response::apply`] on the blocks of eight particles that received
@@ -96,7 +101,7 @@ use crate::error::{positive, Result, WeftError};
 pub(crate) use crate::self_collision::contacts::ApplyParams;
 use crate::self_collision::contacts::{ContactPass, PredictionSink};
 use crate::self_collision::hash::SpatialHash;
-use crate::self_collision::neighbours::Neighbours;
+use crate::self_collision::neighbours::{pair_reach2, within, Neighbours};
 use crate::self_collision::pairs::{PairCtx, PairRows};
 use crate::self_collision::reuse::Reuse;
 use crate::self_collision::tree::{ParticleTree, TreeShape};
@@ -152,8 +157,12 @@ pub struct SelfCollisionData {
     /// Copy the box centres in the clamp even when the correction could derive them (tests
     /// compare both).
     pub(crate) copy_centres: bool,
-    /// This step's travel over `d` (at most the setting's), from the velocities at its start.
+    /// This step's largest travel over `d` (at most the setting's), from the velocities at
+    /// its start, each particle's (padded like the particle arrays), and whether they are all
+    /// the same.
     travel_now: Option<f32>,
+    pub(crate) travel_of: Vec<f32>,
+    travel_uniform: bool,
 }
 
 #[derive(Clone, Debug, Default)]
@@ -184,9 +193,9 @@ pub(crate) struct Active {
     pub d: f32,
     pub response: Response,
     pub friction: f32,
-    /// This step's travel over `d` (at most [`SelfCollision::travel`]).
+    /// This step's largest travel over `d` (at most [`SelfCollision::travel`]).
     pub travel: f32,
-    /// The query radius `q = (1 + 2 travel) d` and the rest-skip radius (of the setting's
+    /// The query radius `q = d + 2 travel d` and the rest-skip radius (of the setting's
     /// travel), m.
     pub q: f32,
     pub skip: f32,
@@ -239,7 +248,7 @@ impl SelfCollisionData {
             response: c.response,
             friction: c.friction,
             travel,
-            q: (1.0 + 2.0 * travel) * d,
+            q: d + (travel + travel) * d,
             skip: c.rest_skip_factor() * d,
         })
     }
@@ -272,6 +281,12 @@ impl SelfCollisionData {
     /// broadphase built afresh; `false` when off.
     fn build_lists(&mut self, x: [&[f32]; 3], n: usize, exec: Exec) -> Result<bool> {
         let Some(a) = self.active() else { return Ok(false) };
+        if self.travel_now.is_none() || self.travel_of.len() < n {
+            // No step has set the travels (or not for these particles): all the bound's.
+            self.travel_of.clear();
+            self.travel_of.resize(n, a.travel);
+            self.travel_uniform = true;
+        }
         let broadphase = self.config.as_ref().map(|c| c.broadphase).unwrap_or_default();
         let mut st = self.state.take().unwrap_or_else(|| State {
             hash: SpatialHash::new(n),
@@ -291,15 +306,29 @@ impl SelfCollisionData {
             let reach = q + skin;
             r = self.build_structure(&mut st, x, n, reach, broadphase, exec);
             t1 = Instant::now();
-            // With a skin the query fills the candidates, else the lists themselves.
+            // With a skin the query fills the candidates (every pair within the step's largest
+            // reach and the skin), filtered to the lists below; without, it lists each pair
+            // within its own reach.
+            let own = skin == 0.0 && !self.travel_uniform;
             let out = if skin > 0.0 { &mut st.cand } else { &mut st.lists };
+            let (d, travel) = (a.d, &self.travel_of[..]);
             r = r.and_then(|_| match (&st.tree, broadphase) {
                 (Some(t), SelfBroadphase::AabbTree) => {
                     let (rest, cloth_of, skip) = (&self.rest, &self.cloth_of, a.skip);
-                    let keep = |i: usize, j: u32| !rest_skipped(rest, cloth_of, i, j as usize, skip);
+                    let keep = |i: usize, j: u32| {
+                        let j = j as usize;
+                        let reach2 = pair_reach2(d, travel[i], travel[j]);
+                        !rest_skipped(rest, cloth_of, i, j, skip)
+                            && (!own || within(x[0][i], x[1][i], x[2][i], x[0][j], x[1][j], x[2][j], reach2))
+                    };
                     t.query_exec(x[0], x[1], x[2], n, reach, out, exec, true, &keep)
                 }
-                _ => st.hash.query_upper_unskipped_cells_exec(reach, a.skip, out, exec),
+                _ => {
+                    if own {
+                        st.hash.attach_travel(d, travel)?;
+                    }
+                    st.hash.query_upper_unskipped_cells_exec(reach, a.skip, out, exec)
+                }
             });
             if r.is_ok() {
                 st.reuse.built(x, n, a.d, q, broadphase, skin);
@@ -307,7 +336,7 @@ impl SelfCollisionData {
             }
         }
         if r.is_ok() && st.reuse.skin() > 0.0 {
-            r = reuse::within_reach(&st.cand, x, q, &mut st.lists, exec);
+            r = reuse::within_reach(&st.cand, x, a.d, &self.travel_of, &mut st.lists, exec);
         }
         if st.cand.limited() || st.lists.limited() {
             r = Err(too_many_pairs(a.d, q));
@@ -327,32 +356,35 @@ impl SelfCollisionData {
         r.map(|_| true)
     }
 
-    /// Sets this step's travel from the velocities `v` of the `n` particles (inverse masses
-    /// `w`) at its start and the step `dt` (see the module docs): the largest speed relative
-    /// to the free particles' mean, or the mean's own speed if larger, over a step, times
-    /// [`TRAVEL_GROWTH`], at least [`TRAVEL_FLOOR`] and at most the setting's travel. A
-    /// non-finite velocity gives the setting's travel.
+    /// Sets this step's travel of every particle from the velocities `v` of the `n` particles
+    /// (inverse masses `w`) at its start and the step `dt` (see the module docs): its speed
+    /// relative to the free particles' mean, or the mean's own speed if larger, over a step,
+    /// times [`TRAVEL_GROWTH`], at least [`TRAVEL_FLOOR`] and at most the setting's travel (a
+    /// non-finite velocity gives the setting's travel).
     pub(crate) fn adapt_travel(&mut self, v: [&[f32]; 3], w: &[f32], n: usize, dt: f32, exec: Exec) {
         let Some(c) = self.config.as_ref() else { return };
-        let d = self.distance();
+        let (bound, d) = (c.travel, self.distance());
         let m = crate::self_collision::response::mean_velocity_in(&mut self.mean_parts, v, w, n, exec);
         // A particle stopped by an obstacle moves at minus the mean relative to it.
-        let mut top = m[0] * m[0] + m[1] * m[1] + m[2] * m[2];
-        for ((vx, vy), vz) in v[0].iter().zip(v[1]).zip(v[2]).take(n) {
-            let u = [vx - m[0], vy - m[1], vz - m[2]];
+        let m2 = m[0] * m[0] + m[1] * m[1] + m[2] * m[2];
+        let len = v[0].len().min(v[1].len()).min(v[2].len());
+        self.travel_of.clear();
+        self.travel_of.resize(len.max(n), bound);
+        let (mut lo, mut hi) = (bound, TRAVEL_FLOOR.min(bound));
+        for (i, t) in self.travel_of.iter_mut().enumerate().take(n.min(len)) {
+            let u = [v[0][i] - m[0], v[1][i] - m[1], v[2][i] - m[2]];
             let u2 = u[0] * u[0] + u[1] * u[1] + u[2] * u[2];
-            // A NaN is kept (and gives the setting's travel below).
-            if u2 > top || u2.is_nan() {
-                top = u2;
-            }
+            let u2 = if u2.is_nan() { u2 } else { u2.max(m2) };
+            let rel = u2.sqrt() * dt / d;
+            *t = if rel.is_finite() {
+                (TRAVEL_GROWTH * rel).max(TRAVEL_FLOOR).min(bound)
+            } else {
+                bound
+            };
+            (lo, hi) = (lo.min(*t), hi.max(*t));
         }
-        let rel = top.sqrt() * dt / d;
-        let t = if rel.is_finite() {
-            (TRAVEL_GROWTH * rel).max(TRAVEL_FLOOR)
-        } else {
-            c.travel
-        };
-        self.travel_now = Some(t.min(c.travel));
+        self.travel_now = Some(hi);
+        self.travel_uniform = lo == hi;
     }
 
     /// The cloths' rest positions.
@@ -428,7 +460,16 @@ impl SelfCollisionData {
         self.stats.phases.correction_s += t0.elapsed().as_secs_f64();
     }
 
-    /// This step's travel over `d`, once a step has set it.
+    /// Each of the first `n` particles' travel over `d` this step (empty before a step has
+    /// set them).
+    pub fn step_travels(&self, n: usize) -> &[f32] {
+        match self.travel_now {
+            Some(_) => self.travel_of.get(..n).unwrap_or(&[]),
+            None => &[],
+        }
+    }
+
+    /// This step's largest travel over `d`, once a step has set it.
     pub fn step_travel(&self) -> Option<f32> {
         let c = self.config.as_ref()?;
         self.travel_now.map(|t| t.min(c.travel))

@@ -418,18 +418,32 @@ fn apply_scalar(inp: &ApplyInput<'_>, p: [&mut [f32]; 3], vc: bool) {
 
 /// Inputs of [`clamp_speed`].
 #[derive(Clone, Copy, Debug)]
-pub struct ClampParams {
+pub struct ClampParams<'a> {
     /// Mean velocity of the free particles, m/s.
     pub mean: [f32; 3],
-    /// Largest move relative to the mean in one substep, m.
+    /// Largest move relative to the mean in one substep, m (times the particle's `travel`).
     pub limit: f32,
     /// Substep length, s.
     pub h: f32,
+    /// Each particle's factor on `limit` (indexed like the whole particle arrays, padding
+    /// included), or empty for `limit` itself for all.
+    pub travel: &'a [f32],
+}
+
+impl ClampParams<'_> {
+    /// Particle `i`'s speed limit relative to the mean, m/s.
+    #[inline(always)]
+    fn lim(&self, i: usize) -> f32 {
+        match self.travel.get(i) {
+            Some(&t) => t * self.limit / self.h,
+            None => self.limit / self.h,
+        }
+    }
 }
 
 /// The speed clamp on one chunk (`x`, `v`, `p`, `w` chunk-local, lengths a multiple of
 /// [`LANES`]): SIMD when `simd`, else the scalar twin.
-pub fn clamp_speed(c: crate::data::particles::ParticleChunk<'_>, cp: &ClampParams, simd: bool) {
+pub fn clamp_speed(c: crate::data::particles::ParticleChunk<'_>, cp: &ClampParams<'_>, simd: bool) {
     if simd {
         clamp_simd(c, cp)
     } else {
@@ -439,12 +453,18 @@ pub fn clamp_speed(c: crate::data::particles::ParticleChunk<'_>, cp: &ClampParam
 
 /// The clamp's lanes. The loads keep their bounds checks: the pass waits on memory, and
 /// unchecked loads saved instructions but no time.
-fn clamp_simd(c: crate::data::particles::ParticleChunk<'_>, cp: &ClampParams) {
+fn clamp_simd(c: crate::data::particles::ParticleChunk<'_>, cp: &ClampParams<'_>) {
     let m = Vec3x8::splat(cp.mean);
     let h = F32s::splat(cp.h);
-    let lim = F32s::splat(cp.limit / cp.h);
-    let lim2 = lim * lim;
+    let uniform = F32s::splat(cp.limit / cp.h);
+    let per = cp.travel.len() >= c.start + c.x.len();
     for i in (0..c.x.len()).step_by(LANES) {
+        let lim = if per {
+            load(cp.travel, c.start + i) * F32s::splat(cp.limit) / h
+        } else {
+            uniform
+        };
+        let lim2 = lim * lim;
         let v = Vec3x8::load(c.vx, c.vy, c.vz, i);
         let u = v - m;
         let u2 = u.length_sq();
@@ -466,11 +486,12 @@ fn clamp_simd(c: crate::data::particles::ParticleChunk<'_>, cp: &ClampParams) {
 }
 
 /// Scalar twin of the speed clamp.
-fn clamp_scalar(c: crate::data::particles::ParticleChunk<'_>, cp: &ClampParams) {
+fn clamp_scalar(c: crate::data::particles::ParticleChunk<'_>, cp: &ClampParams<'_>) {
     let h = cp.h;
-    let lim = cp.limit / cp.h;
-    let lim2 = lim * lim;
+    let per = cp.travel.len() >= c.start + c.x.len();
     for i in 0..c.x.len() {
+        let lim = if per { cp.lim(c.start + i) } else { cp.limit / cp.h };
+        let lim2 = lim * lim;
         let u = [c.vx[i] - cp.mean[0], c.vy[i] - cp.mean[1], c.vz[i] - cp.mean[2]];
         let u2 = u[0] * u[0] + u[1] * u[1] + u[2] * u[2];
         if !(u2 > lim2 && c.w[i] > 0.0) {

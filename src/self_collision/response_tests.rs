@@ -86,7 +86,10 @@ proptest! {
     #[test]
     fn clamp_simd_matches_scalar(n in prop_oneof![0usize..40, 4090usize..4110], seed in any::<u64>(), limit_milli in 1u32..50, h_milli in 1u32..60) {
         let base = cloud(n, seed);
-        let cp = ClampParams { mean: [0.5, -1.0, 0.25], limit: limit_milli as f32 * 1e-3, h: h_milli as f32 * 1e-3 };
+        // Each particle its own travel, or one limit for all.
+        let own: Vec<f32> = (0..base.padded_len()).map(|i| 0.25 + 0.25 * ((i as u64 ^ seed) % 8) as f32).collect();
+        for travel in [&[][..], &own[..]] {
+        let cp = ClampParams { mean: [0.5, -1.0, 0.25], limit: limit_milli as f32 * 1e-3, h: h_milli as f32 * 1e-3, travel };
         let run = |simd: bool, par: bool| {
             let mut p = base.clone();
             p.for_chunks(par, |c| clamp_speed(c, &cp, simd));
@@ -97,16 +100,18 @@ proptest! {
         prop_assert_eq!(bits(&reference), bits(&run(true, true)));
         let len = |a: [f32; 3]| (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
         for i in 0..n {
+            let limit = cp.limit * travel.get(i).copied().unwrap_or(1.0);
             if reference.w[i] > 0.0 {
                 let v = [reference.vx[i], reference.vy[i], reference.vz[i]];
                 let u = [v[0] - cp.mean[0], v[1] - cp.mean[1], v[2] - cp.mean[2]];
                 let m = len(u) * cp.h;
-                if m > cp.limit * 1.0001 {
+                if m > limit * 1.0001 {
                     prop_assert_eq!(v, [base.vx[i], base.vy[i], base.vz[i]], "particle {} moved on unclamped", i);
-                    let clamped: [f32; 3] = std::array::from_fn(|k| cp.mean[k] + u[k] * cp.limit / m);
+                    let clamped: [f32; 3] = std::array::from_fn(|k| cp.mean[k] + u[k] * limit / m);
                     prop_assert!(len(clamped) >= len(v) * 0.9999, "particle {} kept {:?}, slower clamped {:?}", i, v, clamped);
                 }
             }
+        }
         }
     }
 }
@@ -122,6 +127,7 @@ fn the_clamp_slows_fast_particles_and_never_speeds_one_up() {
         mean: [0.0, -3.0, 0.0],
         limit: 0.001,
         h: 0.01,
+        travel: &[],
     };
     for simd in [false, true] {
         let mut p = Particles::new();

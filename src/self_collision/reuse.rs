@@ -2,8 +2,10 @@
 //!
 //! The broadphase may run with the reach `q + s`, `s` the skin, and its candidates be kept
 //! while no particle has moved more than `s / 2` (less a rounding margin) since and the step's
-//! reach is at most `q` (it follows the step's travel): two particles then closed in by less
-//! than `s`, so every pair within the step's reach now was within `q + s` at the build. Each step's lists are the candidates within `q` of each other at the step's start
+//! reach is at most `q` (it follows the step's travels): two particles then closed in by less
+//! than `s`, so every pair within the step's reach now was within `q + s` at the build. The
+//! filter from candidates to lists ([`within_reach`]) keeps each pair within its own reach
+//! `d + (t_i + t_j) d` (a query without a skin keeps them so itself). Each step's lists are the candidates within `q` of each other at the step's start
 //! (the broadphase's own predicate), exactly the lists of a fresh query: the reuse changes the
 //! cost, never the result.
 //!
@@ -16,7 +18,7 @@ use crate::data::exec::Exec;
 use crate::data::lanes::{gather1, F32s, Idx8, LANES};
 use crate::error::Result;
 use crate::model::self_collision::SelfBroadphase;
-use crate::self_collision::neighbours::{within, Neighbours};
+use crate::self_collision::neighbours::{pair_reach2 as reach2, within, Neighbours};
 
 /// The skin in collision distances when the particles move slowly.
 const SKIN_FACTOR: f32 = 1.0;
@@ -102,13 +104,13 @@ fn max_move(a: [&[f32]; 3], b: [&[f32]; 3], n: usize) -> f32 {
     m2.sqrt()
 }
 
-/// The lists `out`: the candidates `cand` within `q` of each other at `x`, by the
-/// broadphase's predicate (in parallel over fixed chunks when `exec` is, eight candidates at a
-/// time when its lanes are; the same lists).
-pub(crate) fn within_reach(cand: &Neighbours, x: [&[f32]; 3], q: f32, out: &mut Neighbours, exec: Exec) -> Result<()> {
-    let q2 = q * q;
+/// The lists `out`: the candidates `cand` within reach of each other at `x`, by the
+/// broadphase's predicate with the pair's own reach `d + (t_i + t_j) d`, `t` the particles'
+/// travels over the collision distance `d` (in parallel over fixed chunks when `exec` is,
+/// eight candidates at a time when its lanes are; the same lists).
+pub(crate) fn within_reach(cand: &Neighbours, x: [&[f32]; 3], d: f32, t: &[f32], out: &mut Neighbours, exec: Exec) -> Result<()> {
     let simd = exec.simd();
-    let keep = |i: usize, buf: &mut Vec<u32>| keep_within(cand.of(i), x, i, q2, simd, buf);
+    let keep = |i: usize, buf: &mut Vec<u32>| keep_within(cand.of(i), x, i, d, t, simd, buf);
     if exec.parallel() {
         out.fill_parallel(cand.len(), keep)
     } else {
@@ -117,15 +119,16 @@ pub(crate) fn within_reach(cand: &Neighbours, x: [&[f32]; 3], q: f32, out: &mut 
 }
 
 /// Appends to `buf`, in order, the candidates `js` of particle `i` that pass [`within`] at
-/// `x` for `q2`. With `simd`, eight at a time: the differences, squares and sums are
-/// [`within`]'s operations in its order, so every decision is the scalar loop's (which is the
-/// twin, and takes the last candidates); the kept ones are written from a bit mask, without a
-/// branch a candidate.
-fn keep_within(js: &[u32], x: [&[f32]; 3], i: usize, q2: f32, simd: bool, buf: &mut Vec<u32>) {
-    let (xi, yi, zi) = (x[0][i], x[1][i], x[2][i]);
+/// `x` for their pair's reach (`pair_reach2`). With `simd`, eight at a time: the differences,
+/// squares, sums and reaches are [`within`]'s and `pair_reach2`'s operations in their order, so
+/// every decision is the scalar loop's (which is the twin, and takes the last candidates);
+/// the kept ones are written from a bit mask, without a branch a candidate.
+fn keep_within(js: &[u32], x: [&[f32]; 3], i: usize, d: f32, t: &[f32], simd: bool, buf: &mut Vec<u32>) {
+    let (xi, yi, zi, ti) = (x[0][i], x[1][i], x[2][i], t[i]);
     let mut done = 0;
     if simd {
-        let (vx, vy, vz, lim) = (F32s::splat(xi), F32s::splat(yi), F32s::splat(zi), F32s::splat(q2));
+        let (vx, vy, vz) = (F32s::splat(xi), F32s::splat(yi), F32s::splat(zi));
+        let (dv, tv) = (F32s::splat(d), F32s::splat(ti));
         let blocks = js.chunks_exact(LANES);
         done = js.len() - blocks.remainder().len();
         for c in blocks {
@@ -133,7 +136,8 @@ fn keep_within(js: &[u32], x: [&[f32]; 3], i: usize, q2: f32, simd: bool, buf: &
             let dx = gather1(x[0], &idx) - vx;
             let dy = gather1(x[1], &idx) - vy;
             let dz = gather1(x[2], &idx) - vz;
-            let mut bits = (dx * dx + dy * dy + dz * dz).simd_le(lim).to_bitmask();
+            let r = dv + (tv + gather1(t, &idx)) * dv;
+            let mut bits = (dx * dx + dy * dy + dz * dz).simd_le(r * r).to_bitmask();
             while bits != 0 {
                 buf.push(c[bits.trailing_zeros() as usize]);
                 bits &= bits - 1;
@@ -142,7 +146,7 @@ fn keep_within(js: &[u32], x: [&[f32]; 3], i: usize, q2: f32, simd: bool, buf: &
     }
     for &j in &js[done..] {
         let j8 = j as usize;
-        if within(xi, yi, zi, x[0][j8], x[1][j8], x[2][j8], q2) {
+        if within(xi, yi, zi, x[0][j8], x[1][j8], x[2][j8], reach2(d, ti, t[j8])) {
             buf.push(j);
         }
     }
@@ -216,6 +220,17 @@ mod tests {
             cand.total()
         );
         assert!(want.of(0).contains(&1) && !want.of(0).contains(&2));
+        // Distance `q` and travels zero: every pair's reach is `q` exactly.
+        let zero = vec![0.0f32; n];
+        // Travels of their own: each pair its reach `d + (t_i + t_j) d`.
+        let d = q / 3.0;
+        let t: Vec<f32> = (0..n).map(|i| 0.25 + 0.125 * (i % 7) as f32).collect();
+        let mut own = Neighbours::new();
+        own.fill_serial(n, |i, buf| {
+            buf.extend(cand.of(i).iter().filter(|&&j| near(i, j, reach2(d, t[i], t[j as usize]))));
+        })
+        .unwrap();
+        assert!(own.total() > 100 && own != want, "{}", own.total());
         for exec in [
             Exec::new(false, false),
             Exec::new(false, true),
@@ -223,8 +238,10 @@ mod tests {
             Exec::new(true, true),
         ] {
             let mut got = Neighbours::new();
-            within_reach(&cand, x, q, &mut got, exec).unwrap();
+            within_reach(&cand, x, q, &zero, &mut got, exec).unwrap();
             assert_eq!(got, want, "{exec:?}");
+            within_reach(&cand, x, d, &t, &mut got, exec).unwrap();
+            assert_eq!(got, own, "{exec:?}, own travels");
         }
     }
 }

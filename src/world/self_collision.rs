@@ -25,18 +25,26 @@ impl World {
         self.selfcol.distance()
     }
 
-    /// The pair lists of the last step: pairs within `q = (1 + 2 t) d` at the step's start
-    /// (`t` its travel, [`World::self_collision_travel`]), the cloths' rest neighbours left out, each pair once in the list of its smaller id (see
+    /// The pair lists of the last step: pairs within `d + (t_i + t_j) d` at the step's start
+    /// (`t_i` the particles' travels, [`World::self_collision_travels`]), the cloths' rest neighbours left out, each pair once in the list of its smaller id (see
     /// [`crate::self_collision`]), if self-collision has run.
     pub fn self_collision_pairs(&self) -> Option<&crate::self_collision::neighbours::Neighbours> {
         self.selfcol.lists()
     }
 
-    /// The travel over the collision distance of the last step with self-collision: what its
-    /// velocities called for, at most [`crate::self_collision::SelfCollision::travel`] (see
-    /// [`crate::self_collision`]); `None` before the first.
+    /// The largest travel over the collision distance of the last step with self-collision:
+    /// what its fastest particle called for, at most
+    /// [`crate::self_collision::SelfCollision::travel`] (see [`crate::self_collision`]);
+    /// `None` before the first.
     pub fn self_collision_travel(&self) -> Option<f32> {
         self.selfcol.step_travel()
+    }
+
+    /// Each particle's travel over the collision distance in the last step with
+    /// self-collision (the pair `(i, j)` was listed within `d + (t_i + t_j) d`); empty before
+    /// the first.
+    pub fn self_collision_travels(&self) -> &[f32] {
+        self.selfcol.step_travels(self.particles.count())
     }
 
     /// Number of pairs in the last step's pair list (the pairs the substeps test).

@@ -71,10 +71,16 @@ impl World {
         let p = &self.particles;
         let parts = &mut self.selfcol.mean_parts;
         let mean = mean.unwrap_or_else(|| mean_velocity_in(parts, [&p.vx, &p.vy, &p.vz], &p.w, n, exec));
+        // Each particle's travel (the step set them; padding and unset ones the step's).
+        let mut travel = std::mem::take(&mut self.selfcol.travel_of);
+        if travel.len() < self.particles.padded_len() {
+            travel.resize(self.particles.padded_len(), a.travel);
+        }
         let cp = ClampParams {
             mean,
-            limit: a.travel * a.d / n_sub as f32,
+            limit: a.d / n_sub as f32,
             h,
+            travel: &travel,
         };
         // Each chunk also copies its predictions as VcCPBD's box centres (one parallel pass),
         // unless the correction derives them (no obstacles).
@@ -85,6 +91,7 @@ impl World {
                 s.keep(c.start, [&*c.px, &*c.py, &*c.pz]);
             }
         });
+        self.selfcol.travel_of = travel;
     }
 
     /// The self-collision pair pass and its correction of the predictions `p`.

@@ -9,7 +9,9 @@
 //!        and  not (cloth_j == cloth_i and |r_i - r_j|² <= skip²)     (r: rest positions)
 //! ```
 //!
-//! sorted ascending: the rest-neighbour rule of Müller's "Ten Minute Physics" self-collision
+//! (with the particles' travels attached, [`SpatialHash::attach_travel`], each pair's own
+//! reach `(d + (t_i + t_j) d)²` stands for `max_dist²`), sorted ascending: the rest-neighbour
+//! rule of Müller's "Ten Minute Physics" self-collision
 //! as the self-collision stage applies it (`rest_skipped` in [`crate::self_collision`]; the
 //! rest distance is computed there as `(r_i - r_j)` per axis, squared and summed in the same
 //! order, no FMA, so both decide alike).
@@ -36,6 +38,10 @@ pub(super) struct RestCopy {
     pub(super) z: Vec<f32>,
     pub(super) cloth: Vec<u32>,
     pub(super) ids: Vec<u32>,
+    /// Each particle's travel in cell order and the collision distance, when attached
+    /// ([`SpatialHash::attach_travel`]): the query then keeps a pair within its own reach.
+    pub(super) travel: Vec<f32>,
+    pub(super) d: Option<f32>,
     /// Whether the copy belongs to the current build (cleared by every build).
     pub(super) valid: bool,
 }
@@ -76,7 +82,37 @@ impl SpatialHash {
             rc.cloth[k] = cloth[i];
             rc.ids[k] = i as u32;
         }
+        rc.travel.clear();
+        rc.d = None;
         rc.valid = true;
+        Ok(())
+    }
+
+    /// Copies each particle's travel `t` over the collision distance `d` into cell order
+    /// (after [`SpatialHash::attach_rest`], which forgets them): the self-collision query then
+    /// keeps the pair `(i, j)` only within `d + (t_i + t_j) d` (and within its `max_dist`,
+    /// which must cover the largest such reach). Errors if `t` is shorter than the build's
+    /// particle count, or `d` or a travel is negative or not finite.
+    pub fn attach_travel(&mut self, d: f32, t: &[f32]) -> Result<()> {
+        crate::error::non_negative("d", d)?;
+        if t.len() < self.n {
+            return Err(WeftError::BufferLength {
+                name: "travel",
+                got: t.len(),
+                expected: self.n,
+            });
+        }
+        if let Some(&bad) = t[..self.n].iter().find(|v| !(v.is_finite() && **v >= 0.0)) {
+            return Err(WeftError::param("travel", bad, "must be finite and not negative"));
+        }
+        let placed = self.cell_entries.len();
+        let rc = &mut self.rest;
+        rc.travel.clear();
+        rc.travel.resize(placed + LANES, 0.0);
+        for (k, &i) in self.cell_entries.iter().enumerate() {
+            rc.travel[k] = t[i as usize];
+        }
+        rc.d = Some(d);
         Ok(())
     }
 

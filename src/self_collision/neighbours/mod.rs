@@ -480,6 +480,14 @@ pub(crate) fn within(xi: f32, yi: f32, zi: f32, xj: f32, yj: f32, zj: f32, md2: 
     dx * dx + dy * dy + dz * dz <= md2
 }
 
+/// The squared reach of a pair whose particles travel `ti` and `tj` collision distances `d`
+/// in a step: `(d + (t_i + t_j) d)²`, computed in this order everywhere (lanes and scalar).
+#[inline(always)]
+pub(crate) fn pair_reach2(d: f32, ti: f32, tj: f32) -> f32 {
+    let r = d + (ti + tj) * d;
+    r * r
+}
+
 /// Half-width of the box a broadphase must search around a particle so that it finds every
 /// `j` that passes [`within`] despite rounding: if the `f32` test passes, the exact distance
 /// along each axis is at most `max(max_dist * (1 + 2^-22), 1.1e-19)` (the second term covers

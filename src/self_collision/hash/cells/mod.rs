@@ -40,7 +40,7 @@
 use crate::data::exec::Exec;
 use crate::data::lanes::{load, load_idx, load_idx_unchecked, load_unchecked, F32s, Vec3x8, LANES};
 use crate::self_collision::hash::SpatialHash;
-use crate::self_collision::neighbours::{search_radius, within, Meter, Neighbours};
+use crate::self_collision::neighbours::{pair_reach2, search_radius, within, Meter, Neighbours};
 use crate::Result;
 use wide::u32x8;
 
@@ -59,6 +59,8 @@ struct Probe {
     p: [f32; 3],
     r: [f32; 3],
     cloth: u32,
+    /// Its travel (zero when none is attached).
+    t: f32,
 }
 
 /// The query's constants.
@@ -71,6 +73,9 @@ struct Reach {
     /// padded by a lane group): a range ending at `e` with `e + LANES <= len` is scanned
     /// without bounds checks.
     len: usize,
+    /// The collision distance when the particles' travels are attached: each pair is then
+    /// kept within its own reach (`pair_reach2`), not `md2`.
+    own: Option<f32>,
 }
 
 impl SpatialHash {
@@ -87,6 +92,7 @@ impl SpatialHash {
             r: search_radius(max_dist),
             s2,
             len: self.scan_len(),
+            own: self.rest.d,
         };
         let ts = self.table_size;
         out.fill_pairs_parallel(self.n, ts.div_ceil(BUCKETS_PER_TASK), |t, buf, meter| {
@@ -122,6 +128,7 @@ impl SpatialHash {
             r: search_radius(max_dist),
             s2,
             len: self.scan_len(),
+            own: self.rest.d,
         };
         out.fill_pairs_serial(self.n, |buf, meter| {
             for b in 0..self.table_size {
@@ -144,6 +151,7 @@ impl SpatialHash {
             rc.z.len(),
             rc.ids.len(),
             rc.cloth.len(),
+            if rc.d.is_some() { rc.travel.len() } else { usize::MAX },
         ]
         .into_iter()
         .min()
@@ -159,6 +167,7 @@ impl SpatialHash {
             p: [self.sx[k], self.sy[k], self.sz[k]],
             r: [rc.x[k], rc.y[k], rc.z[k]],
             cloth: rc.cloth[k],
+            t: if rc.d.is_some() { rc.travel[k] } else { 0.0 },
         }
     }
 
@@ -274,8 +283,9 @@ impl SpatialHash {
     fn kept(&self, q: &Probe, k: Reach, c: usize) -> bool {
         let rc = &self.rest;
         let (dx, dy, dz) = (q.r[0] - rc.x[c], q.r[1] - rc.y[c], q.r[2] - rc.z[c]);
+        let reach2 = k.own.map_or(k.md2, |d| pair_reach2(d, q.t, rc.travel[c]));
         rc.ids[c] != q.i
-            && within(q.p[0], q.p[1], q.p[2], self.sx[c], self.sy[c], self.sz[c], k.md2)
+            && within(q.p[0], q.p[1], q.p[2], self.sx[c], self.sy[c], self.sz[c], reach2)
             && !(rc.cloth[c] == q.cloth && dx * dx + dy * dy + dz * dz <= k.s2)
     }
 
@@ -306,6 +316,7 @@ impl SpatialHash {
         };
         let rc = &self.rest;
         let (pv, m2) = (Vec3x8::splat(q.p), F32s::splat(k.md2));
+        let (dv, tq) = (F32s::splat(k.own.unwrap_or(0.0)), F32s::splat(q.t));
         let mut c = s;
         while c < e {
             let d = Vec3x8 {
@@ -313,7 +324,13 @@ impl SpatialHash {
                 y: ld(&self.sy, c),
                 z: ld(&self.sz, c),
             } - pv;
-            let mut bits = (d.x * d.x + d.y * d.y + d.z * d.z).simd_le(m2).to_bitmask();
+            let reach2 = if k.own.is_some() {
+                let r = dv + (tq + ld(&rc.travel, c)) * dv;
+                r * r
+            } else {
+                m2
+            };
+            let mut bits = (d.x * d.x + d.y * d.y + d.z * d.z).simd_le(reach2).to_bitmask();
             if e - c < LANES {
                 bits &= (1u32 << (e - c)) - 1;
             }

@@ -141,3 +141,56 @@ fn member_lanes_equal_the_scalar_member_test() {
     }
     assert!(checked > 600, "{checked}");
 }
+
+/// With the particles' travels attached, every form of the query (lanes and scalar, serial and
+/// parallel) keeps each pair within its own reach `d + (t_i + t_j) d` (and `max_dist`, which
+/// covers the largest), as the brute force does; a new build forgets the travels.
+#[test]
+fn cells_query_keeps_each_pair_within_its_own_reach() {
+    let h = 0.01f32;
+    let (p, rest, cloth) = lattices(14, h, 1.0, 0.5, 23);
+    let n = cloth.len();
+    let t: Vec<f32> = (0..n)
+        .map(|i| 0.25 + 0.125 * ((i * 5) % 7) as f32 + 0.01 * (i % 3) as f32)
+        .collect();
+    let (d, skip) = (h, 3.003 * h);
+    let top = t.iter().copied().fold(0.0f32, f32::max);
+    let reach = d + (top + top) * d;
+    let all = brute(&p, &rest, &cloth, reach, skip);
+    let mut want = Neighbours::new();
+    want.fill_serial(n, |i, buf| {
+        let r2 = |j: usize| pair_reach2(d, t[i], t[j]);
+        buf.extend(all.of(i).iter().filter(|&&j| {
+            within(
+                p[0][i],
+                p[1][i],
+                p[2][i],
+                p[0][j as usize],
+                p[1][j as usize],
+                p[2][j as usize],
+                r2(j as usize),
+            )
+        }));
+    })
+    .unwrap();
+    assert!(
+        want.total() > 100 && want.total() < all.total(),
+        "{} of {}",
+        want.total(),
+        all.total()
+    );
+    let mut hsh = SpatialHash::new(n);
+    hsh.build(&p[0], &p[1], &p[2], n, reach).unwrap();
+    hsh.attach_rest([&rest[0], &rest[1], &rest[2]], &cloth).unwrap();
+    assert!(hsh.attach_travel(d, &t[..n - 1]).is_err());
+    hsh.attach_travel(d, &t).unwrap();
+    let mut got = Neighbours::new();
+    for exec in [Exec::Scalar, Exec::Simd, Exec::Parallel, Exec::ScalarParallel] {
+        hsh.query_upper_unskipped_cells_exec(reach, skip, &mut got, exec).unwrap();
+        assert_eq!(got, want, "{exec:?}");
+    }
+    hsh.build(&p[0], &p[1], &p[2], n, reach).unwrap();
+    hsh.attach_rest([&rest[0], &rest[1], &rest[2]], &cloth).unwrap();
+    hsh.query_upper_unskipped_cells_exec(reach, skip, &mut got, Exec::Simd).unwrap();
+    assert_eq!(got, all, "travels forgotten by the build");
+}
