@@ -118,7 +118,7 @@ pub struct SelfCollision {
     /// particles list fewer pairs. Lower is cheaper (the lists shrink with the cube of the
     /// reach) and clamps relative motion harder; docs/performance.md measures what it costs
     /// and what it saves on the suite. The rest-neighbour rule follows this bound, not the
-    /// step's travel.
+    /// particles' travels.
     #[serde(default = "default_travel")]
     pub travel: f32,
 }

@@ -130,7 +130,7 @@ impl SelfCollision64 {
         }))
     }
 
-    /// Sets the step's travel from the velocities `v` (inverse masses `w`) at the start of a
+    /// Sets each particle's travel from the velocities `v` (inverse masses `w`) at the start of a
     /// step of `dt` and builds the pair lists from the positions `x`.
     pub(super) fn begin_step(&mut self, x: &[V3], v: &[V3], w: &[f64], dt: f64) {
         let m = mean_free(v, w);

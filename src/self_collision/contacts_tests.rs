@@ -478,10 +478,11 @@ fn contacts_added_in_parallel_parts_equal_the_serial_pass() {
     }
 }
 
-/// The step's travel: the floor at rest; `TRAVEL_GROWTH` times the largest speed relative to
-/// the free particles' mean over a step (a pinned particle at rest while the others fall
-/// counts, at the mean's speed); the setting's bound for fast or non-finite velocities; and
-/// the query reach follows it while the rest-neighbour radius keeps the setting's.
+/// The particles' travels: the floor at rest; `TRAVEL_GROWTH` times the speed relative to
+/// the free particles' mean over a step, or the mean's speed if larger (a pinned particle at
+/// rest while the others fall); the setting's bound for fast or non-finite velocities, each
+/// particle its own; and the query reach follows the largest while the rest-neighbour radius
+/// keeps the setting's.
 #[test]
 fn step_travel_follows_the_velocities() {
     let mut rng = signed(7);

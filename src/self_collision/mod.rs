@@ -23,7 +23,7 @@
 //!   `reuse::within_reach`), `d` the
 //!   collision distance. **Rest neighbours** are dropped as the list is written: pairs of one
 //!   cloth whose rest distance is at most `d + 2 T_max` (plus 0.1%,
-//!   [`SelfCollision::rest_skip_factor`]: the rule does not change with the step's travel),
+//!   [`SelfCollision::rest_skip_factor`]: the rule does not change with the travels),
 //!   held apart by the cloth's own constraints (in a flat cloth every pair the query finds is
 //!   one). The lists hold at most [`MAX_PAIRS_PER_PARTICLE`] pairs a particle on average.
 //!   Each pair is listed once, `(i, j)` with `i < j`, ordered by `i` then `j`, and read as a
