@@ -317,9 +317,11 @@ impl SelfCollisionData {
                     let (rest, cloth_of, skip) = (&self.rest, &self.cloth_of, a.skip);
                     let keep = |i: usize, j: u32| {
                         let j = j as usize;
-                        let reach2 = pair_reach2(d, travel[i], travel[j]);
-                        !rest_skipped(rest, cloth_of, i, j, skip)
-                            && (!own || within(x[0][i], x[1][i], x[2][i], x[0][j], x[1][j], x[2][j], reach2))
+                        let within_own = || {
+                            let reach2 = pair_reach2(d, travel[i], travel[j]);
+                            within(x[0][i], x[1][i], x[2][i], x[0][j], x[1][j], x[2][j], reach2)
+                        };
+                        !rest_skipped(rest, cloth_of, i, j, skip) && (!own || within_own())
                     };
                     t.query_exec(x[0], x[1], x[2], n, reach, out, exec, true, &keep)
                 }

@@ -426,19 +426,8 @@ pub struct ClampParams<'a> {
     /// Substep length, s.
     pub h: f32,
     /// Each particle's factor on `limit` (indexed like the whole particle arrays, padding
-    /// included), or empty for `limit` itself for all.
+    /// included), or empty (or shorter than a chunk's particles) for `limit` itself.
     pub travel: &'a [f32],
-}
-
-impl ClampParams<'_> {
-    /// Particle `i`'s speed limit relative to the mean, m/s.
-    #[inline(always)]
-    fn lim(&self, i: usize) -> f32 {
-        match self.travel.get(i) {
-            Some(&t) => t * self.limit / self.h,
-            None => self.limit / self.h,
-        }
-    }
 }
 
 /// The speed clamp on one chunk (`x`, `v`, `p`, `w` chunk-local, lengths a multiple of
@@ -490,7 +479,11 @@ fn clamp_scalar(c: crate::data::particles::ParticleChunk<'_>, cp: &ClampParams<'
     let h = cp.h;
     let per = cp.travel.len() >= c.start + c.x.len();
     for i in 0..c.x.len() {
-        let lim = if per { cp.lim(c.start + i) } else { cp.limit / cp.h };
+        let lim = if per {
+            cp.travel[c.start + i] * cp.limit / cp.h
+        } else {
+            cp.limit / cp.h
+        };
         let lim2 = lim * lim;
         let u = [c.vx[i] - cp.mean[0], c.vy[i] - cp.mean[1], c.vz[i] - cp.mean[2]];
         let u2 = u[0] * u[0] + u[1] * u[1] + u[2] * u[2];
