@@ -17,11 +17,14 @@
 //!   is listed when closer than its reach `d + T_i + T_j`: two particles at rest within
 //!   `1.5 d`, two fast ones within `(1 + 2 travel) d`. The broadphase (the spatial hash, a
 //!   counting sort of the particles over cells, or the AABB tree, refitted) lists, from the
-//!   positions `x` at the start of the step, every pair closer than the step's query radius
-//!   `q = d + 2 max T_i` and keeps each pair within its own reach (the hash with the travels
-//!   attached, [`SpatialHash::attach_travel`], the tree in its filter; kept candidates through
-//!   `reuse::within_reach`), `d` the
-//!   collision distance. **Rest neighbours** are dropped as the list is written: pairs of one
+//!   positions `x` at the start of the step, every pair within its own reach, `d` the
+//!   collision distance. The tree searches the step's query radius `q = d + 2 max T_i` and
+//!   keeps each pair within its own reach in its filter. The hash's cells are as wide as the
+//!   reach of its *members*, all particles but at most the fastest `n / FAST_SHARE` (their
+//!   largest travel `T_c`, from a histogram of the travels: cells `d + 2 T_c`), which search
+//!   over the half shell of their cell; each faster particle searches a box of its own, of
+//!   radius `d + T_i + max T`, so a few fast particles do not widen every cell
+//!   ([`SpatialHash::attach_travel`]). Kept candidates pass through `reuse::within_reach`. **Rest neighbours** are dropped as the list is written: pairs of one
 //!   cloth whose rest distance is at most `d + 2 T_max` (plus 0.1%,
 //!   [`SelfCollision::rest_skip_factor`]: the rule does not change with the travels),
 //!   held apart by the cloth's own constraints (in a flat cloth every pair the query finds is
@@ -137,6 +140,13 @@ fn too_many_pairs(d: f32, q: f32) -> WeftError {
     )
 }
 
+/// The hash's cells are sized for all but at most `n / FAST_SHARE` of the fastest particles,
+/// which search boxes of their own ([`SpatialHash::attach_travel`]).
+const FAST_SHARE: usize = 32;
+
+/// Bins of the travels between the floor and the bound, for choosing the cells' members.
+const TRAVEL_BINS: usize = 16;
+
 /// Leaf size of the AABB tree (the paper's depth 5 gives ~312 particles a leaf at 10 000
 /// particles; 16 queries much faster and gives the same pairs).
 const TREE_LEAF: u32 = 16;
@@ -163,6 +173,10 @@ pub struct SelfCollisionData {
     travel_now: Option<f32>,
     pub(crate) travel_of: Vec<f32>,
     travel_uniform: bool,
+    /// The largest travel over `d` of the hash cells' members this step (see
+    /// [`SelfCollisionData::adapt_travel`]), and each particle's travel of the next build.
+    travel_cell: f32,
+    travel_build: Vec<f32>,
 }
 
 #[derive(Clone, Debug, Default)]
@@ -301,39 +315,59 @@ impl SelfCollisionData {
         let mut r = Ok(());
         let mut t1 = t0;
         st.fresh = false;
-        if !st.reuse.holds(x, n, a.d, q, broadphase) {
+        if !st.reuse.holds(x, &self.travel_of, n, a.d, broadphase) {
             let skin = st.reuse.next_skin(a.d);
-            let reach = q + skin;
-            r = self.build_structure(&mut st, x, n, reach, broadphase, exec);
-            t1 = Instant::now();
-            // With a skin the query fills the candidates (every pair within the step's largest
-            // reach and the skin), filtered to the lists below; without, it lists each pair
-            // within its own reach.
-            let own = skin == 0.0 && !self.travel_uniform;
-            let out = if skin > 0.0 { &mut st.cand } else { &mut st.lists };
             let (d, travel) = (a.d, &self.travel_of[..]);
-            r = r.and_then(|_| match (&st.tree, broadphase) {
-                (Some(t), SelfBroadphase::AabbTree) => {
-                    let (rest, cloth_of, skip) = (&self.rest, &self.cloth_of, a.skip);
-                    let keep = |i: usize, j: u32| {
-                        let j = j as usize;
-                        let within_own = || {
-                            let reach2 = pair_reach2(d, travel[i], travel[j]);
-                            within(x[0][i], x[1][i], x[2][i], x[0][j], x[1][j], x[2][j], reach2)
+            let hashed = broadphase == SelfBroadphase::Hash && !self.travel_uniform;
+            // Each particle's travel of the build: its own, or with a skin at least the cells'
+            // members' (so the candidates last while a slow particle stays below it).
+            let (cell, t_max) = (self.travel_cell.min(a.travel), a.travel);
+            let build_travel = |i: usize| match (hashed, skin > 0.0) {
+                (true, false) => travel[i],
+                (true, true) => travel[i].max(cell),
+                (false, _) => t_max,
+            };
+            // With a skin the query fills the candidates, filtered to the lists below; without,
+            // it lists each pair within its own reach.
+            if hashed {
+                // The hash searches each pair within its own reach plus the skin: travels
+                // raised by half the skin, cells as wide as their members' reach.
+                let half = skin / (d + d);
+                self.travel_build.clear();
+                self.travel_build.extend((0..n).map(|i| build_travel(i) + half));
+                let members = cell + half;
+                let reach = d + (members + members) * d;
+                r = self.build_structure(&mut st, x, n, reach, broadphase, exec);
+                t1 = Instant::now();
+                let out = if skin > 0.0 { &mut st.cand } else { &mut st.lists };
+                r = r
+                    .and_then(|_| st.hash.attach_travel(d, &self.travel_build, members))
+                    .and_then(|_| st.hash.query_upper_unskipped_cells_exec(reach, a.skip, out, exec));
+            } else {
+                let reach = q + skin;
+                r = self.build_structure(&mut st, x, n, reach, broadphase, exec);
+                t1 = Instant::now();
+                let out = if skin > 0.0 { &mut st.cand } else { &mut st.lists };
+                // The tree keeps each pair within its own reach when it lists the pairs itself.
+                let own = skin == 0.0 && !self.travel_uniform;
+                r = r.and_then(|_| match (&st.tree, broadphase) {
+                    (Some(t), SelfBroadphase::AabbTree) => {
+                        let (rest, cloth_of, skip) = (&self.rest, &self.cloth_of, a.skip);
+                        let keep = |i: usize, j: u32| {
+                            let j = j as usize;
+                            let within_own = || {
+                                let reach2 = pair_reach2(d, travel[i], travel[j]);
+                                within(x[0][i], x[1][i], x[2][i], x[0][j], x[1][j], x[2][j], reach2)
+                            };
+                            !rest_skipped(rest, cloth_of, i, j, skip) && (!own || within_own())
                         };
-                        !rest_skipped(rest, cloth_of, i, j, skip) && (!own || within_own())
-                    };
-                    t.query_exec(x[0], x[1], x[2], n, reach, out, exec, true, &keep)
-                }
-                _ => {
-                    if own {
-                        st.hash.attach_travel(d, travel)?;
+                        t.query_exec(x[0], x[1], x[2], n, reach, out, exec, true, &keep)
                     }
-                    st.hash.query_upper_unskipped_cells_exec(reach, a.skip, out, exec)
-                }
-            });
+                    _ => st.hash.query_upper_unskipped_cells_exec(reach, a.skip, out, exec),
+                });
+            }
             if r.is_ok() {
-                st.reuse.built(x, n, a.d, q, broadphase, skin);
+                st.reuse.built(x, n, a.d, build_travel, broadphase, skin);
                 st.fresh = true;
             }
         }
@@ -372,7 +406,11 @@ impl SelfCollisionData {
         let len = v[0].len().min(v[1].len()).min(v[2].len());
         self.travel_of.clear();
         self.travel_of.resize(len.max(n), bound);
-        let (mut lo, mut hi) = (bound, TRAVEL_FLOOR.min(bound));
+        let floor = TRAVEL_FLOOR.min(bound);
+        let (mut lo, mut hi) = (bound, floor);
+        // How many particles travel at most `floor + k (bound - floor) / TRAVEL_BINS`, by `k`.
+        let mut bins = [0usize; TRAVEL_BINS + 1];
+        let width = (bound - floor) / TRAVEL_BINS as f32;
         for (i, t) in self.travel_of.iter_mut().enumerate().take(n.min(len)) {
             let u = [v[0][i] - m[0], v[1][i] - m[1], v[2][i] - m[2]];
             let u2 = u[0] * u[0] + u[1] * u[1] + u[2] * u[2];
@@ -384,9 +422,20 @@ impl SelfCollisionData {
                 bound
             };
             (lo, hi) = (lo.min(*t), hi.max(*t));
+            let k = if width > 0.0 { ((*t - floor) / width).ceil() } else { 0.0 };
+            bins[(k.max(0.0) as usize).min(TRAVEL_BINS)] += 1;
         }
         self.travel_now = Some(hi);
         self.travel_uniform = lo == hi;
+        // The cells' members: every particle but at most `n / FAST_SHARE` of the fastest.
+        let fast = n.min(len) / FAST_SHARE;
+        let mut slower = 0;
+        let k = bins.iter().position(|&c| {
+            slower += c;
+            n.min(len) - slower <= fast
+        });
+        let edge = k.map_or(bound, |k| if k == TRAVEL_BINS { bound } else { floor + k as f32 * width });
+        self.travel_cell = edge.min(hi);
     }
 
     /// The cloths' rest positions.

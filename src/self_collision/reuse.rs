@@ -1,13 +1,13 @@
 //! Candidate lists kept across steps (Verlet lists with a skin).
 //!
-//! The broadphase may run with the reach `q + s`, `s` the skin, and its candidates be kept
-//! while no particle has moved more than `s / 2` (less a rounding margin) since and the step's
-//! reach is at most `q` (it follows the step's travels): two particles then closed in by less
-//! than `s`, so every pair within the step's reach now was within `q + s` at the build. The
-//! filter from candidates to lists ([`within_reach`]) keeps each pair within its own reach
-//! `d + (t_i + t_j) d` (a query without a skin keeps them so itself). Each step's lists are the candidates within `q` of each other at the step's start
-//! (the broadphase's own predicate), exactly the lists of a fresh query: the reuse changes the
-//! cost, never the result.
+//! The broadphase may run with a skin `s`: it lists each pair within `d + (b_i + b_j) d + s`,
+//! `b_i` the particle's travel of the build (at least its travel then), and the candidates are
+//! kept while no particle has moved more than `s / 2` (less a rounding margin) since and no
+//! particle's travel has passed its `b_i`: two particles then closed in by less than `s`, so
+//! every pair within its own reach `d + (t_i + t_j) d` now was a candidate. The filter from
+//! candidates to lists ([`within_reach`]) keeps each pair within its own reach (a query without
+//! a skin keeps them so itself). Each step's lists are then exactly the lists of a fresh
+//! query: the reuse changes the cost, never the result.
 //!
 //! The skin pays only when the lists then last several steps: a wider reach finds more
 //! candidates, and a cloth that moves its skin in a step or two rebuilds anyway. So the skin
@@ -30,8 +30,8 @@ pub(crate) struct Reuse {
     at: [Vec<f32>; 3],
     /// What the candidates were built for: particle count, distance (bits), broadphase.
     key: Option<(usize, u32, SelfBroadphase)>,
-    /// The reach `q` they were built for (the skin comes on top).
-    reach: f32,
+    /// Each particle's travel over `d` the candidates were built for (the skin comes on top).
+    travel: Vec<f32>,
     skin: f32,
     /// Steps since the build.
     age: u32,
@@ -43,11 +43,12 @@ pub(crate) struct Reuse {
 }
 
 impl Reuse {
-    /// Whether candidates built for distance `d` still hold every pair within the reach `q` of
-    /// the positions `x` (the first `n`); else forgets them.
-    pub(crate) fn holds(&mut self, x: [&[f32]; 3], n: usize, d: f32, q: f32, broadphase: SelfBroadphase) -> bool {
+    /// Whether candidates built for distance `d` still hold every pair within its own reach at
+    /// the positions `x` and travels `t` (the first `n`); else forgets them.
+    pub(crate) fn holds(&mut self, x: [&[f32]; 3], t: &[f32], n: usize, d: f32, broadphase: SelfBroadphase) -> bool {
         self.age += 1;
-        if self.key != Some((n, d.to_bits(), broadphase)) || q > self.reach {
+        let slower = t.len() >= n && self.travel.len() >= n && t[..n].iter().zip(&self.travel).all(|(t, b)| t <= b);
+        if self.key != Some((n, d.to_bits(), broadphase)) || !slower {
             self.key = None;
             return false;
         }
@@ -71,13 +72,15 @@ impl Reuse {
         }
     }
 
-    /// Records a build from `x` with `skin` for distance `d` and reach `q`.
-    pub(crate) fn built(&mut self, x: [&[f32]; 3], n: usize, d: f32, q: f32, broadphase: SelfBroadphase, skin: f32) {
-        self.reach = q;
+    /// Records a build from `x` with `skin` for distance `d`, each particle's travel given by
+    /// `travel(i)` (the first `n`).
+    pub(crate) fn built(&mut self, x: [&[f32]; 3], n: usize, d: f32, travel: impl Fn(usize) -> f32, broadphase: SelfBroadphase, skin: f32) {
         for (a, src) in self.at.iter_mut().zip(x) {
             a.clear();
             a.extend_from_slice(&src[..n.min(src.len())]);
         }
+        self.travel.clear();
+        self.travel.extend((0..n).map(travel));
         self.key = Some((n, d.to_bits(), broadphase));
         self.skin = skin;
         self.age = 0;
@@ -157,24 +160,30 @@ mod tests {
     use super::*;
     use crate::test_rng::signed;
 
-    /// Kept candidates hold while the particles stay within half the skin and the step's
-    /// reach within the reach of the build; a wider reach forgets them.
+    /// Kept candidates hold while the particles stay within half the skin and each travel
+    /// within its travel of the build; a faster particle forgets them.
     #[test]
-    fn candidates_hold_only_within_their_reach() {
+    fn candidates_hold_only_within_their_travels() {
         let x = [vec![0.0f32, 0.01], vec![0.0; 2], vec![0.0; 2]];
         let xs = [&x[0][..], &x[1][..], &x[2][..]];
         let moved = [vec![0.0f32, 0.0145], vec![0.0; 2], vec![0.0; 2]];
         let ms = [&moved[0][..], &moved[1][..], &moved[2][..]];
+        let b = [1.0f32, 0.5];
         let mut r = Reuse::default();
-        r.built(xs, 2, 0.01, 0.03, SelfBroadphase::Hash, 0.01);
-        assert!(r.holds(xs, 2, 0.01, 0.03, SelfBroadphase::Hash));
-        assert!(r.holds(ms, 2, 0.01, 0.02, SelfBroadphase::Hash));
-        assert!(!r.holds(xs, 2, 0.01, 0.031, SelfBroadphase::Hash));
-        // forgotten: the same reach no longer holds
-        assert!(!r.holds(xs, 2, 0.01, 0.03, SelfBroadphase::Hash));
-        r.built(xs, 2, 0.01, 0.03, SelfBroadphase::Hash, 0.01);
+        let hash = SelfBroadphase::Hash;
+        r.built(xs, 2, 0.01, |i| b[i], hash, 0.01);
+        assert!(r.holds(xs, &b, 2, 0.01, hash));
+        assert!(r.holds(ms, &[0.25, 0.5], 2, 0.01, hash));
+        assert!(!r.holds(xs, &[0.25, 0.51], 2, 0.01, hash), "one particle faster");
+        // forgotten: the same travels no longer hold
+        assert!(!r.holds(xs, &b, 2, 0.01, hash));
+        r.built(xs, 2, 0.01, |i| b[i], hash, 0.01);
+        assert!(!r.holds(xs, &b[..1], 2, 0.01, hash), "travels of too few particles");
+        r.built(xs, 2, 0.01, |i| b[i], hash, 0.01);
         let far = [vec![0.0f32, 0.0151], vec![0.0; 2], vec![0.0; 2]];
-        assert!(!r.holds([&far[0][..], &far[1][..], &far[2][..]], 2, 0.01, 0.03, SelfBroadphase::Hash));
+        assert!(!r.holds([&far[0][..], &far[1][..], &far[2][..]], &b, 2, 0.01, hash));
+        r.built(xs, 2, 0.01, |i| b[i], hash, 0.01);
+        assert!(!r.holds(xs, &b, 2, 0.01, SelfBroadphase::AabbTree), "another broadphase");
     }
 
     /// The lane filter keeps exactly the scalar loop's candidates: a random cloud whose

@@ -49,9 +49,10 @@
 //!   neighbours, matching the predicate; [`SpatialHash::non_finite`] counts them so the caller
 //!   can report a diverged state. Huge finite coordinates saturate the integer cell coordinate;
 //!   that is still correct (only slower), as cells are monotone in the coordinate.
-//! * A particle whose search box spans more than 4 cells along an axis — possible only for a
-//!   spacing below about `1e-18`, where the margin for underflowing squares dominates — is
-//!   tested against all particles instead (correct, slow).
+//! * A particle whose search box spans more than 8 cells along an axis — possible only for a
+//!   spacing below about `1e-18`, where the margin for underflowing squares dominates, or for
+//!   a fast particle of the self-collision query with travels attached far above the members'
+//!   — is tested against all particles instead (correct, slow).
 
 use crate::data::lanes::{finite_lanes, load, F32s, LANES};
 use crate::self_collision::neighbours::{check_positions, CHUNK};

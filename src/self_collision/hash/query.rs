@@ -9,6 +9,11 @@ use crate::self_collision::neighbours::{
 use crate::{Result, WeftError};
 use rayon::prelude::*;
 
+/// Most cells a search box may span along an axis before a query tests all particles instead:
+/// a box of `max_dist <= spacing` spans at most 4, a fast particle's box in the self-collision
+/// query (module `cells`) at most 8 with the world's travels.
+pub(super) const MAX_BOX_CELLS: i64 = 8;
+
 impl SpatialHash {
     /// Whether particle `i` has the position it had at the last build (bitwise; a non-finite
     /// particle only has to stay non-finite).
@@ -168,14 +173,14 @@ impl SpatialHash {
     /// Calls `f(b0, b1)` for each row of cells overlapped by the box `[p - r, p + r]³`
     /// (`p` finite), `b0..b1` being the row's contiguous bucket range (a row wrapping past the
     /// table's end gives two calls). Returns `false`, calling nothing, when the box spans more
-    /// than 4 cells along an axis (the caller then tests all particles).
+    /// than [`MAX_BOX_CELLS`] cells along an axis (the caller then tests all particles).
     #[inline(always)]
     pub(super) fn box_ranges(&self, p: [f32; 3], r: f32, mut f: impl FnMut(usize, usize)) -> bool {
         // Clamping to ±f32::MAX keeps the range finite; finite neighbours lie inside anyway.
         let lo = |v: f32| self.coord((v - r).max(-f32::MAX));
         let hi = |v: f32| self.coord((v + r).min(f32::MAX));
         let (x0, x1, y0, y1, z0, z1) = (lo(p[0]), hi(p[0]), lo(p[1]), hi(p[1]), lo(p[2]), hi(p[2]));
-        let wide = |a: i32, b: i32| i64::from(b) - i64::from(a) > 3;
+        let wide = |a: i32, b: i32| i64::from(b) - i64::from(a) >= MAX_BOX_CELLS;
         if wide(x0, x1) || wide(y0, y1) || wide(z0, z1) {
             return false;
         }

@@ -42,6 +42,9 @@ pub(super) struct RestCopy {
     /// ([`SpatialHash::attach_travel`]): the query then keeps a pair within its own reach.
     pub(super) travel: Vec<f32>,
     pub(super) d: Option<f32>,
+    /// With travels attached: the largest travel of a cell's members, and the largest of all.
+    pub(super) cell: f32,
+    pub(super) top: f32,
     /// Whether the copy belongs to the current build (cleared by every build).
     pub(super) valid: bool,
 }
@@ -90,11 +93,16 @@ impl SpatialHash {
 
     /// Copies each particle's travel `t` over the collision distance `d` into cell order
     /// (after [`SpatialHash::attach_rest`], which forgets them): the self-collision query then
-    /// keeps the pair `(i, j)` only within `d + (t_i + t_j) d` (and within its `max_dist`,
-    /// which must cover the largest such reach). Errors if `t` is shorter than the build's
-    /// particle count, or `d` or a travel is negative or not finite.
-    pub fn attach_travel(&mut self, d: f32, t: &[f32]) -> Result<()> {
+    /// keeps the pair `(i, j)` only within its own reach `d + (t_i + t_j) d`. The particles of
+    /// travel at most `cell` are searched over the half shell of their cell (the query's
+    /// `max_dist` must be at least their largest reach, `d + 2 cell d`, and the cells at least
+    /// that wide); each faster one searches its own box, of radius `d + (t_i + t_max) d`. A
+    /// `cell` at or above the largest travel makes every particle a member of its cell as
+    /// without travels. Errors if `t` is shorter than the build's particle count, or `d`,
+    /// `cell` or a travel is negative or not finite.
+    pub fn attach_travel(&mut self, d: f32, t: &[f32], cell: f32) -> Result<()> {
         crate::error::non_negative("d", d)?;
+        crate::error::non_negative("cell", cell)?;
         if t.len() < self.n {
             return Err(WeftError::BufferLength {
                 name: "travel",
@@ -109,10 +117,14 @@ impl SpatialHash {
         let rc = &mut self.rest;
         rc.travel.clear();
         rc.travel.resize(placed + LANES, 0.0);
+        let mut top = 0.0f32;
         for (k, &i) in self.cell_entries.iter().enumerate() {
             rc.travel[k] = t[i as usize];
+            top = top.max(t[i as usize]);
         }
         rc.d = Some(d);
+        rc.cell = cell;
+        rc.top = top;
         Ok(())
     }
 

@@ -1,6 +1,7 @@
 //! Which particles of a bucket are *members* of its home cell (module `cells`): in the home
-//! cell, with the search box inside the 27 cells around it. One particle at a time (the
-//! scalar twin) or eight at a time in lanes.
+//! cell, with the search box inside the 27 cells around it, and (travels attached) of travel
+//! at most the members' (`SpatialHash::attach_travel`). One particle at a time (the scalar
+//! twin) or eight at a time in lanes.
 
 use crate::data::lanes::{load, F32s, LANES};
 use crate::self_collision::hash::cells::SpatialHash;
@@ -13,10 +14,21 @@ impl SpatialHash {
     }
 
     /// Whether the particle in slot `k` lies in cell `home` with its search box (radius `r`)
-    /// inside the 27 cells around it. Cell coordinates below `2^22` in magnitude are compared
-    /// as `f32` (integers there are exact, so this equals the integer test), others as `i64`.
+    /// inside the 27 cells around it and is no faster than the members. Cell coordinates below
+    /// `2^22` in magnitude are compared as `f32` (integers there are exact, so this equals the
+    /// integer test), others as `i64`.
     #[inline(always)]
     pub(super) fn member(&self, k: usize, home: [i32; 3], r: f32) -> bool {
+        let rc = &self.rest;
+        if rc.d.is_some() && rc.travel[k] > rc.cell {
+            return false;
+        }
+        self.member_box(k, home, r)
+    }
+
+    /// The cell and box conditions of [`SpatialHash::member`].
+    #[inline(always)]
+    fn member_box(&self, k: usize, home: [i32; 3], r: f32) -> bool {
         let p = [self.sx[k], self.sy[k], self.sz[k]];
         let inv = self.inv_spacing;
         let mut ok = true;
@@ -52,6 +64,10 @@ impl SpatialHash {
             // NaN fails `abs < big` too, so both go to the scalar test.
             odd |= !c.abs().simd_lt(big);
             ok &= c.simd_eq(F32s::splat(home[a] as f32)) & lo.simd_ge(c - one) & hi.simd_le(c + one);
+        }
+        let rc = &self.rest;
+        if rc.d.is_some() {
+            ok &= load(&rc.travel, k).simd_le(F32s::splat(rc.cell));
         }
         let live = if e - k < LANES { (1u32 << (e - k)) - 1 } else { 0xff };
         let mut bits = ok.to_bitmask() & live;

@@ -41,7 +41,7 @@ use crate::data::exec::Exec;
 use crate::data::lanes::{load, load_idx, load_idx_unchecked, load_unchecked, F32s, Vec3x8, LANES};
 use crate::self_collision::hash::SpatialHash;
 use crate::self_collision::neighbours::{pair_reach2, search_radius, within, Meter, Neighbours};
-use crate::Result;
+use crate::{Result, WeftError};
 use wide::u32x8;
 
 mod members;
@@ -86,14 +86,7 @@ impl SpatialHash {
     /// Errors if `max_dist` or `skip` is negative or non-finite, `max_dist` exceeds the
     /// spacing, or no rest data was attached since the last build.
     pub fn query_upper_unskipped_cells(&self, max_dist: f32, skip: f32, out: &mut Neighbours) -> Result<()> {
-        let (md2, s2) = self.check_rest_query(max_dist, skip)?;
-        let k = Reach {
-            md2,
-            r: search_radius(max_dist),
-            s2,
-            len: self.scan_len(),
-            own: self.rest.d,
-        };
+        let k = self.reach(max_dist, skip)?;
         let ts = self.table_size;
         out.fill_pairs_parallel(self.n, ts.div_ceil(BUCKETS_PER_TASK), |t, buf, meter| {
             let end = ((t + 1) * BUCKETS_PER_TASK).min(ts);
@@ -122,20 +115,37 @@ impl SpatialHash {
 
     /// The serial walk over every bucket, with or without lanes.
     fn cells_serial<const SIMD: bool>(&self, max_dist: f32, skip: f32, out: &mut Neighbours) -> Result<()> {
-        let (md2, s2) = self.check_rest_query(max_dist, skip)?;
-        let k = Reach {
-            md2,
-            r: search_radius(max_dist),
-            s2,
-            len: self.scan_len(),
-            own: self.rest.d,
-        };
+        let k = self.reach(max_dist, skip)?;
         out.fill_pairs_serial(self.n, |buf, meter| {
             for b in 0..self.table_size {
                 if !self.bucket_pairs::<SIMD>(b, k, buf, meter) {
                     return;
                 }
             }
+        })
+    }
+
+    /// The query's constants, after checking the arguments (with travels attached, `max_dist`
+    /// must cover the members' largest reach `d + 2 cell d`).
+    fn reach(&self, max_dist: f32, skip: f32) -> Result<Reach> {
+        let (md2, s2) = self.check_rest_query(max_dist, skip)?;
+        let rc = &self.rest;
+        if let Some(d) = rc.d {
+            let members = d + (rc.cell + rc.cell) * d;
+            if rc.cell < rc.top && max_dist < members {
+                return Err(WeftError::param(
+                    "max_dist",
+                    max_dist,
+                    format!("must cover the reach of the cells' members ({members})"),
+                ));
+            }
+        }
+        Ok(Reach {
+            md2,
+            r: search_radius(max_dist),
+            s2,
+            len: self.scan_len(),
+            own: rc.d,
         })
     }
 
@@ -248,7 +258,14 @@ impl SpatialHash {
     /// Scans the whole search box of the particle in slot `k` (a non-member).
     fn full_box<const SIMD: bool>(&self, k: usize, kr: Reach, buf: &mut Vec<u32>) {
         let q = self.probe_of(k);
-        let boxed = self.box_ranges(q.p, kr.r, |b0, b1| {
+        let rc = &self.rest;
+        // A particle faster than the cells' members reaches every partner within
+        // `d + (t + t_max) d`.
+        let r = match rc.d {
+            Some(d) if q.t > rc.cell => search_radius(d + (q.t + rc.top) * d),
+            _ => kr.r,
+        };
+        let boxed = self.box_ranges(q.p, r, |b0, b1| {
             let (s, e) = (self.cell_start[b0] as usize, self.cell_start[b1] as usize);
             self.pair_scan::<SIMD>(&q, kr, s, e, buf);
         });

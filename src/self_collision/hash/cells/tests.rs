@@ -143,8 +143,10 @@ fn member_lanes_equal_the_scalar_member_test() {
 }
 
 /// With the particles' travels attached, every form of the query (lanes and scalar, serial and
-/// parallel) keeps each pair within its own reach `d + (t_i + t_j) d` (and `max_dist`, which
-/// covers the largest), as the brute force does; a new build forgets the travels.
+/// parallel) keeps each pair within its own reach `d + (t_i + t_j) d`, as the brute force
+/// does: cells wide enough for all (every particle a member), and cells sized for the slower
+/// particles only, the faster searching boxes of their own (up to seven cells an axis); a
+/// `max_dist` short of the members' reach is refused, and a new build forgets the travels.
 #[test]
 fn cells_query_keeps_each_pair_within_its_own_reach() {
     let h = 0.01f32;
@@ -180,14 +182,25 @@ fn cells_query_keeps_each_pair_within_its_own_reach() {
         all.total()
     );
     let mut hsh = SpatialHash::new(n);
-    hsh.build(&p[0], &p[1], &p[2], n, reach).unwrap();
-    hsh.attach_rest([&rest[0], &rest[1], &rest[2]], &cloth).unwrap();
-    assert!(hsh.attach_travel(d, &t[..n - 1]).is_err());
-    hsh.attach_travel(d, &t).unwrap();
     let mut got = Neighbours::new();
-    for exec in [Exec::Scalar, Exec::Simd, Exec::Parallel, Exec::ScalarParallel] {
-        hsh.query_upper_unskipped_cells_exec(reach, skip, &mut got, exec).unwrap();
-        assert_eq!(got, want, "{exec:?}");
+    for cell in [top, 0.6, 0.25, 0.0] {
+        let members = d + (cell + cell) * d;
+        hsh.build(&p[0], &p[1], &p[2], n, members).unwrap();
+        hsh.attach_rest([&rest[0], &rest[1], &rest[2]], &cloth).unwrap();
+        assert!(hsh.attach_travel(d, &t[..n - 1], cell).is_err());
+        assert!(hsh.attach_travel(d, &t, -1.0).is_err());
+        hsh.attach_travel(d, &t, cell).unwrap();
+        for exec in [Exec::Scalar, Exec::Simd, Exec::Parallel, Exec::ScalarParallel] {
+            hsh.query_upper_unskipped_cells_exec(members, skip, &mut got, exec).unwrap();
+            assert_eq!(got, want, "{exec:?}, cell travel {cell}");
+        }
+        if cell < top {
+            let short = members * 0.99;
+            assert!(
+                hsh.query_upper_unskipped_cells(short, skip, &mut got).is_err(),
+                "cell travel {cell}"
+            );
+        }
     }
     hsh.build(&p[0], &p[1], &p[2], n, reach).unwrap();
     hsh.attach_rest([&rest[0], &rest[1], &rest[2]], &cloth).unwrap();
