@@ -82,8 +82,8 @@ pub(crate) struct ContactPass {
     pred: [Vec<f32>; 3],
     /// Damping rates per particle, padded.
     damping: Vec<f32>,
-    /// The predicted positions, one `[x, y, z, 0]` record a particle (whole positions
-    /// gathered in one load each).
+    /// The predicted positions and inverse masses, one `[x, y, z, w]` record a particle
+    /// (whole positions gathered in one load each).
     xyzw: Vec<[f32; 4]>,
     /// Pairs in contact range, one buffer per chunk of the list.
     near: Vec<Vec<(u32, u32)>>,
@@ -152,9 +152,10 @@ impl ContactPass {
         self.xyzw.clear();
         if list.len() > 0 {
             self.xyzw.resize(n, [0.0; 4]);
+            let w = ctx.w;
             let copy = |(c, out): (usize, &mut [[f32; 4]])| {
                 for (k, o) in (c * XYZW_CHUNK..).zip(out) {
-                    *o = [p[0][k], p[1][k], p[2][k], 0.0];
+                    *o = [p[0][k], p[1][k], p[2][k], w.get(k).copied().unwrap_or(0.0)];
                 }
             };
             if exec.parallel() && n > XYZW_CHUNK {
@@ -168,7 +169,7 @@ impl ContactPass {
             near.clear();
             ctx.touching(list, c * PAIR_CHUNK..((c + 1) * PAIR_CHUNK).min(list.len()), xyzw, simd, near);
             found.clear();
-            found.extend(near.iter().map(|&(i, j)| ctx.pair_contact(i as usize, j as usize)));
+            found.extend(near.iter().map(|&(i, j)| ctx.pair_contact(xyzw, i as usize, j as usize)));
         };
         let bufs = (&mut self.near[..chunks], &mut self.found[..chunks]);
         if exec.parallel() && chunks > 1 {

@@ -111,6 +111,7 @@ fn reference(data: &SelfCollisionData, x: &[Vec<f32>; 3], p: &[Vec<f32>; 3], w: 
         w,
         rest: [&data.rest[0], &data.rest[1], &data.rest[2]],
         cloth_of: &data.cloth_of,
+        rest4: &data.rest4,
         d: a.d,
         response: a.response,
     };
@@ -441,6 +442,7 @@ proptest::proptest! {
             w: &w,
             rest: [&rest[0], &rest[1], &rest[2]],
             cloth_of: &cloth,
+            rest4: &[],
             d: 0.03,
             response: Response::Pbd,
         };

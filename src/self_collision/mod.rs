@@ -159,6 +159,8 @@ pub struct SelfCollisionData {
     pub(crate) mean_parts: crate::self_collision::response::MeanParts,
     rest: [Vec<f32>; 3],
     cloth_of: Vec<u32>,
+    /// The same, one `[x, y, z, cloth]` record a particle (the pair pass's contacts).
+    rest4: Vec<[f32; 4]>,
     /// Smallest `min(thickness, spacing)` over the cloths (the default distance).
     default_distance: f32,
     state: Option<State>,
@@ -243,6 +245,7 @@ impl SelfCollisionData {
                 r.push(*c);
             }
             self.cloth_of.push(group);
+            self.rest4.push(pairs::rest_record(*p, group));
         }
         self.state = None;
     }
@@ -492,6 +495,7 @@ impl SelfCollisionData {
             w,
             rest: [&self.rest[0], &self.rest[1], &self.rest[2]],
             cloth_of: &self.cloth_of,
+            rest4: &self.rest4,
             d: a.d,
             response: a.response,
         };

@@ -62,8 +62,16 @@ pub(crate) struct PairCtx<'a> {
     pub(crate) w: &'a [f32],
     pub(crate) rest: [&'a [f32]; 3],
     pub(crate) cloth_of: &'a [u32],
+    /// The same rest positions and cloth ids, one `[x, y, z, cloth]` record a particle (the
+    /// id's bits in the fourth lane, [`rest_record`]): a contact reads one record a side.
+    pub(crate) rest4: &'a [[f32; 4]],
     pub(crate) d: f32,
     pub(crate) response: Response,
+}
+
+/// The rest record of a particle at rest position `r` in cloth `cloth` (see [`PairCtx::rest4`]).
+pub(crate) fn rest_record(r: [f32; 3], cloth: u32) -> [f32; 4] {
+    [r[0], r[1], r[2], f32::from_bits(cloth)]
 }
 
 /// Unit direction separating coincident particles with no rest direction: `(1, 2, 3)/√14`.
@@ -244,26 +252,29 @@ impl PairCtx<'_> {
     /// end: the geometry of `(j, i)` is that of `(i, j)` negated (IEEE subtraction and division
     /// are exact under negation; a zero can only change sign, which no sum sees, see
     /// [`PairContact`]), the squared distances and the mass sum `w_i + w_j` are the same.
+    ///
+    /// The predicted positions and inverse masses are read from `xyzw` (`[x, y, z, w]`
+    /// records of `p` and `w`), the rest data from [`PairCtx::rest4`]: one record a side
+    /// for each (the start positions `x` are read from their arrays).
     #[inline]
-    pub(crate) fn pair_contact(&self, i: usize, j: usize) -> Option<PairContact> {
-        let (wi, wj) = (self.w[i], self.w[j]);
+    pub(crate) fn pair_contact(&self, xyzw: &[[f32; 4]], i: usize, j: usize) -> Option<PairContact> {
+        let (a, b) = (xyzw[i], xyzw[j]);
+        let (wi, wj) = (a[3], b[3]);
         if wi <= 0.0 && wj <= 0.0 {
             return None;
         }
-        let pi = [self.p[0][i], self.p[1][i], self.p[2][i]];
-        let v = [pi[0] - self.p[0][j], pi[1] - self.p[1][j], pi[2] - self.p[2][j]];
+        let pi = [a[0], a[1], a[2]];
+        let pj = [b[0], b[1], b[2]];
+        let v = [pi[0] - pj[0], pi[1] - pj[1], pi[2] - pj[2]];
         let dist2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
         let d2 = self.d * self.d;
         // min_dist <= d: most listed pairs end here, before the rest data is read.
         if dist2.is_nan() || dist2 >= d2 {
             return None;
         }
-        let same = self.cloth_of[i] == self.cloth_of[j];
-        let r = [
-            self.rest[0][i] - self.rest[0][j],
-            self.rest[1][i] - self.rest[1][j],
-            self.rest[2][i] - self.rest[2][j],
-        ];
+        let (ra, rb) = (self.rest4[i], self.rest4[j]);
+        let same = ra[3].to_bits() == rb[3].to_bits();
+        let r = [ra[0] - rb[0], ra[1] - rb[1], ra[2] - rb[2]];
         let rest2 = if same {
             r[0] * r[0] + r[1] * r[1] + r[2] * r[2]
         } else {
@@ -290,11 +301,7 @@ impl PairCtx<'_> {
         let wsum = wi + wj;
         let share = [wi / wsum, wj / wsum];
         let di = [pi[0] - self.x[0][i], pi[1] - self.x[1][i], pi[2] - self.x[2][i]];
-        let dj = [
-            self.p[0][j] - self.x[0][j],
-            self.p[1][j] - self.x[1][j],
-            self.p[2][j] - self.x[2][j],
-        ];
+        let dj = [pj[0] - self.x[0][j], pj[1] - self.x[1][j], pj[2] - self.x[2][j]];
         let (amount, approaching) = if self.response == Response::MovementSpeed {
             let vn = (di[0] - dj[0]) * nrm[0] + (di[1] - dj[1]) * nrm[1] + (di[2] - dj[2]) * nrm[2];
             if vn < 0.0 {
