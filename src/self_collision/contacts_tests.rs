@@ -109,8 +109,6 @@ fn reference(data: &SelfCollisionData, x: &[Vec<f32>; 3], p: &[Vec<f32>; 3], w: 
         x: [&x[0], &x[1], &x[2]],
         p: [&p[0], &p[1], &p[2]],
         w,
-        rest: [&data.rest[0], &data.rest[1], &data.rest[2]],
-        cloth_of: &data.cloth_of,
         rest4: &data.rest4,
         d: a.d,
         response: a.response,
@@ -435,13 +433,11 @@ proptest::proptest! {
         let mut rows = PairRows::default();
         rows.fill(&first, &ids);
         let list = rows.list(&ids);
-        let (w, rest, cloth) = (vec![1.0; n], [vec![0.0; n], vec![0.0; n], vec![0.0; n]], vec![0u32; n]);
+        let w = vec![1.0; n];
         let ctx = PairCtx {
             x: [&p[0], &p[1], &p[2]],
             p: [&p[0], &p[1], &p[2]],
             w: &w,
-            rest: [&rest[0], &rest[1], &rest[2]],
-            cloth_of: &cloth,
             rest4: &[],
             d: 0.03,
             response: Response::Pbd,

@@ -493,8 +493,6 @@ impl SelfCollisionData {
             x,
             p,
             w,
-            rest: [&self.rest[0], &self.rest[1], &self.rest[2]],
-            cloth_of: &self.cloth_of,
             rest4: &self.rest4,
             d: a.d,
             response: a.response,

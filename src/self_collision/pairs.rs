@@ -60,10 +60,8 @@ pub(crate) struct PairCtx<'a> {
     pub(crate) x: [&'a [f32]; 3],
     pub(crate) p: [&'a [f32]; 3],
     pub(crate) w: &'a [f32],
-    pub(crate) rest: [&'a [f32]; 3],
-    pub(crate) cloth_of: &'a [u32],
-    /// The same rest positions and cloth ids, one `[x, y, z, cloth]` record a particle (the
-    /// id's bits in the fourth lane, [`rest_record`]): a contact reads one record a side.
+    /// Rest positions and cloth ids, one `[x, y, z, cloth]` record a particle (the id's bits
+    /// in the fourth lane, [`rest_record`]): a contact reads one record a side.
     pub(crate) rest4: &'a [[f32; 4]],
     pub(crate) d: f32,
     pub(crate) response: Response,
@@ -190,12 +188,9 @@ impl PairCtx<'_> {
             if dist2.is_nan() || dist2 >= d2 {
                 return;
             }
-            let same = self.cloth_of[i] == self.cloth_of[j];
-            let r = [
-                self.rest[0][i] - self.rest[0][j],
-                self.rest[1][i] - self.rest[1][j],
-                self.rest[2][i] - self.rest[2][j],
-            ];
+            let (ra, rb) = (self.rest4[i], self.rest4[j]);
+            let same = ra[3].to_bits() == rb[3].to_bits();
+            let r = [ra[0] - rb[0], ra[1] - rb[1], ra[2] - rb[2]];
             let rest2 = if same {
                 r[0] * r[0] + r[1] * r[1] + r[2] * r[2]
             } else {
