@@ -5,7 +5,8 @@
 //! sums (from [`PARALLEL_CONTACTS`] contacts by one part of the particles per thread, each
 //! part reading the whole contact list), and the velocity-correction kernel
 //! ([`crate::self_collision::response::apply_runs`]) runs on the blocks of [`LANES`] particles
-//! that received one.
+//! that received one. On one thread each chunk's contacts are added as soon as they are found,
+//! while they are still in cache.
 //!
 //! The list is ordered by `i` then `j`, so every particle receives its contacts in ascending
 //! partner order, as a loop over its own sorted list would, however the particles are split;
@@ -143,14 +144,14 @@ impl ContactPass {
     pub(crate) fn pair_pass(&mut self, ctx: &PairCtx<'_>, list: PairList<'_>, exec: Exec) {
         let simd = exec.simd();
         let chunks = list.len().div_ceil(PAIR_CHUNK);
-        if self.near.len() < chunks {
-            self.near.resize_with(chunks, Vec::new);
-            self.found.resize_with(chunks, Vec::new);
+        if self.near.len() < chunks.max(1) {
+            self.near.resize_with(chunks.max(1), Vec::new);
+            self.found.resize_with(chunks.max(1), Vec::new);
         }
         let p = ctx.p;
         let n = p[0].len().min(p[1].len()).min(p[2].len());
-        self.xyzw.clear();
         if list.len() > 0 {
+            // Sized once (not cleared): the copy below overwrites every record.
             self.xyzw.resize(n, [0.0; 4]);
             let w = ctx.w;
             let copy = |(c, out): (usize, &mut [[f32; 4]])| {
@@ -171,61 +172,41 @@ impl ContactPass {
             found.clear();
             found.extend(near.iter().map(|&(i, j)| ctx.pair_contact(xyzw, i as usize, j as usize)));
         };
-        let bufs = (&mut self.near[..chunks], &mut self.found[..chunks]);
-        if exec.parallel() && chunks > 1 {
-            bufs.into_par_iter().enumerate().for_each(|(c, b)| find(c, b));
-        } else {
-            bufs.0.iter_mut().zip(bufs.1.iter_mut()).enumerate().for_each(|(c, b)| find(c, b));
+        let old = std::mem::take(&mut self.touched);
+        self.touched_parts.resize_with(self.touched_parts.len().max(1), Vec::new);
+        if !(exec.parallel() && chunks > 1) {
+            // One thread: each chunk's contacts are added as soon as they are found, while
+            // they are in cache (the same order as below, so the same sums).
+            let (near, found) = (&mut self.near[0], &mut self.found[0]);
+            let mut sums = PartSums::begin(0, &mut self.acc, &mut self.hit, &old);
+            for c in 0..chunks {
+                find(c, (&mut *near, &mut *found));
+                sums.add(near, found);
+            }
+            sums.finish(self.sums.rows(), &mut self.touched_parts[0]);
+            self.collect_touched(old, 1);
+            return;
         }
+        let bufs = (&mut self.near[..chunks], &mut self.found[..chunks]);
+        bufs.into_par_iter().enumerate().for_each(|(c, b)| find(c, b));
         // The particles are split into parts of whole blocks, each (on its own thread) adding
         // the contacts of its own particles in list order (every part reads the whole contact
         // list), zeroing the blocks of its last pass it did not touch now and storing the sums
         // of the blocks it touched: the same sums whatever the split, so it follows the threads.
         let contacts: usize = self.near[..chunks].iter().map(Vec::len).sum();
-        let parts = if exec.parallel() && contacts >= PARALLEL_CONTACTS {
+        let parts = if contacts >= PARALLEL_CONTACTS {
             rayon::current_num_threads().clamp(1, MAX_PARTS)
         } else {
             1
         };
         let blocks = self.hit.len().div_ceil(parts).max(1);
         let (near, found) = (&self.near[..chunks], &self.found[..chunks]);
-        let old = std::mem::take(&mut self.touched);
-        let part = |part: usize, acc: &mut [([f32; 11], f32)], hit: &mut [bool], mut rows: SumRows<'_>, touched: &mut Vec<u32>| {
-            let b0 = part * blocks;
-            let mine = old.partition_point(|&b| (b as usize) < b0)..old.partition_point(|&b| (b as usize) < b0 + hit.len());
-            let mine = &old[mine];
-            for &b in mine {
-                hit[b as usize - b0] = false;
+        let part = |part: usize, acc: &mut [([f32; 11], f32)], hit: &mut [bool], rows: SumRows<'_>, touched: &mut Vec<u32>| {
+            let mut sums = PartSums::begin(part * blocks, acc, hit, &old);
+            for (near, found) in near.iter().zip(found) {
+                sums.add(near, found);
             }
-            let first_id = b0 * LANES;
-            for (&(i, j), contact) in near.iter().flatten().zip(found.iter().flatten()) {
-                let Some(c) = contact else { continue };
-                for (side, a) in [(0, i as usize), (1, j as usize)] {
-                    let Some((out, approaching)) = a.checked_sub(first_id).and_then(|k| acc.get_mut(k)) else {
-                        continue;
-                    };
-                    if c.add_to(side, out, approaching) {
-                        hit[(a - first_id) / LANES] = true;
-                    }
-                }
-            }
-            // The last pass's blocks that this one does not overwrite below go back to zero.
-            for &b in mine {
-                if !hit[b as usize - b0] {
-                    rows.set_block(b as usize - b0, |_| [0.0; 11]);
-                }
-            }
-            touched.clear();
-            for (b, _) in hit.iter().enumerate().filter(|(_, h)| **h) {
-                let run = &mut acc[b * LANES..(b + 1) * LANES];
-                rows.set_block(b, |l| {
-                    let (mut out, approaching) = run[l];
-                    PairCtx::finish(&mut out, approaching);
-                    out
-                });
-                run.fill(([0.0; 11], 0.0));
-                touched.push((b0 + b) as u32);
-            }
+            sums.finish(rows, touched);
         };
         self.touched_parts.resize_with(parts.max(self.touched_parts.len()), Vec::new);
         let touched_parts = &mut self.touched_parts[..parts];
@@ -251,10 +232,14 @@ impl ContactPass {
         } else {
             part(0, &mut self.acc, &mut self.hit, rows, &mut touched_parts[0]);
         }
-        let mut touched = old;
-        touched.clear();
-        touched.extend(touched_parts.iter().flatten());
-        self.touched = touched;
+        self.collect_touched(old, parts);
+    }
+
+    /// The touched blocks of the first `parts` parts, ascending, reusing the buffer `old`.
+    fn collect_touched(&mut self, mut old: Vec<u32>, parts: usize) {
+        old.clear();
+        old.extend(self.touched_parts[..parts].iter().flatten());
+        self.touched = old;
     }
 
     /// The velocity-correction kernel on the touched blocks of the predicted positions `p`
@@ -313,6 +298,68 @@ impl ContactPass {
             })
             .filter(|&(b, _, run)| b + run <= nb);
             apply_runs(&inp(x, w, v), [px, py, pz], runs, ap.response, simd);
+        }
+    }
+}
+
+/// The sums of one part of the particles (whole blocks from `b0`) while its contacts are
+/// added in list order (see [`ContactPass::pair_pass`]).
+struct PartSums<'a> {
+    b0: usize,
+    acc: &'a mut [([f32; 11], f32)],
+    hit: &'a mut [bool],
+    /// The part's blocks of the last pass.
+    mine: &'a [u32],
+}
+
+impl<'a> PartSums<'a> {
+    /// Starts the part of blocks from `b0` (as many as `hit` holds), `old` the blocks the last
+    /// pass touched (ascending).
+    fn begin(b0: usize, acc: &'a mut [([f32; 11], f32)], hit: &'a mut [bool], old: &'a [u32]) -> Self {
+        let mine = old.partition_point(|&b| (b as usize) < b0)..old.partition_point(|&b| (b as usize) < b0 + hit.len());
+        let mine = &old[mine];
+        for &b in mine {
+            hit[b as usize - b0] = false;
+        }
+        PartSums { b0, acc, hit, mine }
+    }
+
+    /// Adds the contacts `found` of the pairs `near` to the sides that belong to the part.
+    #[inline]
+    fn add(&mut self, near: &[(u32, u32)], found: &[Option<PairContact>]) {
+        let first_id = self.b0 * LANES;
+        for (&(i, j), contact) in near.iter().zip(found) {
+            let Some(c) = contact else { continue };
+            for (side, a) in [(0, i as usize), (1, j as usize)] {
+                let Some((out, approaching)) = a.checked_sub(first_id).and_then(|k| self.acc.get_mut(k)) else {
+                    continue;
+                };
+                if c.add_to(side, out, approaching) {
+                    self.hit[(a - first_id) / LANES] = true;
+                }
+            }
+        }
+    }
+
+    /// Zeroes the last pass's blocks this one did not touch, stores the sums of the touched
+    /// blocks into `rows` (the part's) and lists them in `touched`.
+    fn finish(self, mut rows: SumRows<'_>, touched: &mut Vec<u32>) {
+        let b0 = self.b0;
+        for &b in self.mine {
+            if !self.hit[b as usize - b0] {
+                rows.set_block(b as usize - b0, |_| [0.0; 11]);
+            }
+        }
+        touched.clear();
+        for (b, _) in self.hit.iter().enumerate().filter(|(_, h)| **h) {
+            let run = &mut self.acc[b * LANES..(b + 1) * LANES];
+            rows.set_block(b, |l| {
+                let (mut out, approaching) = run[l];
+                PairCtx::finish(&mut out, approaching);
+                out
+            });
+            run.fill(([0.0; 11], 0.0));
+            touched.push((b0 + b) as u32);
         }
     }
 }
