@@ -110,8 +110,8 @@ impl<'a> SumRows<'a> {
         if k + LANES <= self.len {
             let rows: [[f32; 11]; LANES] = std::array::from_fn(v);
             for (c, a) in self.a.iter_mut().enumerate() {
-                for (l, r) in rows.iter().enumerate() {
-                    a[k + l] = r[c];
+                for (d, r) in a[k..k + LANES].iter_mut().zip(&rows) {
+                    *d = r[c];
                 }
             }
         }
