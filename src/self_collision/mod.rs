@@ -24,8 +24,9 @@
 //!   largest travel `T_c`, from a histogram of the travels: cells `d + 2 T_c`), which search
 //!   over the half shell of their cell; each faster particle searches a box of its own, of
 //!   radius `d + T_i + max T`, so a few fast particles do not widen every cell
-//!   ([`SpatialHash::attach_travel`]). Kept candidates pass through `reuse::within_reach`. **Rest neighbours** are dropped as the list is written: pairs of one
-//!   cloth whose rest distance is at most `d + 2 T_max` (plus 0.1%,
+//!   ([`SpatialHash::attach_travel`]). Kept candidates pass through `reuse::within_reach`.
+//!   **Rest neighbours** are dropped as the list is written: pairs of one cloth whose rest
+//!   distance is at most `d + 2 T_max` (plus 0.1%,
 //!   [`SelfCollision::rest_skip_factor`]: the rule does not change with the travels),
 //!   held apart by the cloth's own constraints (in a flat cloth every pair the query finds is
 //!   one). The lists hold at most [`MAX_PAIRS_PER_PARTICLE`] pairs a particle on average.

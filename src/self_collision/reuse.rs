@@ -47,8 +47,8 @@ impl Reuse {
     /// the positions `x` and travels `t` (the first `n`); else forgets them.
     pub(crate) fn holds(&mut self, x: [&[f32]; 3], t: &[f32], n: usize, d: f32, broadphase: SelfBroadphase) -> bool {
         self.age += 1;
-        let slower = t.len() >= n && self.travel.len() >= n && t[..n].iter().zip(&self.travel).all(|(t, b)| t <= b);
-        if self.key != Some((n, d.to_bits(), broadphase)) || !slower {
+        let slower = || t.len() >= n && self.travel.len() >= n && t[..n].iter().zip(&self.travel).all(|(t, b)| t <= b);
+        if self.key != Some((n, d.to_bits(), broadphase)) || !slower() {
             self.key = None;
             return false;
         }

@@ -126,13 +126,15 @@ impl SpatialHash {
     }
 
     /// The query's constants, after checking the arguments (with travels attached, `max_dist`
-    /// must cover the members' largest reach `d + 2 cell d`).
+    /// must cover the members' largest reach `d + 2 t d`, `t` the smaller of the members'
+    /// travel and the largest).
     fn reach(&self, max_dist: f32, skip: f32) -> Result<Reach> {
         let (md2, s2) = self.check_rest_query(max_dist, skip)?;
         let rc = &self.rest;
         if let Some(d) = rc.d {
-            let members = d + (rc.cell + rc.cell) * d;
-            if rc.cell < rc.top && max_dist < members {
+            let t = rc.cell.min(rc.top);
+            let members = d + (t + t) * d;
+            if max_dist < members {
                 return Err(WeftError::param(
                     "max_dist",
                     max_dist,
