@@ -18,7 +18,7 @@
 //!   particles in penetration (VcCPBD's "average collision", [`crate::World::measure_self_collision`]).
 //!
 //! Every method runs the scene's obstacle and self-collision stages (the force-based methods
-//! through [`crate::world::contacts`]), and so does the f64 reference (analytic obstacles
+//! through `world::contacts`), and so does the f64 reference (analytic obstacles
 //! and cloth self-collision; scenes with mesh obstacles fall back to an f32 reference and get no
 //! f64 rows, [`ReferenceKind`]). With self-collision the grid also varies the response and the
 //! broadphase ([`grid_for`]).

@@ -75,7 +75,7 @@ pub struct Outcome {
     /// paper's "average collision"; `None` without self-collision).
     pub self_penetration_pct: Option<f64>,
     /// The run's largest kinetic energy after any step over the reference's energy budget
-    /// ([`energy_budget`](crate::accuracy::energy_budget)); `None` when it went non-finite.
+    /// ([`energy_budget`]); `None` when it went non-finite.
     pub kinetic_ratio: Option<f64>,
     /// On the Pareto front of (ms_per_step, rms_error).
     pub pareto: bool,

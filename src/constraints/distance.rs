@@ -12,7 +12,7 @@
 //! [block plan](super::blocks) lets the kernel use contiguous loads and stores (or a fixed
 //! permutation of a 16-particle window) instead of gathers and scatters.
 //!
-//! A grid cloth whose constraints are whole classes (see [`grid`](super::grid)) is laid out
+//! A grid cloth whose constraints are whole classes (see [`grid`]) is laid out
 //! by class instead, and its colours run the structured kernels, which read no index, rest
 //! length or compliance array; the arrays stay for the scalar twin and every other reader.
 //!
@@ -345,7 +345,7 @@ impl DistanceSet {
 
     /// One sweep of [`solve_simd`](Self::solve_simd) as a wave over the grid that hands each
     /// range of particles to `after` as soon as the sweep is done with it, all `p`'s
-    /// particles once ([`grid_sweep::run_wave`]), and with `before`, each band's particles
+    /// particles once (`grid_sweep::run_wave`), and with `before`, each band's particles
     /// to it just before the sweep reaches them; the same bits as `before` over all
     /// particles, the sweep, then `after` over all particles. Requires
     /// [`wave_ready`](Self::wave_ready), and for `before`, [`bands_on_blocks`](Self::bands_on_blocks).

@@ -39,9 +39,9 @@ pub struct MassSpringState {
     /// The implicit solver's factorisation and layout, built on first use.
     pub implicit: Option<crate::integrate::implicit::ImplicitState>,
     /// The predictions before the collision stages moved them (see
-    /// [`crate::world::contacts`]).
+    /// `world::contacts`).
     pub predicted: [Vec<f32>; 3],
-    /// Velocities before the self-collision speed clamp (see [`crate::world::contacts`]).
+    /// Velocities before the self-collision speed clamp (see `world::contacts`).
     pub before_clamp: [Vec<f32>; 3],
 }
 
@@ -61,7 +61,7 @@ pub struct KickParams<'a> {
     /// Drift `x += h v` after the kick, with this `h`.
     pub drift: Option<f32>,
     /// The drift writes only the prediction `p = x + h v` and leaves `x` for the collision
-    /// stages (see [`crate::world::contacts`]); otherwise it writes both.
+    /// stages (see `world::contacts`); otherwise it writes both.
     pub keep_x: bool,
 }
 

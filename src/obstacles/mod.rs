@@ -1,4 +1,4 @@
-//! Obstacles in the world: analytic [`Shape`]s and triangle meshes, static or moving with a
+//! Obstacles in the world: analytic [`Shape`](crate::model::shapes::Shape)s and triangle meshes, static or moving with a
 //! constant velocity, and their part of the step (Landovskaya, Landovsky & Frolovsky).
 //!
 //! Per substep of length `h` ending at time `t` (`src/world/step.rs`):
@@ -21,13 +21,13 @@
 //!    of the predicted velocity (`obstacle_kernels.rs`).
 //!
 //! When every obstacle is an analytic shape, stages 2 to 4 run chunk by chunk inside the
-//! step's predict and update passes ([`chunkwise`]): the same bits, one pass over the
+//! step's predict and update passes (`chunkwise`): the same bits, one pass over the
 //! particles fewer for each.
 //!
 //! Mesh obstacles use one of three broadphases ([`BroadphaseKind`]), all giving the same
 //! contacts, and optionally the paper's face memory ([`face_memory`](crate::obstacles::mesh::face_memory)): a
 //! particle over the face it touched last tests only that face. Each particle keeps the
-//! candidate faces of a box around its path from step to step ([`face_cache`]) and asks the
+//! candidate faces of a box around its path from step to step ([`face_cache`](crate::obstacles::mesh::face_cache)) and asks the
 //! broadphase again only when its path leaves that box: the same contacts for a fraction of
 //! the broadphase work. A world without obstacles
 //! skips all of this: no pass, no allocation.
@@ -74,7 +74,7 @@ pub struct ObstacleSet {
     reach: Vec<f32>,
     friction: f32,
     busy: std::time::Duration,
-    /// Gather candidate faces afresh every substep instead of keeping them ([`face_cache`]),
+    /// Gather candidate faces afresh every substep instead of keeping them ([`face_cache`](crate::obstacles::mesh::face_cache)),
     /// and search blocks far from the mesh too: the reference the fast path is tested against
     /// (same contacts).
     fresh_search: bool,
@@ -171,7 +171,7 @@ impl ObstacleSet {
 
     /// Whether every obstacle is an analytic shape and there are at most
     /// [`chunkwise::MAX_OBSTACLES`]: the step then runs the obstacle stages chunk by chunk
-    /// inside its element-wise passes ([`chunkwise`]).
+    /// inside its element-wise passes (`chunkwise`).
     pub(crate) fn runs_chunkwise(&self) -> bool {
         self.list.len() <= chunkwise::MAX_OBSTACLES && self.list.iter().all(|o| matches!(o.geometry, Geometry::Shape(_)))
     }

@@ -3,7 +3,7 @@
 //! friction coefficient (Landovskaya, Landovsky & Frolovsky). The step's stages live in
 //! [`obstacles`](crate::obstacles).
 //!
-//! A moving obstacle's place is a function of time, `start + u t` ([`displacement`]), never an
+//! A moving obstacle's place is a function of time, `start + u t` (`displacement`), never an
 //! accumulated sum, so a resumed run sees the same bits. A mesh is placed by translating the
 //! base mesh and rebuilding its broadphase (or refitting it, for a BVH); a translation that
 //! would overflow `f32` leaves the obstacle where it was.

@@ -1,7 +1,7 @@
 //! How deep particles sit inside obstacles: the measure behind the no-penetration tests and
 //! the `max_penetration` column of `weft reproduce landovsky`.
 //!
-//! Analytic shapes have exact signed distances ([`Shape::signed_distance`]). For a closed
+//! Analytic shapes have exact signed distances ([`Shape::signed_distance`](crate::model::shapes::Shape::signed_distance)). For a closed
 //! mesh the signed distance of `q` is the distance to the nearest face, negative when `q` lies
 //! behind that face's outward normal: `sign((q - c).n)` with `c` the closest point (ties to the
 //! smaller face index). Near an edge or a vertex `q - c` lies in the cone of the adjacent

@@ -7,7 +7,7 @@
 //! `r = d/2` the box test put particles back into contact, 1.27% average collision on the
 //! 100x100 fold against 0.0007% with `r = d`).
 //!
-//! * **Once a step** ([`SelfCollisionData::adapt_travel`], [`SelfCollisionData::begin_step`]),
+//! * **Once a step** (`SelfCollisionData::adapt_travel`, `SelfCollisionData::begin_step`),
 //!   the paper's "generate collision constraints" line of Algorithm 1. First each particle's
 //!   travel `T_i`, how far it may move relative to the mean during the step: with `m` the
 //!   mean velocity of the free particles and `u_i` the larger of `|v_i - m|` and `|m|` (a

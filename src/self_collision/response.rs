@@ -21,7 +21,7 @@
 //! is the bound: a falling particle and a stopped one close in faster than `2 T` a step, and
 //! such a pair is caught only once the list holds it.
 //!
-//! The mean is summed in fixed chunks ([`MeanParts`]); when the step has no obstacles (which
+//! The mean is summed in fixed chunks (`MeanParts`); when the step has no obstacles (which
 //! change velocities between predict and the clamp), its predict pass (or the update pass
 //! that runs the next predict) adds each chunk's sums while the chunk is in cache, and the
 //! clamp only reads them: one pass over the particles and one parallel region fewer a

@@ -3,7 +3,7 @@
 //! - [`hair`]: the AHS builder (attaching hairs to a scalp, from the NURBS thesis): roots spread over a scalp, each strand grown along
 //!   the scalp normal, simulated as particles with stretch and bending distance constraints;
 //! - [`scalp`]: the scalp shape, the Fibonacci root placement and the scalp collision stage;
-//! - [`attach`]: adding strands to a world (`World::add_strands`);
+//! - `attach`: adding strands to a world (`World::add_strands`);
 //! - [`nurbs`]: NURBS curves and surfaces with global and local evaluation, used to draw strands
 //!   and cloth smoothly; [`nurbs_timing`] measures global against local evaluation.
 

@@ -116,7 +116,7 @@ impl World {
 
     /// Builds a cloth and adds it; returns its index in [`cloths`](Self::cloths).
     ///
-    /// Refuses a cloth whose world would exceed the memory limit ([`budget`]) before building it.
+    /// Refuses a cloth whose world would exceed the memory limit (`budget`) before building it.
     pub fn add_cloth(&mut self, desc: &ClothDesc) -> Result<usize> {
         self.memory_counts().plus(&desc.memory_counts()).check()?;
         let b = desc.build()?;
@@ -152,7 +152,7 @@ impl World {
         Ok(self.cloths.len() - 1)
     }
 
-    /// The counts the memory estimate ([`budget::MemoryCounts::bytes`]) is computed from.
+    /// The counts the memory estimate (`budget::MemoryCounts::bytes`) is computed from.
     pub fn memory_counts(&self) -> crate::model::budget::MemoryCounts {
         crate::model::budget::MemoryCounts {
             particles: self.particles.count() as u64,

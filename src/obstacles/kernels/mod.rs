@@ -336,7 +336,7 @@ pub fn project_simd<S: SlotBlocks>(slots: &[S], th: &[f32], start: usize, p: [&m
 /// mesh's plane (`mesh[k]` for obstacle `k`: a push along one face's normal can enter a
 /// non-convex mesh through a neighbouring face), else push it along the normal. The chosen
 /// contact is the first crossing of the path, so the point reached lies before every crossing:
-/// outside the obstacle ([`resolve_against_plane`], which [`resolve_position`](crate::obstacles::mesh::response::resolve_position) uses too).
+/// outside the obstacle (`resolve_against_plane`, which [`resolve_position`](crate::obstacles::mesh::response::resolve_position) uses too).
 /// Element-wise; the parallel and serial runs give the same bits.
 pub fn resolve_along_path<S: SlotBlocks>(
     slots: &[S],

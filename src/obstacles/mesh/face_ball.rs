@@ -22,7 +22,7 @@
 //! inequality; the segment lies in the ball, which is convex): `G` can give no proximity
 //! (closer than `r`) and no crossing (a crossing point lies on `G`, up to the narrowphase's
 //! barycentric tolerance of about `1e-9` of the face's size, far below `s`). So the
-//! narrowphase over `K` alone ([`best_contact`](crate::obstacles::mesh::contact::best_contact), whose
+//! narrowphase over `K` alone (`best_contact`, whose
 //! choice does not depend on the order or on faces that give no contact) returns exactly the
 //! contact of the whole list. The test runs in `f32` against `(c - r)(1 - 1e-4)`, a bound
 //! far outside the few-ulp rounding of the squared distances, so it can only say "outside"

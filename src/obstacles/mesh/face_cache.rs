@@ -2,7 +2,7 @@
 //!
 //! A step `x -> p` of reach `r` can touch only the faces whose box overlaps its query box
 //! `Q = box(x, p) + r` ([`query_box`]), and the narrowphase tests exactly those faces
-//! ([`best_contact`]). Asking the broadphase for them every step costs far more than the test
+//! (`best_contact`). Asking the broadphase for them every step costs far more than the test
 //! itself when the particle rests on the obstacle. So each particle keeps a **gathered box**
 //! `G = Q + m` (its query box grown by a margin `m`) and the list of faces whose box overlaps
 //! `G`. While a later query box lies inside `G` (`G.lo <= Q.lo` and `Q.hi <= G.hi` on every
