@@ -331,45 +331,42 @@ impl SelfCollisionData {
                 (true, true) => travel[i].max(cell),
                 (false, _) => t_max,
             };
-            // With a skin the query fills the candidates, filtered to the lists below; without,
-            // it lists each pair within its own reach.
+            // The hash searches each pair within its own reach plus the skin (travels raised by
+            // half the skin, cells as wide as their members' reach); the tree, or a hash of
+            // equal travels, searches the step's query radius plus the skin.
+            let half = skin / (d + d);
+            let members = cell + half;
+            let reach = if hashed { d + (members + members) * d } else { q + skin };
             if hashed {
-                // The hash searches each pair within its own reach plus the skin: travels
-                // raised by half the skin, cells as wide as their members' reach.
-                let half = skin / (d + d);
                 self.travel_build.clear();
                 self.travel_build.extend((0..n).map(|i| build_travel(i) + half));
-                let members = cell + half;
-                let reach = d + (members + members) * d;
-                r = self.build_structure(&mut st, x, n, reach, broadphase, exec);
-                t1 = Instant::now();
-                let out = if skin > 0.0 { &mut st.cand } else { &mut st.lists };
-                r = r
-                    .and_then(|_| st.hash.attach_travel(d, &self.travel_build, members))
-                    .and_then(|_| st.hash.query_upper_unskipped_cells_exec(reach, a.skip, out, exec));
-            } else {
-                let reach = q + skin;
-                r = self.build_structure(&mut st, x, n, reach, broadphase, exec);
-                t1 = Instant::now();
-                let out = if skin > 0.0 { &mut st.cand } else { &mut st.lists };
-                // The tree keeps each pair within its own reach when it lists the pairs itself.
-                let own = skin == 0.0 && !self.travel_uniform;
-                r = r.and_then(|_| match (&st.tree, broadphase) {
-                    (Some(t), SelfBroadphase::AabbTree) => {
-                        let (rest, cloth_of, skip) = (&self.rest, &self.cloth_of, a.skip);
-                        let keep = |i: usize, j: u32| {
-                            let j = j as usize;
-                            let within_own = || {
-                                let reach2 = pair_reach2(d, travel[i], travel[j]);
-                                within(x[0][i], x[1][i], x[2][i], x[0][j], x[1][j], x[2][j], reach2)
-                            };
-                            !rest_skipped(rest, cloth_of, i, j, skip) && (!own || within_own())
-                        };
-                        t.query_exec(x[0], x[1], x[2], n, reach, out, exec, true, &keep)
-                    }
-                    _ => st.hash.query_upper_unskipped_cells_exec(reach, a.skip, out, exec),
-                });
             }
+            r = self.build_structure(&mut st, x, n, reach, broadphase, exec);
+            t1 = Instant::now();
+            // With a skin the query fills the candidates, filtered to the lists below; without,
+            // it lists each pair within its own reach (the tree keeps them so in its filter).
+            let out = if skin > 0.0 { &mut st.cand } else { &mut st.lists };
+            let own = skin == 0.0 && !self.travel_uniform;
+            r = r.and_then(|_| match (&st.tree, broadphase) {
+                (Some(t), SelfBroadphase::AabbTree) => {
+                    let (rest, cloth_of, skip) = (&self.rest, &self.cloth_of, a.skip);
+                    let keep = |i: usize, j: u32| {
+                        let j = j as usize;
+                        let within_own = || {
+                            let reach2 = pair_reach2(d, travel[i], travel[j]);
+                            within(x[0][i], x[1][i], x[2][i], x[0][j], x[1][j], x[2][j], reach2)
+                        };
+                        !rest_skipped(rest, cloth_of, i, j, skip) && (!own || within_own())
+                    };
+                    t.query_exec(x[0], x[1], x[2], n, reach, out, exec, true, &keep)
+                }
+                _ => {
+                    if hashed {
+                        st.hash.attach_travel(d, &self.travel_build, members)?;
+                    }
+                    st.hash.query_upper_unskipped_cells_exec(reach, a.skip, out, exec)
+                }
+            });
             if r.is_ok() {
                 st.reuse.built(x, n, a.d, build_travel, broadphase, skin);
                 st.fresh = true;

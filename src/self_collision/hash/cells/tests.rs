@@ -159,22 +159,11 @@ fn cells_query_keeps_each_pair_within_its_own_reach() {
     let top = t.iter().copied().fold(0.0f32, f32::max);
     let reach = d + (top + top) * d;
     let all = brute(&p, &rest, &cloth, reach, skip);
-    let mut want = Neighbours::new();
-    want.fill_serial(n, |i, buf| {
-        let r2 = |j: usize| pair_reach2(d, t[i], t[j]);
-        buf.extend(all.of(i).iter().filter(|&&j| {
-            within(
-                p[0][i],
-                p[1][i],
-                p[2][i],
-                p[0][j as usize],
-                p[1][j as usize],
-                p[2][j as usize],
-                r2(j as usize),
-            )
-        }));
-    })
-    .unwrap();
+    let mut want = all.clone();
+    want.retain(|i, j| {
+        let j = j as usize;
+        within(p[0][i], p[1][i], p[2][i], p[0][j], p[1][j], p[2][j], pair_reach2(d, t[i], t[j]))
+    });
     assert!(
         want.total() > 100 && want.total() < all.total(),
         "{} of {}",
