@@ -59,12 +59,7 @@ impl World {
         if obstacles {
             self.obstacles.prepare(&self.particles, &self.cloths, &self.strands);
         }
-        let selfcol = {
-            let p = &self.particles;
-            self.selfcol.adapt_travel([&p.vx, &p.vy, &p.vz], &p.w, n, dt, self.exec());
-            let on = self.selfcol.begin_step([&p.x, &p.y, &p.z], n, &self.damping_rate, self.exec());
-            on.unwrap_or(false).then(|| self.selfcol.active()).flatten()
-        };
+        let selfcol = self.begin_self_collision(dt, self.exec());
         if selfcol.is_some() {
             let p = &self.particles;
             let steps = self.steps;

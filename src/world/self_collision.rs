@@ -1,11 +1,25 @@
 //! The world's self-collision API: settings, the collision distance, the pair lists and the
 //! statistics. The stages themselves are `crate::self_collision`.
 
+use crate::data::exec::Exec;
 use crate::error::Result;
+use crate::self_collision::Active;
 use crate::self_collision::{SelfCollision, SelfCollisionStats};
 use crate::world::World;
 
 impl World {
+    /// A step's self-collision start: each particle's travel from the velocities for a step
+    /// of `dt`, then the pair lists from the positions. The settings the substeps need, or
+    /// `None` when off or when the lists failed (the step then runs without; the statistics
+    /// count it).
+    pub(crate) fn begin_self_collision(&mut self, dt: f32, exec: Exec) -> Option<Active> {
+        let n = self.particles.count();
+        let p = &self.particles;
+        self.selfcol.adapt_travel([&p.vx, &p.vy, &p.vz], &p.w, n, dt, exec);
+        let on = self.selfcol.begin_step([&p.x, &p.y, &p.z], n, &self.damping_rate, exec);
+        on.unwrap_or(false).then(|| self.selfcol.active()).flatten()
+    }
+
     /// Turns self-collision on (`Some`) or off (`None`). Off costs nothing in the step.
     pub fn set_self_collision(&mut self, config: Option<SelfCollision>) -> Result<()> {
         if let Some(c) = &config {

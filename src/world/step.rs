@@ -178,12 +178,7 @@ impl World {
         }
         self.clock.lap("step setup");
         let sc_start = std::time::Instant::now();
-        let sc = {
-            let p = &self.particles;
-            self.selfcol.adapt_travel([&p.vx, &p.vy, &p.vz], &p.w, n, h * n_sub as f32, exec);
-            let on = self.selfcol.begin_step([&p.x, &p.y, &p.z], n, &self.damping_rate, exec);
-            on.unwrap_or(false).then(|| self.selfcol.active()).flatten()
-        };
+        let sc = self.begin_self_collision(h * n_sub as f32, exec);
         let mut sc_time = sc_start.elapsed();
         if sc.is_some() {
             self.clock.lap("self-collision lists");
