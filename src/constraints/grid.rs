@@ -13,8 +13,10 @@
 //! consecutive particles and deal them into lanes with two in-lane shuffles
 //! ([`split16`](crate::data::lanes::split16)), which puts the window's eight constraints in
 //! lane order `0, 1, 4, 5, 2, 3, 6, 7`; a row lists its constraints in that order (its
-//! *slots*). The row's last constraints that do not fill a block run one at a time through
-//! the scalar twin's arithmetic. Rest length and compliance are splatted once per row; the
+//! *slots*). The row's last constraints that do not fill a block run as one more block that
+//! ends at the row's end, whose lanes already solved keep their values
+//! (`grid_row.rs`); the rare constraints that block cannot reach, and rows too
+//! short for a block, run one at a time through the scalar twin's arithmetic. Rest length and compliance are splatted once per row; the
 //! multipliers are read and written only when the sweep keeps them.
 //!
 //! The grid is cut into bands of rows ([`layout`]): one parallel pass sweeps each band through
@@ -152,14 +154,21 @@ impl Class {
         cols.saturating_sub(self.col_res) / 16
     }
 
+    /// The last sixteen-particle window a row of a horizontal class holds, by its first column
+    /// and the column rank of its first constraint (`None` when the row holds no window).
+    pub(crate) fn last_window(&self, cols: u32) -> Option<(u32, u32)> {
+        let top = cols.checked_sub(16)?.checked_sub(self.col_res)?;
+        let s = top - top % self.col_mod + self.col_res;
+        Some((s, s / self.col_mod * self.col_n))
+    }
+
     /// Slot `j` of a row holds the constraint of column rank `slot_rank(j)`, and the other
     /// way round: inside whole windows the lane order `0, 1, 4, 5, 2, 3, 6, 7`, which is its
     /// own inverse; elsewhere column order.
     fn slot_rank(&self, cols: u32, j: u32) -> u32 {
-        const LANE: [u32; LANES] = [0, 1, 4, 5, 2, 3, 6, 7];
         let whole = self.split().map_or(0, |_| self.windows(cols) * LANES as u32);
         if j < whole {
-            j - j % 8 + LANE[(j % 8) as usize]
+            j - j % 8 + WINDOW_LANES[(j % 8) as usize]
         } else {
             j
         }
@@ -199,6 +208,9 @@ impl Class {
         Some((k, self.slot_rank(cols, j)))
     }
 }
+
+/// The rank, within its window, of the constraint lane `l` of a window holds (its own inverse).
+pub(crate) const WINDOW_LANES: [u32; LANES] = [0, 1, 4, 5, 2, 3, 6, 7];
 
 /// Rows per band of a grid with `cols` columns (see [`layout`]): at most 16 and about 16k
 /// particles, at least 4 so that the seams of two boundaries share no particle.

@@ -100,7 +100,7 @@ fn only_whole_uniform_classes_are_structured() {
 /// them: on three threads a wave part lies between two others.
 #[test]
 fn structured_sweep_matches_scalar_bitwise() {
-    for (rows, cols) in [(2, 3), (5, 17), (40, 37), (64, 64), (70, 100), (26, 4100)] {
+    for (rows, cols) in [(2, 3), (5, 17), (7, 23), (9, 35), (40, 37), (64, 64), (70, 100), (26, 4100)] {
         let (cons, w, pos) = cloth(rows, cols, 3 + rows as u64);
         let n = (rows * cols) as usize;
         let spec = GridSpec { first: 0, rows, cols };

@@ -17,6 +17,7 @@ pub mod blocks;
 pub mod colour;
 pub mod distance;
 pub mod grid;
+mod grid_row;
 pub mod grid_sweep;
 pub mod project;
 pub mod tethers;
