@@ -14,10 +14,10 @@
 //! ([`split16`](crate::data::lanes::split16)), which puts the window's eight constraints in
 //! lane order `0, 1, 4, 5, 2, 3, 6, 7`; a row lists its constraints in that order (its
 //! *slots*). The row's last constraints that do not fill a block run as one more block that
-//! ends at the row's end, whose lanes already solved keep their values
-//! (`grid_row.rs`); the rare constraints that block cannot reach, and rows too
-//! short for a block, run one at a time through the scalar twin's arithmetic. Rest length and compliance are splatted once per row; the
-//! multipliers are read and written only when the sweep keeps them.
+//! ends at the row's end, whose lanes already solved keep their values (`grid_row.rs`); the
+//! rare constraints that block cannot reach, and rows too short for a block, run one at a
+//! time through the scalar twin's arithmetic. Rest length and compliance are splatted once
+//! per row; the multipliers are read and written only when the sweep keeps them.
 //!
 //! The grid is cut into bands of rows ([`layout`]): one parallel pass sweeps each band through
 //! all twelve classes while it is in cache, a second sweeps the constraints that cross band
