@@ -101,48 +101,64 @@ fn only_whole_uniform_classes_are_structured() {
 #[test]
 fn structured_sweep_matches_scalar_bitwise() {
     for (rows, cols) in [(2, 3), (5, 17), (7, 23), (9, 35), (40, 37), (64, 64), (70, 100), (26, 4100)] {
-        let (cons, w, pos) = cloth(rows, cols, 3 + rows as u64);
-        let n = (rows * cols) as usize;
-        let spec = GridSpec { first: 0, rows, cols };
-        let sink = (round_up(n + 1) - 1) as u32;
-        let set = DistanceSet::with_grids(&cons, n, sink, &[(spec, 0..cons.len())]);
-        assert!(set.colours.iter().all(|c| c.grid.is_some()), "{rows}x{cols}: all structured");
-        assert_eq!(set.len(), cons.len());
-        let run = |simd: bool, parallel: bool, threads: usize| {
-            let (mut s, mut p) = (set.clone(), pos.clone());
-            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-            pool.install(|| {
-                for sweep in 0..5 {
-                    match sweep {
-                        1 => s.reset_lambda_unkept(),
-                        2 | 4 => s.reset_lambda(),
-                        _ => {}
-                    }
-                    let [x, y, z] = &mut p;
-                    if simd {
-                        s.solve_simd(x, y, z, &w, 3.6e5, parallel);
-                    } else {
-                        s.solve_scalar(x, y, z, &w, 3.6e5);
-                    }
+        assert_sweep_matches_scalar(rows, cols, 3 + rows as u64, &[(false, 1), (true, 1), (true, 2), (true, 3)]);
+    }
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(48))]
+    /// The same on random grid shapes: every row length meets the row's last block (runs and
+    /// both window splits, with and without a constraint beyond the last window).
+    #[test]
+    fn structured_sweep_matches_scalar_on_any_shape(rows in 2u32..14, cols in 2u32..90, seed in 0u64..1000) {
+        assert_sweep_matches_scalar(rows, cols, seed, &[(false, 1), (true, 2)]);
+    }
+}
+
+/// Five sweeps of a `rows x cols` cloth by the scalar twin and by SIMD on each
+/// `(parallel, threads)` of `runs`: the same bits in positions and multipliers.
+fn assert_sweep_matches_scalar(rows: u32, cols: u32, seed: u64, runs: &[(bool, usize)]) {
+    let (cons, w, pos) = cloth(rows, cols, seed);
+    let n = (rows * cols) as usize;
+    let spec = GridSpec { first: 0, rows, cols };
+    let sink = (round_up(n + 1) - 1) as u32;
+    let set = DistanceSet::with_grids(&cons, n, sink, &[(spec, 0..cons.len())]);
+    assert!(set.colours.iter().all(|c| c.grid.is_some()), "{rows}x{cols}: all structured");
+    assert_eq!(set.len(), cons.len());
+    let run = |simd: bool, parallel: bool, threads: usize| {
+        let (mut s, mut p) = (set.clone(), pos.clone());
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        pool.install(|| {
+            for sweep in 0..5 {
+                match sweep {
+                    1 => s.reset_lambda_unkept(),
+                    2 | 4 => s.reset_lambda(),
+                    _ => {}
                 }
-            });
-            let bits = p.iter().flat_map(|a| a.iter().map(|f| f.to_bits())).collect::<Vec<_>>();
-            let lambda = s
-                .colours
-                .iter()
-                .flat_map(|c| c.lambda.iter().map(|l| l.to_bits()))
-                .collect::<Vec<_>>();
-            (bits, lambda)
-        };
-        let want = run(false, false, 1);
-        let start = pos.iter().flat_map(|a| a.iter().map(|f| f.to_bits())).collect::<Vec<_>>();
-        assert!(want.0 != start, "the sweeps moved the particles");
-        for (parallel, threads) in [(false, 1), (true, 1), (true, 2), (true, 3)] {
-            assert!(
-                want == run(true, parallel, threads),
-                "{rows}x{cols} parallel {parallel} threads {threads}"
-            );
-        }
+                let [x, y, z] = &mut p;
+                if simd {
+                    s.solve_simd(x, y, z, &w, 3.6e5, parallel);
+                } else {
+                    s.solve_scalar(x, y, z, &w, 3.6e5);
+                }
+            }
+        });
+        let bits = p.iter().flat_map(|a| a.iter().map(|f| f.to_bits())).collect::<Vec<_>>();
+        let lambda = s
+            .colours
+            .iter()
+            .flat_map(|c| c.lambda.iter().map(|l| l.to_bits()))
+            .collect::<Vec<_>>();
+        (bits, lambda)
+    };
+    let want = run(false, false, 1);
+    let start = pos.iter().flat_map(|a| a.iter().map(|f| f.to_bits())).collect::<Vec<_>>();
+    assert!(want.0 != start, "the sweeps moved the particles");
+    for &(parallel, threads) in runs {
+        assert!(
+            want == run(true, parallel, threads),
+            "{rows}x{cols} parallel {parallel} threads {threads}"
+        );
     }
 }
 
