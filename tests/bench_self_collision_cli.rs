@@ -32,6 +32,19 @@ fn bench_self_collision_json_has_the_fields_and_plausible_figures() {
         assert_eq!(r["substeps"], 10);
         assert!(r["collision_ns_per_particle_substep"].as_f64().unwrap() > 0.0);
         assert!(r["step_ms_p95"].as_f64().unwrap() >= r["step_ms_median"].as_f64().unwrap());
+        // the 1-thread run's median over this run's: 1 on one thread, positive on two
+        let speedup = r["speedup_over_1_thread"].as_f64().unwrap();
+        if r["threads"] == 1 {
+            assert_eq!(speedup, 1.0);
+        } else {
+            assert!(speedup > 0.0 && speedup.is_finite());
+        }
+    }
+    for pair in rows.chunks(2) {
+        let (one, two) = (&pair[0], &pair[1]);
+        let ratio = one["step_ms_median"].as_f64().unwrap() / two["step_ms_median"].as_f64().unwrap();
+        let speedup = two["speedup_over_1_thread"].as_f64().unwrap();
+        assert!((speedup - ratio).abs() <= 1e-12 * ratio, "{speedup} against {ratio}");
     }
     assert_eq!(rows[0]["scene"], "twist");
     assert_eq!(rows[0]["particles"], 4000);

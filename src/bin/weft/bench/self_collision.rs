@@ -26,6 +26,9 @@ struct SelfCollisionFigure {
     /// two runs step in alternating blocks of 30 steps).
     step_ms_median_without: f64,
     step_ms_p95_without: f64,
+    /// The 1-thread run's step median over this run's, with self-collision (1 on one thread):
+    /// the four runs of a scene (1 and 2 threads, with and without) step in turn, a block each.
+    speedup_over_1_thread: f64,
     /// The paper's average collision: mean over the steps of the share of particles with a
     /// non-neighbour (rest distance above 1.5 d) closer than 0.9 d, %.
     avg_collision_pct: f64,
@@ -73,12 +76,12 @@ fn median_p95(mut ms: Vec<f64>) -> (f64, f64) {
     (at(0.5), at(0.95))
 }
 
-/// Steps each run takes before the other takes its turn, and states kept between two audits.
-/// The run with self-collision and the run without alternate in blocks, so that both are
-/// timed under the same conditions of the machine and the ratio of their medians does not
-/// follow a drift between two separate runs. The audits run between steps, and a pause
-/// between steps lets the pool's workers sleep (waking them costs the next step), so they run
-/// once a block, on the kept states, rather than after every step.
+/// Steps each run takes before the next takes its turn, and states kept between two audits.
+/// A scene's runs (with and without self-collision, on one and on two threads) step in turn,
+/// a block each, so that all are timed under the same conditions of the machine and the
+/// ratios of their medians do not follow a drift between separate runs. The audits run
+/// between steps, and a pause between steps lets the pool's workers sleep (waking them costs
+/// the next step), so they run once a block, on the kept states, rather than after every step.
 const BLOCK: usize = 30;
 
 /// Deepest violation and crossings over consecutive `states` (positions of one run).
@@ -124,31 +127,38 @@ fn snapshot(run: &weft::suite::SuiteRun) -> [Vec<f32>; 3] {
     run.world.positions().map(|a| a.to_vec())
 }
 
-/// Step times (ms) with and without self-collision, deepest violation (m) and crossings.
-type Timed = (Vec<f64>, Vec<f64>, f64, u64);
+/// Step times (ms) with and without self-collision of each pair of runs, deepest violation
+/// (m) and crossings.
+type Timed = (Vec<(Vec<f64>, Vec<f64>)>, f64, u64);
 
-/// The step times (ms) of `on` and of `off`, `steps` steps each in alternating blocks of
-/// [`BLOCK`]; with `audit`, also the deepest violation and the crossings of every step of
-/// `on` (outside the timed steps).
-fn timed_pair(on: &mut weft::suite::SuiteRun, off: &mut weft::suite::SuiteRun, steps: u32, audit: bool) -> weft::Result<Timed> {
+/// The step times (ms) of each `(on, off)` pair of `runs`, `steps` steps each, every run a
+/// block of [`BLOCK`] steps in turn; also the deepest violation and the crossings of every step
+/// of the first pair's `on` (outside the timed steps).
+fn timed_runs(runs: &mut [(weft::suite::SuiteRun, weft::suite::SuiteRun)], steps: u32) -> weft::Result<Timed> {
     let steps = steps as usize;
-    let (mut ms_on, mut ms_off) = (Vec::with_capacity(steps), Vec::with_capacity(steps));
+    let mut ms: Vec<(Vec<f64>, Vec<f64>)> = runs
+        .iter()
+        .map(|_| (Vec::with_capacity(steps), Vec::with_capacity(steps)))
+        .collect();
     let (mut deepest, mut crossings) = (0.0f64, 0u64);
-    let mut states = audit.then(|| vec![snapshot(on)]);
+    let mut states = runs.first().map(|(on, _)| vec![snapshot(on)]);
     let mut done = 0;
     while done < steps {
         let count = BLOCK.min(steps - done);
-        timed_steps(on, count, &mut ms_on, states.as_mut())?;
-        if let Some(st) = &mut states {
-            let (dv, c) = audit_states(on, st)?;
-            deepest = deepest.max(dv);
-            crossings += c;
-            st.drain(..st.len() - 1);
+        for (k, ((on, off), (ms_on, ms_off))) in runs.iter_mut().zip(ms.iter_mut()).enumerate() {
+            let audited = if k == 0 { states.as_mut() } else { None };
+            timed_steps(on, count, ms_on, audited)?;
+            if let (0, Some(st)) = (k, &mut states) {
+                let (dv, c) = audit_states(on, st)?;
+                deepest = deepest.max(dv);
+                crossings += c;
+                st.drain(..st.len() - 1);
+            }
+            timed_steps(off, count, ms_off, None)?;
         }
-        timed_steps(off, count, &mut ms_off, None)?;
         done += count;
     }
-    Ok((ms_on, ms_off, deepest, crossings))
+    Ok((ms, deepest, crossings))
 }
 
 /// `weft bench --self-collision`: each suite scene on 1 and 2 threads, with and without
@@ -178,31 +188,32 @@ pub fn bench_self_collision(
         ));
     }
     let mut rows = Vec::new();
+    const THREADS: [usize; 2] = [1, 2];
     for name in SCENES.into_iter().filter(|s| only.is_empty() || only.iter().any(|o| o == s)) {
-        let mut audit = (0.0, 0);
-        for threads in [1usize, 2] {
+        let (mut runs, mut spans) = (Vec::new(), Vec::new());
+        let mut used = 0.0;
+        for threads in THREADS {
             let mut run = SuiteRun::load(dir, name, threads, true)?;
-            let mut used = 0.0;
             if let Some(mut sc) = run.world.self_collision().cloned() {
                 sc.measure = true;
                 sc.travel = travel.unwrap_or(sc.travel);
                 used = sc.travel;
                 run.world.set_self_collision(Some(sc))?;
             }
-            let span = crate::pictures::plane_span(&run.world);
+            spans.push(crate::pictures::plane_span(&run.world));
             run.world.set_stage_clock(true);
             let mut off = SuiteRun::load(dir, name, threads, false)?;
             off.world.set_stage_clock(true);
-            let (ms, ms_off, deepest, crossings) = timed_pair(&mut run, &mut off, steps, threads == 1)?;
-            if threads == 1 {
-                audit = (deepest, crossings);
-            }
+            runs.push((run, off));
+        }
+        let (ms, deepest, crossings) = timed_runs(&mut runs, steps)?;
+        let medians: Vec<_> = ms.into_iter().map(|(on, off)| (median_p95(on), median_p95(off))).collect();
+        for (k, (threads, (run, off))) in THREADS.into_iter().zip(&runs).enumerate() {
             let w = &run.world;
             let collision_s: f64 = COLLISION_STAGES.iter().map(|s| stage_s(w, s)).sum();
             let clock_s = w.stage_clock().total().as_secs_f64() - stage_s(w, MEASURE_STAGE);
             let (n, substeps) = (w.particle_count(), w.params().substeps);
-            let (median, p95) = median_p95(ms);
-            let (median_off, p95_off) = median_p95(ms_off);
+            let ((median, p95), (median_off, p95_off)) = medians[k];
             rows.push(SelfCollisionFigure {
                 scene: name.to_string(),
                 particles: n,
@@ -215,13 +226,15 @@ pub fn bench_self_collision(
                 step_ms_p95: p95,
                 step_ms_median_without: median_off,
                 step_ms_p95_without: p95_off,
+                speedup_over_1_thread: medians[0].0 .0 / median,
                 avg_collision_pct: w.self_collision_stats().average_pct,
-                max_violation_m: audit.0,
-                crossings: audit.1,
+                max_violation_m: deepest,
+                crossings,
                 stages_ms: stages_ms(w),
                 stages_ms_without: stages_ms(&off.world),
             });
             if let (Some(dir), 1) = (pictures, threads) {
+                let span = spans[k];
                 let mut positions = Vec::new();
                 w.positions_interleaved(&mut positions);
                 let frame = crate::pictures::Frame {
@@ -251,12 +264,25 @@ pub fn bench_self_collision(
     let travel = travel.map_or("each scene's".to_string(), |t| t.to_string());
     println!("self-collision suite, {steps} steps a run, travel {travel}; step ms with self-collision (median, p95) and without (median)");
     println!(
-        "{:<8} {:>7} {:>3} {:>3} {:>9} {:>6} {:>8} {:>8} {:>8} {:>6} {:>9} {:>10} {:>9}",
-        "scene", "parts", "sub", "thr", "coll ns", "share", "median", "p95", "without", "ratio", "avg coll%", "violation", "crossings"
+        "{:<8} {:>7} {:>3} {:>3} {:>9} {:>6} {:>8} {:>8} {:>8} {:>6} {:>6} {:>9} {:>10} {:>9}",
+        "scene",
+        "parts",
+        "sub",
+        "thr",
+        "coll ns",
+        "share",
+        "median",
+        "p95",
+        "without",
+        "ratio",
+        "vs 1t",
+        "avg coll%",
+        "violation",
+        "crossings"
     );
     for r in &rows {
         println!(
-            "{:<8} {:>7} {:>3} {:>3} {:>9.1} {:>5.0}% {:>8.3} {:>8.3} {:>8.3} {:>5.2}x {:>9.4} {:>10.2e} {:>9}",
+            "{:<8} {:>7} {:>3} {:>3} {:>9.1} {:>5.0}% {:>8.3} {:>8.3} {:>8.3} {:>5.2}x {:>5.2}x {:>9.4} {:>10.2e} {:>9}",
             r.scene,
             r.particles,
             r.substeps,
@@ -267,6 +293,7 @@ pub fn bench_self_collision(
             r.step_ms_p95,
             r.step_ms_median_without,
             r.step_ms_median / r.step_ms_median_without,
+            r.speedup_over_1_thread,
             r.avg_collision_pct,
             r.max_violation_m,
             r.crossings
