@@ -24,9 +24,11 @@ pub(crate) unsafe fn row<const RESET: bool, const STORE: bool>(g: &GridColour, a
     let row_start = (g.spec.first + r * cols) as usize;
     let (a_dc, b_dc) = cl.dc();
     let off = (cl.dr() * cols + b_dc) as usize - a_dc as usize;
+    // `α / h²`, one rounding: the lanes and the scalar loop below use the same value
+    let alpha = g.compliance * s.inv_h2;
     let k = Kernel {
         rest: F32s::splat(g.rest),
-        alpha: F32s::splat(g.compliance) * F32s::splat(s.inv_h2),
+        alpha: F32s::splat(alpha),
         p: &s.p,
         w: s.w,
     };
@@ -70,8 +72,7 @@ pub(crate) unsafe fn row<const RESET: bool, const STORE: bool>(g: &GridColour, a
             last.map_or(whole * LANES, |(_, rank)| (rank as usize + LANES).max(whole * LANES))
         }
     };
-    let alpha = g.compliance * s.inv_h2;
-    let p = &s.p;
+    let (p, w) = (k.p, k.w);
     for (j, l) in lam.iter_mut().enumerate().skip(done) {
         let c = cl.col(j as u32);
         let a = row_start + (c + a_dc) as usize;
@@ -79,7 +80,7 @@ pub(crate) unsafe fn row<const RESET: bool, const STORE: bool>(g: &GridColour, a
         let l0 = if RESET { 0.0 } else { *l };
         // SAFETY: as above.
         let (pa, pb) = unsafe { (p.get(a), p.get(b)) };
-        let (pa, pb, l1) = project1::<true>(pa, pb, s.w[a], s.w[b], g.rest, alpha, l0);
+        let (pa, pb, l1) = project1::<true>(pa, pb, w[a], w[b], g.rest, alpha, l0);
         unsafe {
             p.set(a, pa);
             p.set(b, pb);
