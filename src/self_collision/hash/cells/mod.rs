@@ -46,8 +46,12 @@ use wide::u32x8;
 
 mod members;
 
-/// Buckets walked by one parallel task (fixed, so the split does not depend on the threads).
-const BUCKETS_PER_TASK: usize = 1024;
+/// Particles (slots) whose buckets one parallel task walks. The tasks cut the slots, not the
+/// buckets: a scene's occupied buckets can crowd into a few stretches of the table (a pile
+/// under the linear row map), and equal runs of buckets then left one task most of the work.
+/// The cut is a function of the build alone, not of the threads (and the lists are canonical
+/// whatever the split).
+const SLOTS_PER_TASK: usize = 512;
 
 /// The half-shell rows other than the cell's own, as `(dy, dz)`; each is read over
 /// `cx - 1 ..= cx + 1`.
@@ -81,21 +85,30 @@ struct Reach {
 impl SpatialHash {
     /// The self-collision lists (each pair once under its smaller
     /// id, within `max_dist`, rest neighbours within `skip` dropped), found cell by cell over
-    /// a half shell (see the module docs); parallel over fixed groups of buckets.
+    /// a half shell (see the module docs); parallel over tasks of 512 particles' buckets (`SLOTS_PER_TASK`).
     ///
     /// Errors if `max_dist` or `skip` is negative or non-finite, `max_dist` exceeds the
     /// spacing, or no rest data was attached since the last build.
     pub fn query_upper_unskipped_cells(&self, max_dist: f32, skip: f32, out: &mut Neighbours) -> Result<()> {
         let k = self.reach(max_dist, skip)?;
-        let ts = self.table_size;
-        out.fill_pairs_parallel(self.n, ts.div_ceil(BUCKETS_PER_TASK), |t, buf, meter| {
-            let end = ((t + 1) * BUCKETS_PER_TASK).min(ts);
-            for b in t * BUCKETS_PER_TASK..end {
+        let tasks = self.cell_entries.len().div_ceil(SLOTS_PER_TASK).max(1);
+        out.fill_pairs_parallel(self.n, tasks, |t, buf, meter| {
+            for b in self.task_buckets(t, tasks) {
                 if !self.bucket_pairs::<true>(b, k, buf, meter) {
                     return;
                 }
             }
         })
+    }
+
+    /// The buckets task `t` of `tasks` walks: those whose first slot lies in the task's
+    /// [`SLOTS_PER_TASK`] slots (the last task also takes the empty buckets at the end), so
+    /// every bucket falls to one task.
+    fn task_buckets(&self, t: usize, tasks: usize) -> std::ops::Range<usize> {
+        let ts = self.table_size;
+        let starts = &self.cell_start[..ts];
+        let first = |t: usize| starts.partition_point(|&s| (s as usize) < t * SLOTS_PER_TASK);
+        first(t)..if t + 1 >= tasks { ts } else { first(t + 1) }
     }
 
     /// [`SpatialHash::query_upper_unskipped_cells`] when `exec` is parallel, else a serial walk

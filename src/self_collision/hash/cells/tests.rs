@@ -194,3 +194,29 @@ fn cells_query_keeps_each_pair_within_its_own_reach() {
     hsh.query_upper_unskipped_cells_exec(reach, skip, &mut got, Exec::Simd).unwrap();
     assert_eq!(got, all, "travels forgotten by the build");
 }
+
+/// The parallel walk's tasks cut the slots: a crowd of particles in one cell (a bucket longer
+/// than a task, so tasks inside it walk no bucket) beside a sparse cloud. The tasks' buckets
+/// tile the table, each bucket once, and the lists equal the brute force's.
+#[test]
+fn slot_tasks_tile_the_table_around_a_crowded_bucket() {
+    let mut rng = signed(31);
+    let (crowd, n) = (5 * SLOTS_PER_TASK / 2, 5 * SLOTS_PER_TASK / 2 + 900);
+    let p: [Vec<f32>; 3] = std::array::from_fn(|_| {
+        (0..n)
+            .map(|i| if i < crowd { 0.505 + 0.002 * rng() } else { 0.5 * rng() })
+            .collect()
+    });
+    let rest: [Vec<f32>; 3] = std::array::from_fn(|k| (0..n).map(|i| ((i * (k + 3)) % 89) as f32 * 0.01).collect());
+    let cloth: Vec<u32> = (0..n as u32).map(|i| i % 2).collect();
+    let mut h = SpatialHash::new(n);
+    h.build(&p[0], &p[1], &p[2], n, 0.01).unwrap();
+    let tasks = h.cell_entries.len().div_ceil(SLOTS_PER_TASK);
+    let ranges: Vec<_> = (0..tasks).map(|t| h.task_buckets(t, tasks)).collect();
+    assert_eq!(ranges[0].start, 0);
+    assert_eq!(ranges[tasks - 1].end, h.table_size);
+    assert!(ranges.windows(2).all(|w| w[0].end == w[1].start), "{ranges:?}");
+    assert!(ranges.iter().any(|r| r.is_empty()), "a task inside the crowded bucket: {ranges:?}");
+    let s = (p, rest, cloth);
+    assert!(check(&s, 0.01, 0.01, 0.02) > crowd * crowd / 4);
+}
