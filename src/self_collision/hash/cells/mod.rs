@@ -377,15 +377,39 @@ impl SpatialHash {
                 let near = (rd.x * rd.x + rd.y * rd.y + rd.z * rd.z).simd_le(F32s::splat(k.s2)).to_bitmask();
                 let same = u32x8::from(ld_idx(&rc.cloth, c)).simd_eq(u32x8::splat(q.cloth)).to_bitmask();
                 bits &= !(near & same) & !ids.simd_eq(u32x8::splat(q.i)).to_bitmask();
-                while bits != 0 {
-                    let j = rc.ids[c + bits.trailing_zeros() as usize];
-                    buf.extend([q.i.min(j), q.i.max(j)]);
-                    bits &= bits - 1;
+                if bits != 0 {
+                    emit_lanes(buf, ids, q.i, bits);
                 }
             }
             c += LANES;
         }
     }
+}
+
+/// Appends `(min(i, j), max(i, j))` for the id `j` of each lane set in `bits`, in lane order
+/// (as the scalar scan does). Every lane's pair is written and the end advances past the kept
+/// ones only, so there is no branch a lane: which lanes are kept does not follow a pattern the
+/// branch predictor could learn.
+#[inline(always)]
+fn emit_lanes(buf: &mut Vec<u32>, ids: u32x8, i: u32, bits: u32) {
+    let qi = u32x8::splat(i);
+    let (lo, hi) = (ids.min(qi).to_array(), ids.max(qi).to_array());
+    buf.reserve(2 * LANES);
+    let len = buf.len();
+    let spare = &mut buf.spare_capacity_mut()[..2 * LANES];
+    let mut n = 0;
+    for l in 0..LANES {
+        // SAFETY: `n <= 2 l` before lane `l`, so `n + 1 < 2 LANES = spare.len()`. (Checked
+        // indexing measured 1-2% slower on the suite's piles.)
+        unsafe {
+            spare.get_unchecked_mut(n).write(lo[l]);
+            spare.get_unchecked_mut(n + 1).write(hi[l]);
+        }
+        n += 2 * ((bits >> l) & 1) as usize;
+    }
+    // SAFETY: the first `n` spare places were written above (`n <= 2 LANES`, within the
+    // reserve).
+    unsafe { buf.set_len(len + n) };
 }
 
 #[cfg(test)]
