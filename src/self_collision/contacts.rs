@@ -23,8 +23,10 @@ use crate::model::self_collision::Response;
 use crate::self_collision::pairs::{PairContact, PairCtx, PairList};
 use crate::self_collision::response::{apply_runs, ApplyInput, ContactSums, SumRows};
 
-/// Pairs one parallel task tests in the pair pass.
-pub(crate) const PAIR_CHUNK: usize = 4096;
+/// Pairs one parallel task tests in the pair pass. Small enough that a list of a few thousand
+/// pairs makes several tasks: the contacts crowd into some stretches of the list (the lower
+/// layers of a pile), and three or four tasks on two threads left one thread most of them.
+pub(crate) const PAIR_CHUNK: usize = 1024;
 
 /// Particle blocks one parallel task handles in the correction pass.
 pub(crate) const APPLY_BLOCKS: usize = 64;
