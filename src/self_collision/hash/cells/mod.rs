@@ -83,9 +83,9 @@ struct Reach {
 }
 
 impl SpatialHash {
-    /// The self-collision lists (each pair once under its smaller
-    /// id, within `max_dist`, rest neighbours within `skip` dropped), found cell by cell over
-    /// a half shell (see the module docs); parallel over tasks of 512 particles' buckets (`SLOTS_PER_TASK`).
+    /// The self-collision lists (each pair once under its smaller id, within `max_dist`, rest
+    /// neighbours within `skip` dropped), found cell by cell over a half shell (see the module
+    /// docs); parallel over tasks of 512 particles' buckets (`SLOTS_PER_TASK`).
     ///
     /// Errors if `max_dist` or `skip` is negative or non-finite, `max_dist` exceeds the
     /// spacing, or no rest data was attached since the last build.
@@ -399,8 +399,8 @@ fn emit_lanes(buf: &mut Vec<u32>, ids: u32x8, i: u32, bits: u32) {
     let spare = &mut buf.spare_capacity_mut()[..2 * LANES];
     let mut n = 0;
     for l in 0..LANES {
-        // SAFETY: `n <= 2 l` before lane `l`, so `n + 1 < 2 LANES = spare.len()`. (Checked
-        // indexing measured 1-2% slower on the suite's piles.)
+        // SAFETY: `n <= 2 l` before lane `l`, so `n + 1 < 2 LANES = spare.len()` (checked
+        // indexing costs 1-2% on the suite's piles).
         unsafe {
             spare.get_unchecked_mut(n).write(lo[l]);
             spare.get_unchecked_mut(n + 1).write(hi[l]);
