@@ -96,6 +96,7 @@ pub mod neighbours;
 pub(crate) mod pairs;
 pub mod response;
 pub(crate) mod reuse;
+pub(crate) mod travel;
 pub mod tree;
 
 use crate::data::exec::Exec;
@@ -108,6 +109,7 @@ use crate::self_collision::hash::SpatialHash;
 use crate::self_collision::neighbours::{pair_reach2, within, Neighbours};
 use crate::self_collision::pairs::{PairCtx, PairRows};
 use crate::self_collision::reuse::Reuse;
+use crate::self_collision::travel::{Tally, TravelRule, TRAVEL_BINS};
 use crate::self_collision::tree::{ParticleTree, TreeShape};
 
 pub use crate::model::self_collision::{
@@ -144,9 +146,6 @@ fn too_many_pairs(d: f32, q: f32) -> WeftError {
 /// The hash's cells are sized for all but at most `n / FAST_SHARE` of the fastest particles,
 /// which search boxes of their own ([`SpatialHash::attach_travel`]).
 const FAST_SHARE: usize = 32;
-
-/// Bins of the travels between the floor and the bound, for choosing the cells' members.
-const TRAVEL_BINS: usize = 16;
 
 /// Leaf size of the AABB tree (the paper's depth 5 gives ~312 particles a leaf at 10 000
 /// particles; 16 queries much faster and gives the same pairs).
@@ -402,30 +401,12 @@ impl SelfCollisionData {
         let Some(c) = self.config.as_ref() else { return };
         let (bound, d) = (c.travel, self.distance());
         let m = crate::self_collision::response::mean_velocity_in(&mut self.mean_parts, v, w, n, exec);
-        // A particle stopped by an obstacle moves at minus the mean relative to it.
-        let m2 = m[0] * m[0] + m[1] * m[1] + m[2] * m[2];
         let len = v[0].len().min(v[1].len()).min(v[2].len());
         self.travel_of.clear();
         self.travel_of.resize(len.max(n), bound);
-        let floor = TRAVEL_FLOOR.min(bound);
-        let (mut lo, mut hi) = (bound, floor);
-        // How many particles travel at most `floor + k (bound - floor) / TRAVEL_BINS`, by `k`.
-        let mut bins = [0usize; TRAVEL_BINS + 1];
-        let width = (bound - floor) / TRAVEL_BINS as f32;
-        for (i, t) in self.travel_of.iter_mut().enumerate().take(n.min(len)) {
-            let u = [v[0][i] - m[0], v[1][i] - m[1], v[2][i] - m[2]];
-            let u2 = u[0] * u[0] + u[1] * u[1] + u[2] * u[2];
-            let u2 = if u2.is_nan() { u2 } else { u2.max(m2) };
-            let rel = u2.sqrt() * dt / d;
-            *t = if rel.is_finite() {
-                (TRAVEL_GROWTH * rel).max(TRAVEL_FLOOR).min(bound)
-            } else {
-                bound
-            };
-            (lo, hi) = (lo.min(*t), hi.max(*t));
-            let k = if width > 0.0 { ((*t - floor) / width).ceil() } else { 0.0 };
-            bins[(k.max(0.0) as usize).min(TRAVEL_BINS)] += 1;
-        }
+        let rule = TravelRule { m, dt, d, bound };
+        let Tally { lo, hi, bins } = rule.all(v, &mut self.travel_of[..n.min(len)], exec);
+        let (floor, width) = (rule.floor(), rule.width());
         self.travel_now = Some(hi);
         self.travel_uniform = lo == hi;
         // The cells' members: every particle but at most `n / FAST_SHARE` of the fastest.
