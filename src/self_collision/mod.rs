@@ -92,6 +92,7 @@ pub mod audit;
 pub mod config;
 pub(crate) mod contacts;
 pub mod hash;
+pub(crate) mod mean;
 pub mod neighbours;
 pub(crate) mod pairs;
 pub mod response;
@@ -156,7 +157,7 @@ const TREE_LEAF: u32 = 16;
 pub struct SelfCollisionData {
     pub(crate) config: Option<SelfCollision>,
     /// Chunk sums of the speed clamp's mean velocity, kept so a step allocates none.
-    pub(crate) mean_parts: crate::self_collision::response::MeanParts,
+    pub(crate) mean_parts: crate::self_collision::mean::MeanParts,
     rest: [Vec<f32>; 3],
     cloth_of: Vec<u32>,
     /// The same, one `[x, y, z, cloth]` record a particle (the pair pass's contacts).
@@ -400,7 +401,7 @@ impl SelfCollisionData {
     pub(crate) fn adapt_travel(&mut self, v: [&[f32]; 3], w: &[f32], n: usize, dt: f32, exec: Exec) {
         let Some(c) = self.config.as_ref() else { return };
         let (bound, d) = (c.travel, self.distance());
-        let m = crate::self_collision::response::mean_velocity_in(&mut self.mean_parts, v, w, n, exec);
+        let m = crate::self_collision::mean::mean_velocity_in(&mut self.mean_parts, v, w, n, exec);
         let len = v[0].len().min(v[1].len()).min(v[2].len());
         self.travel_of.clear();
         self.travel_of.resize(len.max(n), bound);

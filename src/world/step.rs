@@ -46,7 +46,7 @@ use crate::integrate::{predict, update, PredictParams};
 use crate::model::params::Method;
 use crate::obstacles::chunkwise::ChunkObstacles;
 use crate::obstacles::ObstacleSet;
-use crate::self_collision::response::MeanParts;
+use crate::self_collision::mean::MeanParts;
 use crate::world::World;
 
 /// Index of the first entry below `n` that is not finite in any of `arrays`.
