@@ -46,6 +46,22 @@ pub fn median_secs(reps: usize, f: impl FnMut()) -> f64 {
     t[t.len() / 2]
 }
 
+/// How long a kernel runs untimed before [`kernel_median_secs`] times it: long enough for a
+/// pool's other cores to be at work. On a virtual machine a core left idle (while a one-thread
+/// figure was measured) can take milliseconds to come back, and a two-thread figure of a
+/// short kernel then measured the first runs at one thread's speed.
+pub const WARM_UP_S: f64 = 0.1;
+
+/// Median of `reps` timings of a kernel `f`, in seconds, after untimed runs for at least
+/// [`WARM_UP_S`]: the cost of the kernel run back to back, as a simulation runs it.
+pub fn kernel_median_secs(reps: usize, mut f: impl FnMut()) -> f64 {
+    let warm = Instant::now();
+    while warm.elapsed().as_secs_f64() < WARM_UP_S {
+        f();
+    }
+    median_secs(reps, f)
+}
+
 /// A rayon pool of `threads` threads.
 pub fn pool(threads: usize) -> Result<rayon::ThreadPool> {
     rayon::ThreadPoolBuilder::new()
@@ -154,7 +170,7 @@ pub fn stream_reference(p: &mut Particles, parallel: bool) {
 
 /// Median seconds of [`stream_reference`] over `reps` runs.
 pub fn time_stream_reference(p: &mut Particles, parallel: bool, reps: usize) -> f64 {
-    median_secs(reps, || stream_reference(p, parallel))
+    kernel_median_secs(reps, || stream_reference(p, parallel))
 }
 
 /// Integrate against its memory ceiling at one size and thread count.
@@ -220,7 +236,7 @@ pub fn time_integrate(p: &mut Particles, exec: Exec, reps: usize) -> f64 {
         drag: None,
         force: None,
     };
-    median_secs(reps, || {
+    kernel_median_secs(reps, || {
         p.for_chunks(parallel, |c| predict(c, &params, simd));
         p.for_chunks(parallel, |c| update(c, 1.0 / 600.0, None, simd));
     })
@@ -230,7 +246,7 @@ pub fn time_integrate(p: &mut Particles, exec: Exec, reps: usize) -> f64 {
 pub fn time_solve(set: &mut DistanceSet, p: &mut Particles, exec: Exec, reps: usize) -> f64 {
     let (simd, parallel) = (exec.simd(), exec.parallel());
     let inv_h2 = 3.6e5;
-    median_secs(reps, || {
+    kernel_median_secs(reps, || {
         if simd {
             set.solve_simd(&mut p.px, &mut p.py, &mut p.pz, &p.w, inv_h2, parallel);
         } else {
