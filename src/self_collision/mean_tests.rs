@@ -86,30 +86,21 @@ fn mean_parts_filled_by_chunk_ranges_equal_mean_velocity() {
         let whole = MeanParts::new(n);
         whole.add(0, [&p.vx[..], &p.vy[..], &p.vz[..]], &p.w, n, true);
         assert_eq!(whole.mean().map(f32::to_bits), want.map(f32::to_bits), "n {n}");
+        // The chunk from `lo`, every other chunk with the lanes.
+        let add_chunk = |parts: &MeanParts, p: &Particles, lo: usize| {
+            let hi = (lo + MEAN_CHUNK).min(len);
+            let v = [&p.vx[lo..hi], &p.vy[lo..hi], &p.vz[lo..hi]];
+            parts.add(lo, v, &p.w[lo..hi], n, (lo / MEAN_CHUNK).is_multiple_of(2));
+        };
         let parts = MeanParts::new(n);
         for lo in (0..len).step_by(MEAN_CHUNK).rev() {
-            let hi = (lo + MEAN_CHUNK).min(len);
-            parts.add(
-                lo,
-                [&p.vx[lo..hi], &p.vy[lo..hi], &p.vz[lo..hi]],
-                &p.w[lo..hi],
-                n,
-                (lo / MEAN_CHUNK).is_multiple_of(2),
-            );
+            add_chunk(&parts, &p, lo);
         }
         assert_eq!(parts.mean().map(f32::to_bits), want.map(f32::to_bits), "n {n}");
         let i = n - 1;
         p.vx[i] += 1000.0;
         p.w[i] = 1.0;
-        let lo = i / MEAN_CHUNK * MEAN_CHUNK;
-        let hi = (lo + MEAN_CHUNK).min(len);
-        parts.add(
-            lo,
-            [&p.vx[lo..hi], &p.vy[lo..hi], &p.vz[lo..hi]],
-            &p.w[lo..hi],
-            n,
-            (lo / MEAN_CHUNK).is_multiple_of(2),
-        );
+        add_chunk(&parts, &p, i / MEAN_CHUNK * MEAN_CHUNK);
         let moved = mean_velocity([&p.vx[..], &p.vy[..], &p.vz[..]], &p.w, n, Exec::Simd);
         assert_eq!(parts.mean().map(f32::to_bits), moved.map(f32::to_bits), "n {n}");
         assert_ne!(moved[0], want[0], "n {n}");
