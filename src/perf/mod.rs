@@ -49,7 +49,8 @@ pub fn median_secs(reps: usize, f: impl FnMut()) -> f64 {
 /// How long a kernel runs untimed before [`kernel_median_secs`] times it: long enough for a
 /// pool's other cores to be at work. On a virtual machine a core left idle (while a one-thread
 /// figure was measured) can take milliseconds to come back, and a two-thread figure of a
-/// short kernel then measured the first runs at one thread's speed.
+/// short kernel then measured the first runs at one thread's speed. It does not remove the
+/// spread of a machine shared with other work: compare several runs.
 pub const WARM_UP_S: f64 = 0.1;
 
 /// Median of `reps` timings of a kernel `f`, in seconds, after untimed runs for at least
