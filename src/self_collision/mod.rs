@@ -110,7 +110,7 @@ use crate::self_collision::hash::SpatialHash;
 use crate::self_collision::neighbours::{pair_reach2, within, Neighbours};
 use crate::self_collision::pairs::{PairCtx, PairRows};
 use crate::self_collision::reuse::Reuse;
-use crate::self_collision::travel::{Tally, TravelRule, TRAVEL_BINS};
+use crate::self_collision::travel::TravelRule;
 use crate::self_collision::tree::{ParticleTree, TreeShape};
 
 pub use crate::model::self_collision::{
@@ -406,19 +406,11 @@ impl SelfCollisionData {
         self.travel_of.clear();
         self.travel_of.resize(len.max(n), bound);
         let rule = TravelRule { m, dt, d, bound };
-        let Tally { lo, hi, bins } = rule.all(v, &mut self.travel_of[..n.min(len)], exec);
-        let (floor, width) = (rule.floor(), rule.width());
-        self.travel_now = Some(hi);
-        self.travel_uniform = lo == hi;
+        let tally = rule.all(v, &mut self.travel_of[..n.min(len)], exec);
+        self.travel_now = Some(tally.hi);
+        self.travel_uniform = tally.lo == tally.hi;
         // The cells' members: every particle but at most `n / FAST_SHARE` of the fastest.
-        let fast = n.min(len) / FAST_SHARE;
-        let mut slower = 0;
-        let k = bins.iter().position(|&c| {
-            slower += c;
-            n.min(len) - slower <= fast
-        });
-        let edge = k.map_or(bound, |k| if k == TRAVEL_BINS { bound } else { floor + k as f32 * width });
-        self.travel_cell = edge.min(hi);
+        self.travel_cell = rule.members_travel(&tally, n.min(len), n.min(len) / FAST_SHARE);
     }
 
     /// The cloths' rest positions.

@@ -18,7 +18,7 @@ use crate::data::lanes::{load, store, F32s, LANES};
 use crate::model::self_collision::{TRAVEL_FLOOR, TRAVEL_GROWTH};
 
 /// Bins of the travels between the floor and the bound.
-pub(crate) const TRAVEL_BINS: usize = 16;
+const TRAVEL_BINS: usize = 16;
 
 /// Particles one parallel task handles.
 const TRAVEL_CHUNK: usize = 4096;
@@ -47,13 +47,32 @@ pub(crate) struct Tally {
 
 impl TravelRule {
     /// The smallest travel: [`TRAVEL_FLOOR`], or the bound if lower.
-    pub(crate) fn floor(&self) -> f32 {
+    fn floor(&self) -> f32 {
         TRAVEL_FLOOR.min(self.bound)
     }
 
     /// The width of a bin of the histogram.
-    pub(crate) fn width(&self) -> f32 {
+    fn width(&self) -> f32 {
         (self.bound - self.floor()) / TRAVEL_BINS as f32
+    }
+
+    /// The largest travel of the hash cells' members, from the `tally` of `n` particles: the
+    /// upper edge of the first bin by which at most `fast` particles are left faster (the
+    /// bound past the last bin), at most the largest travel.
+    pub(crate) fn members_travel(&self, tally: &Tally, n: usize, fast: usize) -> f32 {
+        let mut slower = 0;
+        let k = tally.bins.iter().position(|&c| {
+            slower += c;
+            n - slower <= fast
+        });
+        let edge = k.map_or(self.bound, |k| {
+            if k == TRAVEL_BINS {
+                self.bound
+            } else {
+                self.floor() + k as f32 * self.width()
+            }
+        });
+        edge.min(tally.hi)
     }
 
     /// The tally of no particle.
@@ -227,5 +246,33 @@ mod tests {
                 assert_eq!(bits(&got), bits(&want), "{exec:?}");
             }
         }
+    }
+
+    /// The cells' members: all but at most `fast` of the fastest. Three fast particles of a
+    /// hundred leave the members at the floor, five at the bound; the upper edge of a middle
+    /// bin when only two are faster than it; never above the largest travel.
+    #[test]
+    fn members_travel_leaves_out_at_most_the_fast_ones() {
+        let rule = TravelRule {
+            m: [0.0; 3],
+            dt: 0.01,
+            d: 0.01,
+            bound: 1.0,
+        };
+        let members = |fast: &[f32]| {
+            let t: Vec<f32> = (0..100).map(|i| fast.get(i).copied().unwrap_or(TRAVEL_FLOOR)).collect();
+            let mut tally = rule.empty();
+            for &x in &t {
+                tally.bins[(((x - rule.floor()) / rule.width()).ceil().max(0.0) as usize).min(TRAVEL_BINS)] += 1;
+                tally.hi = tally.hi.max(x);
+            }
+            rule.members_travel(&tally, 100, 3)
+        };
+        assert_eq!(members(&[1.0; 3]), TRAVEL_FLOOR);
+        assert_eq!(members(&[1.0; 5]), 1.0);
+        let (edge, inside) = (TRAVEL_FLOOR + 8.0 * rule.width(), TRAVEL_FLOOR + 7.5 * rule.width());
+        assert_eq!(members(&[1.0, 1.0, inside, inside, inside]), edge);
+        assert_eq!(members(&[inside; 5]), inside, "capped at the largest travel");
+        assert_eq!(members(&[]), TRAVEL_FLOOR);
     }
 }
