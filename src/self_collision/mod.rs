@@ -524,8 +524,9 @@ fn rest_skipped(rest: &[Vec<f32>; 3], cloth_of: &[u32], i: usize, j: usize, skip
     cloth_of[i] == cloth_of[j] && dist2(rest, i, j) <= skip * skip
 }
 
-/// Builds `hash` on `x` (first `n`) with cells of `reach` (times [`CELL_FACTOR`]) and
-/// attaches the cloths' `rest` positions and `cloth_of` ids for the rest rule of its
+/// Builds `hash` on `x` (first `n`) with cells of `reach` (times [`CELL_FACTOR`], widened
+/// to [`SpatialHash::member_spacing`] so that particles on a cell's faces are members of it)
+/// and attaches the cloths' `rest` positions and `cloth_of` ids for the rest rule of its
 /// self-collision query; `parallel` false builds serially (the same hash).
 pub(crate) fn build_hash(
     hash: &mut SpatialHash,
@@ -536,10 +537,11 @@ pub(crate) fn build_hash(
     cloth_of: &[u32],
     parallel: bool,
 ) -> Result<()> {
+    let spacing = SpatialHash::member_spacing(reach) * CELL_FACTOR;
     if parallel {
-        hash.build(x[0], x[1], x[2], n, reach * CELL_FACTOR)?;
+        hash.build(x[0], x[1], x[2], n, spacing)?;
     } else {
-        hash.build_serial(x[0], x[1], x[2], n, reach * CELL_FACTOR)?;
+        hash.build_serial(x[0], x[1], x[2], n, spacing)?;
     }
     hash.attach_rest(rest, cloth_of)
 }

@@ -5,8 +5,21 @@
 
 use crate::data::lanes::{load, F32s, LANES};
 use crate::self_collision::hash::cells::SpatialHash;
+use crate::self_collision::neighbours::search_radius;
 
 impl SpatialHash {
+    /// The cell side for the self-collision query within `max_dist`: a hair wider than the
+    /// query's search radius, so that a particle on a cell's lower face has its search box
+    /// inside the 27 cells around it, as one inside the cell has. With cells exactly
+    /// `max_dist` wide, the box of a particle on a face reaches one cell further (the radius
+    /// exceeds `max_dist` by a rounding margin), and a flat cloth lying in the plane of a face
+    /// (`z = 0` before anything moves it off) would scan whole boxes instead of half shells.
+    /// (Far from the origin, where a coordinate's rounding exceeds the margin, a particle on a
+    /// face can still fail the test: correct, only slower.)
+    pub fn member_spacing(max_dist: f32) -> f32 {
+        search_radius(max_dist) * (1.0 + 1.0 / 1_048_576.0)
+    }
+
     /// Integer cell of the particle in slot `k`.
     #[inline(always)]
     pub(super) fn cell_of_slot(&self, k: usize) -> [i32; 3] {

@@ -220,3 +220,22 @@ fn slot_tasks_tile_the_table_around_a_crowded_bucket() {
     let s = (p, rest, cloth);
     assert!(check(&s, 0.01, 0.01, 0.02) > crowd * crowd / 4);
 }
+
+/// Cells of `member_spacing` make particles on the cells' faces members of their cells (a flat
+/// lattice at `z = 0`, every third column on `x = k reach`); cells exactly the reach wide
+/// leave all of them out.
+#[test]
+fn member_spacing_makes_particles_on_faces_members() {
+    let (reach, n) = (0.03f32, 400);
+    let x: Vec<f32> = (0..n).map(|i| (i % 20) as f32 * 0.01 - 0.09).collect();
+    let y: Vec<f32> = (0..n).map(|i| (i / 20) as f32 * 0.01 + 0.005).collect();
+    let z = vec![0.0f32; n];
+    let members = |spacing: f32| {
+        let mut h = SpatialHash::new(n);
+        h.build(&x, &y, &z, n, spacing).unwrap();
+        let r = search_radius(reach);
+        (0..n).filter(|&k| h.member(k, h.cell_of_slot(k), r)).count()
+    };
+    assert_eq!(members(SpatialHash::member_spacing(reach)), n);
+    assert_eq!(members(reach), 0);
+}
