@@ -137,9 +137,7 @@ impl TravelRule {
                 bound
             };
             t[i] = ti;
-            (tally.lo, tally.hi) = (tally.lo.min(ti), tally.hi.max(ti));
-            let k = if width > 0.0 { ((ti - floor) / width).ceil() } else { 0.0 };
-            tally.bins[(k.max(0.0) as usize).min(TRAVEL_BINS)] += 1;
+            tally.count(ti, floor, width);
         }
         tally
     }
@@ -171,6 +169,15 @@ impl TravelRule {
 }
 
 impl Tally {
+    /// Counts one travel `t` (the scalar form of the lanes' binning; `floor` and `width` those
+    /// of the rule).
+    #[inline]
+    fn count(&mut self, t: f32, floor: f32, width: f32) {
+        (self.lo, self.hi) = (self.lo.min(t), self.hi.max(t));
+        let k = if width > 0.0 { ((t - floor) / width).ceil() } else { 0.0 };
+        self.bins[(k.max(0.0) as usize).min(TRAVEL_BINS)] += 1;
+    }
+
     /// The tally of two sets of particles together.
     fn join(&self, other: &Tally) -> Tally {
         let mut bins = self.bins;
@@ -263,8 +270,7 @@ mod tests {
             let t: Vec<f32> = (0..100).map(|i| fast.get(i).copied().unwrap_or(TRAVEL_FLOOR)).collect();
             let mut tally = rule.empty();
             for &x in &t {
-                tally.bins[(((x - rule.floor()) / rule.width()).ceil().max(0.0) as usize).min(TRAVEL_BINS)] += 1;
-                tally.hi = tally.hi.max(x);
+                tally.count(x, rule.floor(), rule.width());
             }
             rule.members_travel(&tally, 100, 3)
         };
