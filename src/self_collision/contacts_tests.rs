@@ -4,6 +4,7 @@
 //! every particle. Bit for bit, for the three responses, SIMD and scalar, serial and parallel
 //! on one and two threads.
 
+use super::lists::rest_skipped;
 use super::*;
 use crate::data::exec::Exec;
 use crate::self_collision::response::{apply, ApplyInput, ContactSums};

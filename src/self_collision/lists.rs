@@ -1,0 +1,219 @@
+//! The step's pair list (the first bullet of the pipeline in [`crate::self_collision`]): each
+//! particle's travel, the broadphase (hash or tree) built on the positions at the step's
+//! start, or the kept candidates when they still hold ([`super::reuse`]), and the error of a
+//! list past [`MAX_PAIRS_PER_PARTICLE`].
+
+use std::time::Instant;
+
+use crate::data::exec::Exec;
+use crate::error::{Result, WeftError};
+use crate::self_collision::hash::SpatialHash;
+use crate::self_collision::neighbours::{pair_reach2, within};
+use crate::self_collision::reuse;
+use crate::self_collision::travel::TravelRule;
+use crate::self_collision::tree::{ParticleTree, TreeShape};
+use crate::self_collision::{dist2, SelfBroadphase, SelfCollisionData, State, CELL_FACTOR, MAX_PAIRS_PER_PARTICLE};
+
+/// The error of a step whose pairs passed [`MAX_PAIRS_PER_PARTICLE`], for distance `d` and
+/// reach `q`.
+#[cold]
+#[inline(never)]
+fn too_many_pairs(d: f32, q: f32) -> WeftError {
+    WeftError::param(
+        "self_collision.distance",
+        format!("{d} m"),
+        format!(
+            "gives more than {MAX_PAIRS_PER_PARTICLE} pairs a particle on average within the step's reach {q} m \
+             (particles collapsed onto each other, or a distance far above the cloth's spacing): \
+             lower the distance or the travel"
+        ),
+    )
+}
+
+/// The hash's cells are sized for all but at most `n / FAST_SHARE` of the fastest particles,
+/// which search boxes of their own ([`SpatialHash::attach_travel`]).
+const FAST_SHARE: usize = 32;
+
+/// Leaf size of the AABB tree (the paper's depth 5 gives ~312 particles a leaf at 10 000
+/// particles; 16 queries much faster and gives the same pairs).
+const TREE_LEAF: u32 = 16;
+
+impl SelfCollisionData {
+    /// Fills the step's lists from `x` (each pair once, rest neighbours dropped) and the flat
+    /// pair list: from the kept candidates when they still hold ([`reuse`]), else from the
+    /// broadphase built afresh; `false` when off.
+    pub(super) fn build_lists(&mut self, x: [&[f32]; 3], n: usize, exec: Exec) -> Result<bool> {
+        let Some(a) = self.active() else { return Ok(false) };
+        if self.travel_now.is_none() || self.travel_of.len() < n {
+            // No step has set the travels (or not for these particles): all the bound's.
+            self.travel_of.clear();
+            self.travel_of.resize(n, a.travel);
+            self.travel_uniform = true;
+        }
+        let broadphase = self.config.as_ref().map(|c| c.broadphase).unwrap_or_default();
+        let mut st = self.state.take().unwrap_or_else(|| State {
+            hash: SpatialHash::new(n),
+            ..State::default()
+        });
+        let q = a.q;
+        let limit = MAX_PAIRS_PER_PARTICLE.saturating_mul(n);
+        st.cand.set_limit(limit);
+        st.lists.set_limit(limit);
+        st.probe.set_limit(limit.saturating_mul(2));
+        let t0 = Instant::now();
+        let mut r = Ok(());
+        let mut t1 = t0;
+        st.fresh = false;
+        if !st.reuse.holds(x, &self.travel_of, n, a.d, broadphase) {
+            let skin = st.reuse.next_skin(a.d);
+            let (d, travel) = (a.d, &self.travel_of[..]);
+            let hashed = broadphase == SelfBroadphase::Hash && !self.travel_uniform;
+            // Each particle's travel of the build: its own, or with a skin at least the cells'
+            // members' (so the candidates last while a slow particle stays below it).
+            let (cell, t_max) = (self.travel_cell.min(a.travel), a.travel);
+            let build_travel = |i: usize| match (hashed, skin > 0.0) {
+                (true, false) => travel[i],
+                (true, true) => travel[i].max(cell),
+                (false, _) => t_max,
+            };
+            // The hash searches each pair within its own reach plus the skin (travels raised by
+            // half the skin, cells as wide as their members' reach); the tree, or a hash of
+            // equal travels, searches the step's query radius plus the skin.
+            let half = skin / (d + d);
+            let members = cell + half;
+            let reach = if hashed { d + (members + members) * d } else { q + skin };
+            if hashed {
+                self.travel_build.clear();
+                self.travel_build.extend((0..n).map(|i| build_travel(i) + half));
+            }
+            r = self.build_structure(&mut st, x, n, reach, broadphase, exec);
+            t1 = Instant::now();
+            // With a skin the query fills the candidates, filtered to the lists below; without,
+            // it lists each pair within its own reach (the tree keeps them so in its filter).
+            let out = if skin > 0.0 { &mut st.cand } else { &mut st.lists };
+            let own = skin == 0.0 && !self.travel_uniform;
+            r = r.and_then(|_| match (&st.tree, broadphase) {
+                (Some(t), SelfBroadphase::AabbTree) => {
+                    let (rest, cloth_of, skip) = (&self.rest, &self.cloth_of, a.skip);
+                    let keep = |i: usize, j: u32| {
+                        let j = j as usize;
+                        let within_own = || {
+                            let reach2 = pair_reach2(d, travel[i], travel[j]);
+                            within(x[0][i], x[1][i], x[2][i], x[0][j], x[1][j], x[2][j], reach2)
+                        };
+                        !rest_skipped(rest, cloth_of, i, j, skip) && (!own || within_own())
+                    };
+                    t.query_exec(x[0], x[1], x[2], n, reach, out, exec, true, &keep)
+                }
+                _ => {
+                    if hashed {
+                        st.hash.attach_travel(d, &self.travel_build, members)?;
+                    }
+                    st.hash.query_upper_unskipped_cells_exec(reach, a.skip, out, exec)
+                }
+            });
+            if r.is_ok() {
+                st.reuse.built(x, n, a.d, build_travel, broadphase, skin);
+                st.fresh = true;
+            }
+        }
+        if r.is_ok() && st.reuse.skin() > 0.0 {
+            r = reuse::within_reach(&st.cand, x, a.d, &self.travel_of, &mut st.lists, exec);
+        }
+        if st.cand.limited() || st.lists.limited() {
+            r = Err(too_many_pairs(a.d, q));
+        }
+        let ph = &mut self.stats.phases;
+        ph.build_s += t1.duration_since(t0).as_secs_f64();
+        ph.query_s += t1.elapsed().as_secs_f64();
+        ph.rebuilds = st.reuse.builds;
+        st.ready = r.is_ok();
+        if r.is_ok() {
+            st.rows.fill(&st.lists.first, &st.lists.ids);
+        } else {
+            st.lists.clear();
+            st.rows.fill(&[0], &[]);
+        }
+        self.state = Some(st);
+        r.map(|_| true)
+    }
+
+    /// Sets this step's travel of every particle from the velocities `v` of the `n` particles
+    /// (inverse masses `w`) at its start and the step `dt` (see the module docs): its speed
+    /// relative to the free particles' mean, or the mean's own speed if larger, over a step,
+    /// times [`TRAVEL_GROWTH`], at least [`TRAVEL_FLOOR`] and at most the setting's travel (a
+    /// non-finite velocity gives the setting's travel).
+    pub(crate) fn adapt_travel(&mut self, v: [&[f32]; 3], w: &[f32], n: usize, dt: f32, exec: Exec) {
+        let Some(c) = self.config.as_ref() else { return };
+        let (bound, d) = (c.travel, self.distance());
+        let m = crate::self_collision::mean::mean_velocity_in(&mut self.mean_parts, v, w, n, exec);
+        let len = v[0].len().min(v[1].len()).min(v[2].len());
+        self.travel_of.clear();
+        self.travel_of.resize(len.max(n), bound);
+        let rule = TravelRule { m, dt, d, bound };
+        let tally = rule.all(v, &mut self.travel_of[..n.min(len)], exec);
+        self.travel_now = Some(tally.hi);
+        self.travel_uniform = tally.lo == tally.hi;
+        // The cells' members: every particle but at most `n / FAST_SHARE` of the fastest.
+        self.travel_cell = rule.members_travel(&tally, n.min(len), n.min(len) / FAST_SHARE);
+    }
+
+    /// The cloths' rest positions.
+    pub(super) fn rest(&self) -> [&[f32]; 3] {
+        [&self.rest[0], &self.rest[1], &self.rest[2]]
+    }
+
+    /// Builds the hash (cell `reach`) or refits the tree on `x`, in parallel when `exec` is.
+    pub(super) fn build_structure(
+        &self,
+        st: &mut State,
+        x: [&[f32]; 3],
+        n: usize,
+        reach: f32,
+        broadphase: SelfBroadphase,
+        exec: Exec,
+    ) -> Result<()> {
+        match broadphase {
+            SelfBroadphase::Hash => build_hash(&mut st.hash, x, n, reach, self.rest(), &self.cloth_of, exec.parallel()),
+            SelfBroadphase::AabbTree => {
+                let t = match st.tree.take() {
+                    Some(mut t) if t.len() == n && exec.parallel() => t.refit(x[0], x[1], x[2], n).map(|_| t),
+                    Some(mut t) if t.len() == n => t.refit_serial(x[0], x[1], x[2], n).map(|_| t),
+                    _ => ParticleTree::build(x[0], x[1], x[2], n, TreeShape::LeafSize(TREE_LEAF)),
+                }?;
+                st.tree = Some(t);
+                Ok(())
+            }
+        }
+    }
+}
+
+/// Whether `i` and `j` are rest neighbours: one cloth, rest distance at most `skip`
+/// ([`SelfCollision::rest_skip_factor`] `d`). Such pairs are never contacts (the cloth's own
+/// constraints keep them apart), so the broadphase drops them when it writes the list.
+#[inline]
+pub(super) fn rest_skipped(rest: &[Vec<f32>; 3], cloth_of: &[u32], i: usize, j: usize, skip: f32) -> bool {
+    cloth_of[i] == cloth_of[j] && dist2(rest, i, j) <= skip * skip
+}
+
+/// Builds `hash` on `x` (first `n`) with cells of `reach` (times [`CELL_FACTOR`], widened
+/// to [`SpatialHash::member_spacing`] so that particles on a cell's faces are members of it)
+/// and attaches the cloths' `rest` positions and `cloth_of` ids for the rest rule of its
+/// self-collision query; `parallel` false builds serially (the same hash).
+pub(crate) fn build_hash(
+    hash: &mut SpatialHash,
+    x: [&[f32]; 3],
+    n: usize,
+    reach: f32,
+    rest: [&[f32]; 3],
+    cloth_of: &[u32],
+    parallel: bool,
+) -> Result<()> {
+    let spacing = SpatialHash::member_spacing(reach) * CELL_FACTOR;
+    if parallel {
+        hash.build(x[0], x[1], x[2], n, spacing)?;
+    } else {
+        hash.build_serial(x[0], x[1], x[2], n, spacing)?;
+    }
+    hash.attach_rest(rest, cloth_of)
+}
