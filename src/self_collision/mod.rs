@@ -34,7 +34,7 @@
 //!   structure-of-arrays pair list: the lists' ids are the `j`, and each entry's `i` is
 //!   written out (`pairs`). Both broadphases give the same list (tested equal to each other
 //!   and to a brute force).
-//! * **After predict** (each substep): the speed clamp ([`crate::self_collision::response`])
+//! * **After predict** (each substep): the speed clamp ([`crate::self_collision::clamp`])
 //!   limits a free particle's velocity relative to the mean velocity of the free particles to
 //!   `T_i / substeps` a substep, so two particles close in by at most `T_i + T_j` in a step:
 //!   any pair that touches during the step is in the list. (The clamp is relative so a falling cloth
@@ -89,6 +89,7 @@
 //! and averaged over the steps ([`SelfCollisionStats`]).
 
 pub mod audit;
+pub mod clamp;
 pub mod config;
 pub(crate) mod contacts;
 pub mod hash;

@@ -3,8 +3,8 @@
 //! call these, each in its own order (the force-based methods have no constraint sweeps).
 
 use crate::data::exec::Exec;
+use crate::self_collision::clamp::{clamp_speed, ClampParams};
 use crate::self_collision::mean::mean_velocity_in;
-use crate::self_collision::response::{clamp_speed, ClampParams};
 use crate::self_collision::Active;
 use crate::world::World;
 
