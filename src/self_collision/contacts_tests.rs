@@ -353,7 +353,7 @@ fn parallel_correction_equals_serial() {
     let (mut data, x, p, w, n) = jittered_fold(70, 17, 21);
     let (want, _) = compact(&mut data, &x, &p, &w, n, Exec::Simd);
     assert!(
-        data.touched_blocks() > 2 * crate::self_collision::contacts::APPLY_BLOCKS,
+        data.touched_blocks() > 2 * crate::self_collision::pass::APPLY_BLOCKS,
         "{} touched blocks",
         data.touched_blocks()
     );
@@ -398,7 +398,7 @@ fn fold_with_parallel_pair_chunks_is_bitwise_on_any_thread_count() {
     let mut ranged = 0;
     for step in 0..80 {
         one.step(dt).unwrap();
-        ranged += usize::from(one.selfcol.pair_count() > crate::self_collision::contacts::PAIR_CHUNK);
+        ranged += usize::from(one.selfcol.pair_count() > crate::self_collision::pass::PAIR_CHUNK);
         for w in &mut others {
             w.step(dt).unwrap();
             for (a, b) in w.positions().iter().zip(one.positions()) {
@@ -467,7 +467,7 @@ fn contacts_added_in_parallel_parts_equal_the_serial_pass() {
     let (want_p, want) = compact(&mut data, &x, &p, &w, n, Exec::Scalar);
     let contacts: f32 = want.iter().map(|v| v[10]).sum::<f32>() / 2.0;
     assert!(
-        contacts as usize >= crate::self_collision::contacts::PARALLEL_CONTACTS,
+        contacts as usize >= crate::self_collision::pass::PARALLEL_CONTACTS,
         "{contacts} contacts"
     );
     for threads in [2, 3] {

@@ -24,7 +24,7 @@
 //!   largest travel `T_c`, from a histogram of the travels: cells `d + 2 T_c`), which search
 //!   over the half shell of their cell; each faster particle searches a box of its own, of
 //!   radius `d + T_i + max T`, so a few fast particles do not widen every cell
-//!   ([`SpatialHash::attach_travel`]). Kept candidates pass through `reuse::within_reach`.
+//!   ([`SpatialHash::attach_travel`]). Kept candidates pass through `lists::reuse::within_reach`.
 //!   **Rest neighbours** are dropped as the list is written: pairs of one cloth whose rest
 //!   distance is at most `d + 2 T_max` (plus 0.1%,
 //!   [`SelfCollision::rest_skip_factor`]: the rule does not change with the travels),
@@ -32,7 +32,7 @@
 //!   one). The lists hold at most [`MAX_PAIRS_PER_PARTICLE`] pairs a particle on average.
 //!   Each pair is listed once, `(i, j)` with `i < j`, ordered by `i` then `j`, and read as a
 //!   structure-of-arrays pair list: the lists' ids are the `j`, and each entry's `i` is
-//!   written out (`pairs`). Both broadphases give the same list (tested equal to each other
+//!   written out (`pass::pairs`). Both broadphases give the same list (tested equal to each other
 //!   and to a brute force).
 //! * **After predict** (each substep): the speed clamp ([`crate::self_collision::clamp`])
 //!   limits a free particle's velocity relative to the mean velocity of the free particles to
@@ -47,7 +47,7 @@
 //!   settled cloth, or of the slow particles of a busy one, are then a fraction of those at
 //!   `T_max`.
 //! * **After the constraint sweeps** (each substep): the pair pass below over the whole list,
-//!   eight pairs at a time (`contacts`), then the velocity-correction kernel
+//!   eight pairs at a time (`pass`), then the velocity-correction kernel
 //!   [`crate::self_collision::response::apply`] on the blocks of eight particles that received
 //!   a contact.
 //!
@@ -91,27 +91,24 @@
 pub mod audit;
 pub mod clamp;
 pub mod config;
-pub(crate) mod contacts;
 pub mod hash;
 mod lists;
 pub(crate) mod mean;
 pub mod neighbours;
-pub(crate) mod pairs;
+pub(crate) mod pass;
 pub mod response;
-pub(crate) mod reuse;
-pub(crate) mod travel;
 pub mod tree;
 
 use crate::data::exec::Exec;
 use std::time::Instant;
 
 use crate::error::{positive, Result, WeftError};
-pub(crate) use crate::self_collision::contacts::ApplyParams;
-use crate::self_collision::contacts::{ContactPass, PredictionSink};
 use crate::self_collision::hash::SpatialHash;
+use crate::self_collision::lists::reuse::Reuse;
 use crate::self_collision::neighbours::Neighbours;
-use crate::self_collision::pairs::{PairCtx, PairRows};
-use crate::self_collision::reuse::Reuse;
+use crate::self_collision::pass::pairs::{PairCtx, PairRows};
+pub(crate) use crate::self_collision::pass::ApplyParams;
+use crate::self_collision::pass::{ContactPass, PredictionSink};
 use crate::self_collision::tree::ParticleTree;
 
 pub use crate::model::self_collision::{
@@ -223,7 +220,7 @@ impl SelfCollisionData {
                 r.push(*c);
             }
             self.cloth_of.push(group);
-            self.rest4.push(pairs::rest_record(*p, group));
+            self.rest4.push(pass::pairs::rest_record(*p, group));
         }
         self.state = None;
     }

@@ -1,7 +1,10 @@
 //! The step's pair list (the first bullet of the pipeline in [`crate::self_collision`]): each
 //! particle's travel, the broadphase (hash or tree) built on the positions at the step's
-//! start, or the kept candidates when they still hold ([`super::reuse`]), and the error of a
+//! start, or the kept candidates when they still hold ([`reuse`]), and the error of a
 //! list past [`MAX_PAIRS_PER_PARTICLE`].
+
+pub(crate) mod reuse;
+pub(crate) mod travel;
 
 use std::time::Instant;
 
@@ -9,8 +12,8 @@ use crate::data::exec::Exec;
 use crate::error::{Result, WeftError};
 use crate::self_collision::hash::SpatialHash;
 use crate::self_collision::neighbours::{pair_reach2, within};
-use crate::self_collision::reuse;
-use crate::self_collision::travel::TravelRule;
+
+use crate::self_collision::lists::travel::TravelRule;
 use crate::self_collision::tree::{ParticleTree, TreeShape};
 use crate::self_collision::{dist2, SelfBroadphase, SelfCollisionData, State, CELL_FACTOR, MAX_PAIRS_PER_PARTICLE};
 

@@ -15,12 +15,14 @@
 //! (a run of each of the eleven arrays), those it touches and, back to zero, those of the
 //! last pass it does not touch, each part its own.
 
+pub(crate) mod pairs;
+
 use crate::data::exec::Exec;
 use rayon::prelude::*;
 
 use crate::data::lanes::{SharedVec3, Vec3x8, LANES};
 use crate::model::self_collision::Response;
-use crate::self_collision::pairs::{PairContact, PairCtx, PairList};
+use crate::self_collision::pass::pairs::{PairContact, PairCtx, PairList};
 use crate::self_collision::response::{apply_runs, ApplyInput, ContactSums, SumRows};
 
 /// Pairs one parallel task tests in the pair pass. Small enough that a list of a few thousand
