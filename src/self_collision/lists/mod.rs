@@ -11,9 +11,8 @@ use std::time::Instant;
 use crate::data::exec::Exec;
 use crate::error::{Result, WeftError};
 use crate::self_collision::hash::SpatialHash;
-use crate::self_collision::neighbours::{pair_reach2, within};
-
 use crate::self_collision::lists::travel::TravelRule;
+use crate::self_collision::neighbours::{pair_reach2, within};
 use crate::self_collision::tree::{ParticleTree, TreeShape};
 use crate::self_collision::{dist2, SelfBroadphase, SelfCollisionData, State, CELL_FACTOR, MAX_PAIRS_PER_PARTICLE};
 
