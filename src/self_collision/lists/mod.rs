@@ -161,7 +161,7 @@ impl SelfCollisionData {
     }
 
     /// The cloths' rest positions.
-    pub(super) fn rest(&self) -> [&[f32]; 3] {
+    fn rest(&self) -> [&[f32]; 3] {
         [&self.rest[0], &self.rest[1], &self.rest[2]]
     }
 
@@ -202,7 +202,7 @@ pub(super) fn rest_skipped(rest: &[Vec<f32>; 3], cloth_of: &[u32], i: usize, j: 
 /// to [`SpatialHash::member_spacing`] so that particles on a cell's faces are members of it)
 /// and attaches the cloths' `rest` positions and `cloth_of` ids for the rest rule of its
 /// self-collision query; `parallel` false builds serially (the same hash).
-pub(crate) fn build_hash(
+fn build_hash(
     hash: &mut SpatialHash,
     x: [&[f32]; 3],
     n: usize,
