@@ -7,17 +7,8 @@
 //!
 //! # The neighbour predicate
 //! Every broadphase in weft, and the brute-force reference [`Neighbours::fill_brute_force`],
-//! uses one predicate, evaluated in `f32` in this exact order:
-//!
-//! ```text
-//! dx = x[j] - x[i];  dy = y[j] - y[i];  dz = z[j] - z[i]
-//! j is a neighbour of i  <=>  j != i  and  (dx*dx + dy*dy) + dz*dz <= max_dist * max_dist
-//! ```
-//!
-//! Swapping `i` and `j` only negates `dx, dy, dz`, so the relation is symmetric bit for bit.
-//! A particle with a non-finite coordinate (NaN or ±Inf) fails the predicate with everyone, so
-//! it has no neighbours and is nobody's neighbour. Coincident particles (`dist2 == 0`) are
-//! neighbours: the response must handle them, not the broadphase skip them.
+//! uses one predicate (module `predicate`: `j != i` and the squared distance, summed in a fixed
+//! order, at most `max_dist²`), symmetric bit for bit.
 //!
 //! # Canonical form
 //! Each list is sorted ascending and holds no duplicates, so the CSR arrays are a function of
@@ -28,17 +19,18 @@
 //! them allocates nothing.
 //!
 //! # Limit
-//! The entries a fill may write are bounded ([`Neighbours::set_limit`]): particles that have
-//! collapsed onto each other, or a reach far above their spacing, would otherwise list every
-//! pair (`n²` entries). A fill that passes the limit stops writing, empties the lists and
-//! returns an error. Its tasks count what they write in batches of `METER_BATCH` entries (the
-//! shared count is touched once a batch), so what it wrote beyond the limit is at most a batch
-//! and one particle's list a running task.
+//! The entries a fill may write are bounded ([`Neighbours::set_limit`], module `limit`): a
+//! fill that passes the limit stops writing, empties the lists and returns an error.
 
-use crate::data::lanes::{F32s, Vec3x8, LANES};
-use crate::{Result, WeftError};
+pub(crate) mod limit;
+pub(crate) mod predicate;
+
+use crate::Result;
 use rayon::prelude::*;
-use std::sync::atomic::{AtomicUsize, Ordering};
+
+pub(crate) use limit::{too_many, Meter};
+use limit::{Budget, MAX_ENTRIES};
+pub(crate) use predicate::{check_max_dist, check_positions, pair_reach2, search_radius, within, Candidates};
 
 /// Particles handled by one parallel task when filling lists. Fixed, so the work split does not
 /// depend on the thread count (the result would not either: lists are canonical).
@@ -66,64 +58,6 @@ pub struct Neighbours {
     limit: usize,
     /// Whether the last fill stopped at the limit.
     limited: bool,
-}
-
-/// The entries a fill has written so far, shared by its tasks, against the lists' limit.
-pub(crate) struct Budget {
-    used: AtomicUsize,
-    limit: usize,
-}
-
-impl Budget {
-    fn new(limit: usize) -> Self {
-        Budget {
-            used: AtomicUsize::new(0),
-            limit,
-        }
-    }
-
-    /// Counts `k` more entries; `false` once the total passes the limit (the writer stops).
-    #[inline]
-    pub(crate) fn spend(&self, k: usize) -> bool {
-        k == 0 || self.used.fetch_add(k, Ordering::Relaxed).saturating_add(k) <= self.limit
-    }
-
-    /// Whether the total has passed the limit.
-    #[inline]
-    pub(crate) fn over(&self) -> bool {
-        self.used.load(Ordering::Relaxed) > self.limit
-    }
-
-    /// A task's meter on this budget.
-    pub(crate) fn meter(&self) -> Meter<'_> {
-        Meter { budget: self, pending: 0 }
-    }
-}
-
-/// Entries a task counts before it adds them to the shared budget: the tasks touch the
-/// shared count once per this many entries, not once per particle.
-const METER_BATCH: usize = 1024;
-
-/// One task's count of the entries it wrote, added to its [`Budget`] in batches. The fills
-/// hand one to each task and flush it when the task ends (so the budget's total is exact).
-pub(crate) struct Meter<'a> {
-    budget: &'a Budget,
-    pending: usize,
-}
-
-impl Meter<'_> {
-    /// Counts `k` more entries; `false` once the budget's total passes the limit.
-    #[inline]
-    pub(crate) fn add(&mut self, k: usize) -> bool {
-        self.pending += k;
-        self.pending < METER_BATCH || self.flush()
-    }
-
-    /// Adds the pending count to the budget; `false` once its total passes the limit.
-    pub(crate) fn flush(&mut self) -> bool {
-        let k = std::mem::take(&mut self.pending);
-        self.budget.spend(k)
-    }
 }
 
 impl Default for Neighbours {
@@ -343,24 +277,6 @@ fn prefix_sum(first: &mut [u32]) -> Result<usize> {
     Ok(acc as usize)
 }
 
-/// Most entries of any lists: ids and offsets are `u32`.
-const MAX_ENTRIES: usize = u32::MAX as usize;
-
-/// The error of a fill past `limit` entries for `n` particles (cold and out of line: the fills'
-/// loops stay small enough to inline their callbacks).
-#[cold]
-#[inline(never)]
-pub(crate) fn too_many(limit: usize, n: usize) -> WeftError {
-    WeftError::param(
-        "max_dist",
-        "too large",
-        format!(
-            "more than {limit} neighbour entries in total ({:.0} a particle): the reach is too large for the particles' spacing, or they have collapsed onto each other",
-            limit as f64 / n.max(1) as f64
-        ),
-    )
-}
-
 /// Copies the chunk buffers one after another into `dst` (whose length is their total),
 /// splitting the work in halves with `rayon::join` (no allocation).
 fn copy_buffers(bufs: &[Vec<u32>], dst: &mut [u32]) {
@@ -408,116 +324,6 @@ pub(crate) fn sort_dedup_tail(buf: &mut Vec<u32>, start: usize) {
         }
     }
     buf.truncate(start + w);
-}
-
-/// Candidate particles stored contiguously: ids with their positions at the same index. The
-/// position arrays extend at least [`LANES`] entries past any scanned range (NaN padding), so a
-/// lane load never leaves them.
-pub(crate) struct Candidates<'a> {
-    pub ids: &'a [u32],
-    pub x: &'a [f32],
-    pub y: &'a [f32],
-    pub z: &'a [f32],
-    /// Keep only ids above the skipped one (each pair once, in the list of its smaller id).
-    pub above: bool,
-}
-
-impl Candidates<'_> {
-    /// Whether id `j` may be listed for particle `skip`.
-    #[inline(always)]
-    fn keeps(&self, j: u32, skip: u32) -> bool {
-        if self.above {
-            j > skip
-        } else {
-            j != skip
-        }
-    }
-
-    /// Appends to `buf` each `ids[k]`, `k` in `range`, other than `skip` (above it with
-    /// [`Candidates::above`]), whose position passes
-    /// the predicate against `p`. With `SIMD` eight candidates are tested per lane load, the
-    /// predicate computed operation for operation like [`within`] (no FMA), so both paths pick
-    /// the same ids; without it, the plain scalar loop (the twin).
-    #[inline(always)]
-    pub fn scan<const SIMD: bool>(&self, range: std::ops::Range<usize>, skip: u32, p: [f32; 3], md2: f32, buf: &mut Vec<u32>) {
-        let (s, e) = (range.start, range.end);
-        if !SIMD {
-            for k in s..e {
-                let j = self.ids[k];
-                if self.keeps(j, skip) && within(p[0], p[1], p[2], self.x[k], self.y[k], self.z[k], md2) {
-                    buf.push(j);
-                }
-            }
-            return;
-        }
-        let (pv, m2) = (Vec3x8::splat(p), F32s::splat(md2));
-        let mut k = s;
-        while k < e {
-            let d = Vec3x8::load(self.x, self.y, self.z, k) - pv;
-            let d2 = d.x * d.x + d.y * d.y + d.z * d.z;
-            let mut bits = d2.simd_le(m2).to_bitmask();
-            if e - k < LANES {
-                bits &= (1u32 << (e - k)) - 1;
-            }
-            while bits != 0 {
-                let j = self.ids[k + bits.trailing_zeros() as usize];
-                bits &= bits - 1;
-                if self.keeps(j, skip) {
-                    buf.push(j);
-                }
-            }
-            k += LANES;
-        }
-    }
-}
-
-/// The neighbour predicate (see the module docs), shared by every broadphase.
-#[inline(always)]
-pub(crate) fn within(xi: f32, yi: f32, zi: f32, xj: f32, yj: f32, zj: f32, md2: f32) -> bool {
-    let dx = xj - xi;
-    let dy = yj - yi;
-    let dz = zj - zi;
-    dx * dx + dy * dy + dz * dz <= md2
-}
-
-/// The squared reach of a pair whose particles travel `ti` and `tj` collision distances `d`
-/// in a step: `(d + (t_i + t_j) d)²`, computed in this order everywhere (lanes and scalar).
-#[inline(always)]
-pub(crate) fn pair_reach2(d: f32, ti: f32, tj: f32) -> f32 {
-    let r = d + (ti + tj) * d;
-    r * r
-}
-
-/// Half-width of the box a broadphase must search around a particle so that it finds every
-/// `j` that passes [`within`] despite rounding: if the `f32` test passes, the exact distance
-/// along each axis is at most `max(max_dist * (1 + 2^-22), 1.1e-19)` (the second term covers
-/// squares that underflow). The returned value exceeds both bounds.
-#[inline]
-pub(crate) fn search_radius(max_dist: f32) -> f32 {
-    max_dist * (1.0 + 1.0 / 1_048_576.0) + 2e-19
-}
-
-/// Validates `max_dist` (finite, not negative) and returns `max_dist²`.
-pub(crate) fn check_max_dist(max_dist: f32) -> Result<f32> {
-    crate::error::non_negative("max_dist", max_dist)?;
-    Ok(max_dist * max_dist)
-}
-
-/// Checks that the position arrays hold at least `n` particles and that ids fit in `u32`.
-pub(crate) fn check_positions(x: &[f32], y: &[f32], z: &[f32], n: usize) -> Result<()> {
-    if n >= u32::MAX as usize {
-        return Err(WeftError::param("n", n, "must be below 2^32 - 1 (ids are u32)"));
-    }
-    for (name, a) in [("x", x), ("y", y), ("z", z)] {
-        if a.len() < n {
-            return Err(WeftError::BufferLength {
-                name,
-                got: a.len(),
-                expected: n,
-            });
-        }
-    }
-    Ok(())
 }
 
 mod pairs;

@@ -1,5 +1,6 @@
 //! Tests of the neighbour lists (CSR form, fills, helpers).
 
+use super::limit::METER_BATCH;
 use super::*;
 
 #[test]
