@@ -22,12 +22,12 @@
 
 use rayon::prelude::*;
 
-use crate::constraints::blocks::{plan, Block, Window, GATHER, RUN, WINDOW};
+use crate::constraints::blocks::{plan, solve_block_simd, Block, Cons, Window};
 use crate::constraints::colour::colour_families;
 use crate::constraints::grid::{self, GridColour, GridSpec};
 use crate::constraints::grid_sweep::{self, Sweep};
 pub(crate) use crate::constraints::project::{project1, project8};
-use crate::data::lanes::{gather1, load, load_idx, pick16, pick16_vec, round_up, store, F32s, SharedVec3, Vec3x8, LANES};
+use crate::data::lanes::{round_up, SharedVec3, LANES};
 
 pub use crate::model::params::MIN_LENGTH;
 
@@ -409,87 +409,6 @@ type Solve = fn(&Cons<'_>, &mut [f32], &[Window], &SharedVec3, &[f32], f32);
 type GridPass = fn(&mut [Colour], &Sweep<'_>, bool);
 /// The kernel of one grid's bands and seams as a wave (see [`grid_sweep::run_wave`]).
 type GridWave = fn(&mut [Colour], &mut [Colour], &Sweep<'_>, bool, Option<grid_sweep::Finish<'_>>);
-
-/// One chunk of a colour's constraint arrays (a multiple of the lane width long).
-struct Cons<'a> {
-    a: &'a [u32],
-    b: &'a [u32],
-    rest: &'a [f32],
-    comp: &'a [f32],
-    blocks: &'a [Block],
-}
-
-/// One chunk of a colour, eight constraints at a time; `RESET`: the multipliers read as zero;
-/// `STORE`: they are written.
-#[inline]
-fn solve_block_simd<const RESET: bool, const STORE: bool>(
-    cons: &Cons<'_>,
-    lambda: &mut [f32],
-    windows: &[Window],
-    p: &SharedVec3,
-    w: &[f32],
-    inv_h2: f32,
-) {
-    let inv_h2 = F32s::splat(inv_h2);
-    for (k, bl) in cons.blocks.iter().enumerate() {
-        let i = k * LANES;
-        let s = bl.first as usize;
-        // SAFETY (all particle accesses below): every index or run of indices comes from this
-        // block's constraints, which are below the padded particle count, and within one
-        // colour no particle appears in two constraints, so no other task touches them. A run
-        // block's `a` and `b` runs are disjoint; a window block owns all sixteen particles.
-        let (pa, pb, wa, wb) = match bl.kind {
-            GATHER => {
-                let (ia, ib) = (load_idx(cons.a, i), load_idx(cons.b, i));
-                unsafe { (p.gather(&ia), p.gather(&ib), gather1(w, &ia), gather1(w, &ib)) }
-            }
-            RUN => {
-                let t = bl.second as usize;
-                unsafe { (p.load_run(s), p.load_run(t), load(w, s), load(w, t)) }
-            }
-            kind => {
-                let win = &windows[(kind - WINDOW) as usize];
-                let (lo, hi) = unsafe { (p.load_run(s), p.load_run(s + LANES)) };
-                let (wl, wh) = (load(w, s), load(w, s + LANES));
-                let pa = pick16_vec(lo, hi, &win.pos_a);
-                let pb = pick16_vec(lo, hi, &win.pos_b);
-                (pa, pb, pick16(wl, wh, &win.pos_a), pick16(wl, wh, &win.pos_b))
-            }
-        };
-        let alpha = load(cons.comp, i) * inv_h2;
-        let lam = if RESET { F32s::ZERO } else { load(lambda, i) };
-        let (pa, pb, lam) = project8::<false>(pa, pb, wa, wb, load(cons.rest, i), alpha, lam);
-        if STORE {
-            store(lambda, i, lam);
-        }
-        write_back(bl, windows, p, cons, i, pa, pb);
-    }
-}
-
-/// Writes a block's new positions back the way its plan read them.
-#[inline(always)]
-fn write_back(bl: &Block, windows: &[Window], p: &SharedVec3, cons: &Cons<'_>, i: usize, pa: Vec3x8, pb: Vec3x8) {
-    let s = bl.first as usize;
-    // SAFETY: as in `solve_block_simd`; for gathers `a` is scattered before `b`, and
-    // `a != b` for real constraints.
-    unsafe {
-        match bl.kind {
-            GATHER => {
-                p.scatter(&load_idx(cons.a, i), pa);
-                p.scatter(&load_idx(cons.b, i), pb);
-            }
-            RUN => {
-                p.store_run(s, pa);
-                p.store_run(bl.second as usize, pb);
-            }
-            kind => {
-                let win = &windows[(kind - WINDOW) as usize];
-                p.store_run(s, pick16_vec(pa, pb, &win.src_lo));
-                p.store_run(s + LANES, pick16_vec(pa, pb, &win.src_hi));
-            }
-        }
-    }
-}
 
 #[cfg(test)]
 #[path = "distance_tests.rs"]
