@@ -2,6 +2,7 @@
 
 use super::*;
 use crate::data::exec::Exec;
+use crate::self_collision::neighbours::{pair_reach2, within};
 use crate::test_rng::signed;
 
 use super::super::rest::tests::{lattices, Scene};
