@@ -40,17 +40,7 @@ pub fn gather1(s: &[f32], idx: &Idx8) -> F32s {
     // [`gather1_unchecked`]: that cost the distance solve's gathers more instructions.
     let g = |l: usize| s[idx[l] as usize];
     let v = [g(0), g(1), g(2), g(3), g(4), g(5), g(6), g(7)];
-    #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
-    {
-        use std::arch::x86_64::{__m256, _mm256_set_ps};
-        // SAFETY: the cfg guarantees AVX at compile time; register-only intrinsic.
-        let r: __m256 = unsafe { _mm256_set_ps(v[7], v[6], v[5], v[4], v[3], v[2], v[1], v[0]) };
-        bytemuck::cast(r)
-    }
-    #[cfg(not(all(target_arch = "x86_64", target_feature = "avx")))]
-    {
-        F32s::from(v)
-    }
+    in_registers(v)
 }
 
 /// Eight `[x, y, z, w]` records of `xyzw` (indices `idx`) as four vectors: lane `l` of the
@@ -106,6 +96,13 @@ pub unsafe fn gather1_unchecked(s: &[f32], idx: &Idx8) -> F32s {
     // SAFETY: the caller guarantees every index is in bounds.
     let g = |l: usize| unsafe { *s.get_unchecked(idx[l] as usize) };
     let v = [g(0), g(1), g(2), g(3), g(4), g(5), g(6), g(7)];
+    in_registers(v)
+}
+
+/// Eight loaded values as a vector built in registers (see [`gather1`]): on AVX
+/// `_mm256_set_ps`, elsewhere the portable conversion.
+#[inline(always)]
+fn in_registers(v: [f32; LANES]) -> F32s {
     #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
     {
         use std::arch::x86_64::{__m256, _mm256_set_ps};
