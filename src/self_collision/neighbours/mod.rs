@@ -7,8 +7,17 @@
 //!
 //! # The neighbour predicate
 //! Every broadphase in weft, and the brute-force reference [`Neighbours::fill_brute_force`],
-//! uses one predicate (module `predicate`: `j != i` and the squared distance, summed in a fixed
-//! order, at most `max_dist²`), symmetric bit for bit.
+//! uses one predicate, evaluated in `f32` in this exact order:
+//!
+//! ```text
+//! dx = x[j] - x[i];  dy = y[j] - y[i];  dz = z[j] - z[i]
+//! j is a neighbour of i  <=>  j != i  and  (dx*dx + dy*dy) + dz*dz <= max_dist * max_dist
+//! ```
+//!
+//! Swapping `i` and `j` only negates `dx, dy, dz`, so the relation is symmetric bit for bit.
+//! A particle with a non-finite coordinate (NaN or ±Inf) fails the predicate with everyone, so
+//! it has no neighbours and is nobody's neighbour. Coincident particles (`dist2 == 0`) are
+//! neighbours: the response must handle them, not the broadphase skip them.
 //!
 //! # Canonical form
 //! Each list is sorted ascending and holds no duplicates, so the CSR arrays are a function of
@@ -19,8 +28,10 @@
 //! them allocates nothing.
 //!
 //! # Limit
-//! The entries a fill may write are bounded ([`Neighbours::set_limit`], module `limit`): a
-//! fill that passes the limit stops writing, empties the lists and returns an error.
+//! The entries a fill may write are bounded ([`Neighbours::set_limit`]): particles that have
+//! collapsed onto each other, or a reach far above their spacing, would otherwise list every
+//! pair (`n²` entries). A fill that passes the limit stops writing, empties the lists and
+//! returns an error.
 
 pub(crate) mod limit;
 pub(crate) mod predicate;

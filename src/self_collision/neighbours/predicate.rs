@@ -1,19 +1,7 @@
-//! The neighbour predicate every broadphase shares, the search box that finds every pair it
-//! accepts despite rounding, the checks of a query's arguments, and [`Candidates`], the lane
-//! scan of contiguous candidates under the predicate.
-//!
-//! # The predicate
-//! Evaluated in `f32` in this exact order:
-//!
-//! ```text
-//! dx = x[j] - x[i];  dy = y[j] - y[i];  dz = z[j] - z[i]
-//! j is a neighbour of i  <=>  j != i  and  (dx*dx + dy*dy) + dz*dz <= max_dist * max_dist
-//! ```
-//!
-//! Swapping `i` and `j` only negates `dx, dy, dz`, so the relation is symmetric bit for bit.
-//! A particle with a non-finite coordinate (NaN or ±Inf) fails the predicate with everyone, so
-//! it has no neighbours and is nobody's neighbour. Coincident particles (`dist2 == 0`) are
-//! neighbours: the response must handle them, not the broadphase skip them.
+//! The neighbour predicate every broadphase shares (stated in the docs of
+//! [`neighbours`](super)), the search box that finds every pair it accepts despite rounding,
+//! the checks of a query's arguments, and [`Candidates`], the lane scan of contiguous
+//! candidates under the predicate.
 
 use crate::data::lanes::{F32s, Vec3x8, LANES};
 use crate::{Result, WeftError};
