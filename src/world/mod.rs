@@ -10,6 +10,7 @@ pub mod checkpoint;
 pub(crate) mod contacts;
 pub(crate) mod describe;
 pub(crate) mod forces;
+mod fusion;
 pub mod metrics;
 pub(crate) mod obstacles;
 pub(crate) mod self_collision;

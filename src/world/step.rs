@@ -18,12 +18,12 @@
 //!     obstacle velocity pass: normal part, friction     [obstacles]        (if any)
 //!       (both chunk by chunk in one pass; the last substep's pass also checks that the
 //!        chunk's x, v are finite, for the guard)
-//!   Fused forms, the same bits: obstacles that are all shapes run their contacts after each
-//!   chunk's predict, their last projection before its update and their velocity pass after
-//!   it (`obstacles::chunkwise`); a world that is one grid cloth swept once a substep runs
-//!   the sweep and the update pass as one wave (`DistanceSet::solve_wave`), which also
-//!   predicts each band (and runs its obstacle contacts) just before sweeping it when the
-//!   bands start on whole blocks.
+//!   Fused forms, the same bits (`world/fusion.rs` decides which run): obstacles that are
+//!   all shapes run their contacts after each chunk's predict, their last projection before
+//!   its update and their velocity pass after it (`obstacles::chunkwise`); a world that is
+//!   one grid cloth swept once a substep runs the sweep and the update pass as one wave
+//!   (`DistanceSet::solve_wave`), which also predicts each band (and runs its obstacle
+//!   contacts) just before sweeping it when the bands start on whole blocks.
 //!   (solver.method = symplectic-euler | leapfrog | implicit-euler: the force-based step of
 //!    integrate::mass_spring / integrate::implicit replaces the substep loop above; its drift
 //!    feeds the obstacle and self-collision stages as the prediction p, world::contacts)
@@ -47,6 +47,7 @@ use crate::model::params::Method;
 use crate::obstacles::chunkwise::ChunkObstacles;
 use crate::obstacles::ObstacleSet;
 use crate::self_collision::mean::MeanParts;
+use crate::world::fusion::Fusion;
 use crate::world::World;
 
 /// Index of the first entry below `n` that is not finite in any of `arrays`.
@@ -171,7 +172,6 @@ impl World {
             };
         }
         let has_obstacles = !self.obstacles.is_empty();
-        let fused_guard = self.params.guard && !check;
         let all_finite = std::sync::atomic::AtomicBool::new(true);
         if has_obstacles {
             self.obstacles.prepare(&self.particles, &self.cloths, &self.strands);
@@ -187,20 +187,21 @@ impl World {
             self.selfcol.record_start_state([&p.x, &p.y, &p.z], n, steps, parallel);
             self.clock.lap("self-collision measure");
         }
-        // Without wind nothing runs between a substep's update and the next substep's predict,
-        // and both are element-wise, so the update pass runs the next predict on each chunk
-        // while it is in cache: the same bits as two passes, one sweep over 1M particles fewer
-        // a substep.
-        let fuse_next = self.fuse_predict && !check && self.effects.wind.is_none() && self.wind.is_none();
-        // The speed clamp's mean velocity, summed by the predict pass chunk by chunk while the
-        // velocities are in cache (the same sums as `mean_velocity`); obstacles change
-        // velocities between predict and the clamp, so they keep the separate pass.
-        // Its time is self-collision time: summed over the chunks, shared by the threads
-        // (like the obstacles' velocity pass below), and added to the stage's.
+        let Fusion {
+            fused_guard,
+            fuse_next,
+            fused_mean,
+            chunk_obstacles,
+            fuse_project,
+            wave,
+            wave_can_predict,
+        } = self.fusion(check, sc.is_some(), simd, n);
+        // The clamp's mean velocity summed inside predict (`Fusion::fused_mean`) is
+        // self-collision time: summed over the chunks, shared by the threads (like the
+        // obstacles' velocity pass below), and added to the stage's.
         let mean_ns = AtomicU64::new(0);
         // Taken out of the world for the substeps (and put back after them) so that the predict
         // passes can fill it while the stages borrow the world.
-        let fused_mean = sc.is_some() && self.fuse_predict && !check && !has_obstacles;
         let mut parts = if fused_mean {
             std::mem::take(&mut self.selfcol.mean_parts)
         } else {
@@ -211,28 +212,6 @@ impl World {
         }
         let mean_parts = fused_mean.then_some(&parts);
         let mean_sink = mean_parts.map(|m| (m, &mean_ns));
-        // All-shape obstacles run chunk by chunk inside the element-wise passes
-        // (`obstacles::chunkwise`): the contacts after each chunk's predict, the velocity pass
-        // after its update, and the last iteration's projection before its update when nothing
-        // runs between the two (no scalp, no self-collision).
-        let chunk_obstacles = has_obstacles && self.fuse_predict && !check && self.obstacles.runs_chunkwise();
-        let fuse_project = chunk_obstacles && self.scalps.is_empty() && sc.is_none();
-        // One grid cloth swept once a substep with nothing else in the iteration: the sweep
-        // hands each band of rows to the update pass as soon as it is done with it
-        // (`DistanceSet::solve_wave`), so a substep reads the particles from memory once.
-        let wave = simd
-            && self.fuse_predict
-            && !check
-            && self.params.iterations == 1
-            && self.tethers.is_empty()
-            && self.scalps.is_empty()
-            && sc.is_none()
-            && (!has_obstacles || chunk_obstacles)
-            && self.distance.wave_ready(n);
-        // The wave predicts each band (and runs its obstacle contacts) just before it sweeps
-        // it, when bands start on whole blocks: element-wise, so the same bits as a pass
-        // before the sweep.
-        let wave_can_predict = wave && self.distance.bands_on_blocks();
         let obstacle_ns = AtomicU64::new(0);
         let mut predicted_ahead = false;
         for s in 0..n_sub {

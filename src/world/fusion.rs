@@ -1,0 +1,64 @@
+//! Which of a step's passes run fused (the "fused forms" of the stage list in
+//! [`world::step`](super::step)): decided once a step from the world's state. Every fused form
+//! gives the same bits as its passes one after the other (`step_fusion_tests.rs`); none runs
+//! in the stage-by-stage replay of the guard (`check`), which needs every stage apart.
+
+use crate::world::World;
+
+/// The fused forms a step runs.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Fusion {
+    /// The guard's copy of `x, v` made inside the first predict and its finite check inside
+    /// the last update, while the data is in cache.
+    pub fused_guard: bool,
+    /// Without wind nothing runs between a substep's update and the next substep's predict,
+    /// and both are element-wise, so the update pass runs the next predict on each chunk
+    /// while it is in cache: one sweep over the particles fewer a substep.
+    pub fuse_next: bool,
+    /// The speed clamp's mean velocity summed by the predict pass chunk by chunk while the
+    /// velocities are in cache (the same sums as `mean_velocity`); obstacles change
+    /// velocities between predict and the clamp, so they keep the separate pass.
+    pub fused_mean: bool,
+    /// All-shape obstacles run chunk by chunk inside the element-wise passes
+    /// (`obstacles::chunkwise`): the contacts after each chunk's predict, the velocity pass
+    /// after its update.
+    pub chunk_obstacles: bool,
+    /// And the last iteration's projection before its update, when nothing runs between the
+    /// two (no scalp, no self-collision).
+    pub fuse_project: bool,
+    /// One grid cloth swept once a substep with nothing else in the iteration: the sweep
+    /// hands each band of rows to the update pass as soon as it is done with it
+    /// (`DistanceSet::solve_wave`), so a substep reads the particles from memory once.
+    pub wave: bool,
+    /// The wave predicts each band (and runs its obstacle contacts) just before it sweeps it,
+    /// when bands start on whole blocks: element-wise, so the same bits as a pass before the
+    /// sweep.
+    pub wave_can_predict: bool,
+}
+
+impl World {
+    /// The fused forms of this step for `n` particles: none with `check`; `self_collision`
+    /// when the step runs self-collision, `simd` when it runs the lanes.
+    pub(super) fn fusion(&self, check: bool, self_collision: bool, simd: bool, n: usize) -> Fusion {
+        let fuse = self.fuse_predict && !check;
+        let has_obstacles = !self.obstacles.is_empty();
+        let chunk_obstacles = has_obstacles && fuse && self.obstacles.runs_chunkwise();
+        let wave = simd
+            && fuse
+            && self.params.iterations == 1
+            && self.tethers.is_empty()
+            && self.scalps.is_empty()
+            && !self_collision
+            && (!has_obstacles || chunk_obstacles)
+            && self.distance.wave_ready(n);
+        Fusion {
+            fused_guard: self.params.guard && !check,
+            fuse_next: fuse && self.effects.wind.is_none() && self.wind.is_none(),
+            fused_mean: self_collision && fuse && !has_obstacles,
+            chunk_obstacles,
+            fuse_project: chunk_obstacles && self.scalps.is_empty() && !self_collision,
+            wave,
+            wave_can_predict: wave && self.distance.bands_on_blocks(),
+        }
+    }
+}
