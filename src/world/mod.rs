@@ -19,6 +19,7 @@ pub(crate) mod stages;
 pub mod step;
 pub mod strands;
 pub mod threads;
+mod update_pass;
 
 use std::sync::Arc;
 

@@ -37,17 +37,15 @@
 //!   kinematic pins land exactly on their targets                     [embed::kinematic]
 //! ```
 
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::AtomicU64;
 
-use crate::data::particles::{chunk_finite_simd, ParticleChunk, RawParticles, RawSaved};
+use crate::data::particles::ParticleChunk;
 use crate::error::{positive, Result, WeftError};
-use crate::integrate::wind::WindState;
-use crate::integrate::{predict, update, PredictParams};
+use crate::integrate::{predict, update};
 use crate::model::params::Method;
-use crate::obstacles::chunkwise::ChunkObstacles;
-use crate::obstacles::ObstacleSet;
 use crate::self_collision::mean::MeanParts;
 use crate::world::fusion::Fusion;
+use crate::world::update_pass::{add_mean, substep_predict, timed, SubstepPass};
 use crate::world::World;
 
 /// Index of the first entry below `n` that is not finite in any of `arrays`.
@@ -187,15 +185,16 @@ impl World {
             self.selfcol.record_start_state([&p.x, &p.y, &p.z], n, steps, parallel);
             self.clock.lap("self-collision measure");
         }
+        let fusion = self.fusion(check, sc.is_some(), simd, n);
         let Fusion {
             fused_guard,
-            fuse_next,
             fused_mean,
             chunk_obstacles,
             fuse_project,
             wave,
             wave_can_predict,
-        } = self.fusion(check, sc.is_some(), simd, n);
+            ..
+        } = fusion;
         // The clamp's mean velocity summed inside predict (`Fusion::fused_mean`) is
         // self-collision time: summed over the chunks, shared by the threads (like the
         // obstacles' velocity pass below), and added to the stage's.
@@ -311,89 +310,23 @@ impl World {
                 checkpoint!("self-collision", p.px, p.py, p.pz);
                 self.clock.lap("self-collision pairs");
             }
-            let damp = self.has_damping.then_some(&self.damp_factor[..]);
             if !check {
-                // update, the obstacle velocity pass and (last substep) the guard's check,
-                // chunk by chunk: element-wise, so the same bits as three passes
-                let last = fused_guard && s + 1 == n_sub;
-                let ahead = fuse_next && s + 1 < n_sub;
-                let finite = &all_finite;
-                // the next substep's contacts (the shapes placed at its end) when it is
-                // predicted here
-                let t_next = self.time + ((s + 2) as f64) * (h as f64);
-                // and this substep's contacts (the shapes placed at its end) when the wave
-                // predicts it, on the same slots
-                let t_now = self.time + ((s + 1) as f64) * (h as f64);
-                let mut co_now = None;
-                let stages = if chunk_obstacles && wave_predicts {
-                    let [now, next] = self.obstacles.chunkwise_at([t_now, t_next], h, n);
-                    co_now = Some(now);
-                    Obstacles::Chunkwise(next)
-                } else if chunk_obstacles {
-                    Obstacles::Chunkwise(self.obstacles.chunkwise(t_next, h, n))
-                } else if has_obstacles {
-                    Obstacles::Whole(&self.obstacles)
-                } else {
-                    Obstacles::None
+                let pass = SubstepPass {
+                    s,
+                    n_sub,
+                    h,
+                    inv_h2,
+                    n,
+                    simd,
+                    parallel,
+                    fusion,
+                    has_obstacles,
+                    wave_predicts,
+                    mean_sink,
+                    obstacle_ns: &obstacle_ns,
+                    all_finite: &all_finite,
                 };
-                let (particles, distance, backup) = (&mut self.particles, &mut self.distance, &mut self.backup);
-                // this substep's predict when the wave runs it (see `wave_predicts`), and the
-                // next substep's when this pass runs it (only without wind: the same settings)
-                let pp = substep_predict(h, &self.effects, self.wind.as_ref());
-                let mut run = |motion: &[([f32; 3], f32)]| {
-                    let body = |mut c: ParticleChunk<'_>| {
-                        if let (Obstacles::Chunkwise(co), true) = (&stages, fuse_project) {
-                            timed(&obstacle_ns, || co.project(&mut c, simd));
-                        }
-                        update(c.reborrow(), h, damp, simd);
-                        match &stages {
-                            Obstacles::Chunkwise(co) => timed(&obstacle_ns, || co.velocity(&mut c, simd)),
-                            Obstacles::Whole(o) => timed(&obstacle_ns, || o.velocity_pass_chunk(motion, &mut c, simd)),
-                            Obstacles::None => {}
-                        }
-                        if last {
-                            let real = n.saturating_sub(c.start).min(c.x.len());
-                            if !chunk_finite_simd(&c.state(), real) {
-                                finite.store(false, Ordering::Relaxed);
-                            }
-                        }
-                        if ahead {
-                            predict(c.reborrow(), &pp, simd);
-                            add_mean(mean_sink, &c, n, simd);
-                            if let Obstacles::Chunkwise(co) = &stages {
-                                timed(&obstacle_ns, || co.contacts(&mut c, simd));
-                            }
-                        }
-                    };
-                    if wave {
-                        let len = particles.padded_len();
-                        let saved = (wave_predicts && fused_guard && s == 0).then(|| RawSaved::new(backup, len));
-                        let raw = RawParticles::new(particles);
-                        // SAFETY (both closures): the wave hands each range to one call, before
-                        // the sweep reaches its particles or once it is done with them, while no
-                        // other task touches them.
-                        let predict_band = |r: std::ops::Range<usize>| {
-                            let mut c = unsafe { raw.chunk(r.clone()) };
-                            if let Some(saved) = &saved {
-                                c.save_state(unsafe { saved.range(r) });
-                            }
-                            predict(c.reborrow(), &pp, simd);
-                            if let Some(co) = &co_now {
-                                timed(&obstacle_ns, || co.contacts(&mut c, simd));
-                            }
-                        };
-                        let before: Option<&(dyn Fn(std::ops::Range<usize>) + Sync)> =
-                            if wave_predicts { Some(&predict_band) } else { None };
-                        distance.solve_wave(&raw, inv_h2, parallel, before, &|r| body(unsafe { raw.chunk(r) }));
-                    } else {
-                        particles.for_chunks(parallel, body);
-                    }
-                };
-                match &stages {
-                    Obstacles::Whole(o) => o.with_motion(run),
-                    _ => run(&[]),
-                }
-                predicted_ahead = ahead;
+                predicted_ahead = self.fused_update_pass(&pass);
                 self.clock.lap(if wave {
                     "distance constraints, update, obstacles, next predict (one wave)"
                 } else {
@@ -401,6 +334,7 @@ impl World {
                 });
                 continue;
             }
+            let damp = self.has_damping.then_some(&self.damp_factor[..]);
             self.particles.for_chunks(parallel, |c| update(c, h, damp, simd));
             let p = &self.particles;
             checkpoint!("update", p.x, p.y, p.z, p.vx, p.vy, p.vz);
@@ -433,45 +367,6 @@ impl World {
         } else {
             Ran::NonFinite
         }
-    }
-}
-
-/// How the update pass runs the obstacle stages of its chunks. It lives on the stack for one
-/// pass; boxing the large variant would allocate every substep.
-#[allow(clippy::large_enum_variant)]
-enum Obstacles<'a> {
-    /// No obstacle.
-    None,
-    /// All shapes: the projection, the velocity pass and the next contacts, chunk by chunk.
-    Chunkwise(ChunkObstacles<'a>),
-    /// The velocity pass only (the other stages run in passes of their own).
-    Whole(&'a ObstacleSet),
-}
-
-/// A substep's predict settings: gravity, drag and, when wind blows, its forces.
-fn substep_predict<'a>(h: f32, effects: &crate::Effects, wind: Option<&'a WindState>) -> PredictParams<'a> {
-    PredictParams {
-        h,
-        gravity: effects.gravity,
-        drag: effects.drag,
-        force: wind.map(|w| [&w.fx[..], &w.fy[..], &w.fz[..]]),
-    }
-}
-
-/// Runs `f` and adds the nanoseconds it took to `ns`.
-fn timed(ns: &AtomicU64, f: impl FnOnce()) {
-    let t0 = std::time::Instant::now();
-    f();
-    ns.fetch_add(t0.elapsed().as_nanos() as u64, Ordering::Relaxed);
-}
-
-/// Adds a chunk's predicted velocities to the mean-velocity sums, when they are kept, and
-/// the time it took to the nanoseconds counter beside them.
-fn add_mean(sink: Option<(&MeanParts, &AtomicU64)>, c: &crate::data::particles::ParticleChunk<'_>, n: usize, simd: bool) {
-    if let Some((m, ns)) = sink {
-        let t0 = std::time::Instant::now();
-        m.add(c.start, [&c.vx[..], &c.vy[..], &c.vz[..]], c.w, n, simd);
-        ns.fetch_add(t0.elapsed().as_nanos() as u64, Ordering::Relaxed);
     }
 }
 
