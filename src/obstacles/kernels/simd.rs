@@ -1,5 +1,5 @@
 //! Eight-lane (`f32x8`) versions of the obstacle response and velocity pass of
-//! [`obstacle_kernels`](super): [`resolve_simd`] is the twin of
+//! [`kernels`](super): [`resolve_simd`] is the twin of
 //! [`resolve_along_path`](crate::obstacles::kernels::resolve_along_path), [`velocity_pass_simd`] of
 //! [`velocity_pass`](crate::obstacles::kernels::velocity_pass).
 //!
@@ -12,7 +12,7 @@
 //! scalar ones, with no fused multiply-add, the clamp `t.clamp(0, 1)` is "below 0 -> 0, then
 //! above 1 -> 1" (NaN passes, as in `f32::clamp`) and the maxima of
 //! [`contact_velocity`](crate::obstacles::kernels::contact_velocity) are comparisons and choices, so both agree bit
-//! for bit (`obstacle_kernels_tests.rs`).
+//! for bit (`kernels/tests.rs`).
 
 use crate::data::lanes::{load, F32s, Vec3x8, LANES};
 use crate::obstacles::kernels::{block_touched, SlotBlocks, TOUCH_SLACK};
