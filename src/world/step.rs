@@ -320,7 +320,6 @@ impl World {
                     simd,
                     parallel,
                     fusion,
-                    has_obstacles,
                     wave_predicts,
                     mean_sink,
                     obstacle_ns: &obstacle_ns,

@@ -27,7 +27,6 @@ pub(super) struct SubstepPass<'a> {
     pub simd: bool,
     pub parallel: bool,
     pub fusion: Fusion,
-    pub has_obstacles: bool,
     /// Whether the wave predicts this substep (its bands, just before it sweeps them).
     pub wave_predicts: bool,
     /// Where the predict passes add the clamp's mean velocity, and their time.
@@ -63,7 +62,7 @@ impl World {
             Obstacles::Chunkwise(next)
         } else if u.fusion.chunk_obstacles {
             Obstacles::Chunkwise(self.obstacles.chunkwise(t_next, h, n))
-        } else if u.has_obstacles {
+        } else if !self.obstacles.is_empty() {
             Obstacles::Whole(&self.obstacles)
         } else {
             Obstacles::None
