@@ -18,13 +18,20 @@
 
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
-/// What the caller shares with its pollers.
+/// What the caller shares with its pollers. It lives on the caller's stack, beside the step's
+/// own locals; aligned and sized to two cache lines so that none of them shares its line: the
+/// pollers read `stop` in a loop, and a local written on that line would wait for the line on
+/// every store (false sharing).
 #[derive(Debug, Default)]
+#[repr(align(128))]
 struct Shared {
     stop: AtomicBool,
     /// Pollers running now.
     running: AtomicUsize,
 }
+
+// The flag has its lines to itself, whatever the build's stack layout.
+const _: () = assert!(std::mem::align_of::<Shared>() == 128 && std::mem::size_of::<Shared>() == 128);
 
 /// Sets the stop flag when dropped (when the call returns or unwinds).
 struct StopOnDrop<'a>(&'a AtomicBool);
