@@ -18,6 +18,10 @@
 //!   [`RETRY_AFTER`] steps, and at once when the world's shape changes (particles, substeps,
 //!   iterations, method, self-collision, obstacles).
 //!
+//! A fixed pool needs its cores: when one of them is busy with other work, a worker can be
+//! preempted in the middle of a pass and the step waits for it, so `threads = k > 1` can step
+//! several times slower than one thread; the measured choice then picks the caller's thread.
+//!
 //! Every choice gives the same bits (the kernels split their work into fixed chunks), so the
 //! choice changes the time of a step, never its result. A pool's other workers poll for work
 //! through the step's serial parts (`keep_awake`).
