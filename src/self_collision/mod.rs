@@ -379,3 +379,5 @@ mod metric;
 
 #[cfg(test)]
 mod contacts_tests;
+#[cfg(test)]
+mod runs_tests;
