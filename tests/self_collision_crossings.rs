@@ -45,18 +45,18 @@ fn the_fold_never_crosses() {
 }
 
 /// The first 150 steps (two and a half seconds, a turn and a quarter). Later, as the strip
-/// wraps tighter, today's pipeline lets it cross: `weft bench --self-collision` counts 24
+/// wraps tighter, the pipeline lets it cross: `weft bench --self-collision` counts 23
 /// crossings in 240 steps.
 #[test]
 fn the_twist_does_not_cross_in_its_first_150_steps() {
     assert_no_crossings("twist", 150);
 }
 
-/// Fails on today's pipeline: 380 crossings in 150 steps (the first at step 12, up to 25 a
-/// step while the strip collapses), with non-neighbours as close as 1.3 mm at a collision
-/// distance of 1 cm. Kept as the target, not weakened.
+/// Fails: the pipeline lets the strip's layers cross, 380 crossings in 150 steps (the first
+/// at step 12, up to 25 a step while the strip collapses), with non-neighbours as close as
+/// 1.3 mm at a collision distance of 1 cm. Kept as the target, not weakened.
 #[test]
-#[ignore = "today's pipeline lets the pile's layers cross (380 crossings in 150 steps)"]
+#[ignore = "the pipeline lets the pile's layers cross (380 crossings in 150 steps)"]
 fn the_pile_never_crosses() {
     assert_no_crossings("pile", 150);
 }

@@ -227,7 +227,7 @@ impl ClothDesc {
         let f = &self.fabric;
         // The shear diagonals' rest lengths are measured on the built grid, so a cloth whose
         // directions u and v are not perpendicular starts at rest too (s * sqrt 2 holds only for
-        // perpendicular directions; it used to be assumed and made such cloths move by themselves).
+        // perpendicular directions; assuming it would make such cloths move by themselves).
         let len = |a: [f32; 3]| (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
         let diag_down = s * len([u[0] + v[0], u[1] + v[1], u[2] + v[2]]);
         let diag_up = s * len([u[0] - v[0], u[1] - v[1], u[2] - v[2]]);

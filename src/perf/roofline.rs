@@ -7,7 +7,7 @@
 //! iteration read and write every prediction once (24 + 24 bytes a particle). The
 //! constraints of a grid cloth are implied by the grid and share their rest length and
 //! compliance per family, so no constraint data is compulsory: the count is a lower bound
-//! that any layout must pay, and what today's layout moves beyond it (indices, rest lengths,
+//! that any layout must pay, and what weft's layout moves beyond it (indices, rest lengths,
 //! compliances, multipliers) shows as a fraction below one.
 //!
 //! **Flops.** Per substep and particle, 18 (prediction `v += h g`, `p = x + h v`; update
