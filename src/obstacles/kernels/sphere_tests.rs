@@ -1,0 +1,123 @@
+//! The sphere's lane kernels: the pre-test that skips far blocks never rejects a contact and
+//! does reject far blocks; the lane contacts equal the scalar ones in every case.
+
+use super::*;
+
+/// A point at distance `r + off` from `center` in direction `dir` (normalised).
+fn around(center: [f32; 3], dir: (f32, f32, f32), r: f32, off: f32) -> [f32; 3] {
+    let l = (dir.0 * dir.0 + dir.1 * dir.1 + dir.2 * dir.2).sqrt().max(1e-3);
+    let d = [dir.0 / l, dir.1 / l, dir.2 / l];
+    [0, 1, 2].map(|k| center[k] + d[k] * (r + off))
+}
+
+proptest! {
+    /// The sphere pre-test: SIMD equals scalar, and a block it rejects gets no contact from
+    /// the full test (SIMD or scalar), for paths that start and end right around the sphere's
+    /// proximity and thickness shells, moving in and out, fast and slow, shifted or not.
+    #[test]
+    fn sphere_pretest_never_rejects_a_contact(
+        lanes in proptest::collection::vec(((-1.0f32..1.0, -1.0f32..1.0, -1.0f32..1.0), -0.05f32..0.08, (-1.0f32..1.0, -1.0f32..1.0, -1.0f32..1.0), -0.05f32..0.08, 0.0f32..0.02, 0.0f32..0.02), 24),
+        r in 0.2f32..1.0,
+        shift in (-0.01f32..0.01, -0.01f32..0.01, -0.01f32..0.01),
+    ) {
+        let center = [0.1, 0.4, -0.2];
+        let len = 4 * LANES;
+        let mut v: [Vec<f32>; 9] = std::array::from_fn(|_| vec![0.0; len]);
+        for (i, &(dx, ox, dp, op, th, extra)) in lanes.iter().enumerate() {
+            let (x, p) = (around(center, dx, r, ox), around(center, dp, r, op));
+            for k in 0..3 {
+                v[k][i] = x[k];
+                v[3 + k][i] = p[k];
+            }
+            v[6][i] = 1.0;
+            v[7][i] = th;
+            v[8][i] = th + extra;
+        }
+        let g = input_reach(&v, 8, lanes.len(), [shift.0, shift.1, shift.2]);
+        let sphere = Shape::Sphere { center, radius: r };
+        for b in 0..len / LANES {
+            let may = shape_may_touch_simd(&sphere, &g, b);
+            prop_assert_eq!(may, shape_may_touch_scalar(&sphere, &g, b));
+            let (mut a, mut c) = (vec![7.0; SLOT_BLOCK], vec![7.0; SLOT_BLOCK]);
+            shape_block_simd(&sphere, &g, b, &mut a);
+            shape_block_scalar(&sphere, &g, b, &mut c);
+            if !may {
+                prop_assert!(!block_nonzero(&a) && !block_nonzero(&c), "block {} rejected but {:?}", b, a);
+            }
+        }
+        prop_assert!(Shape::plane([0.0; 3], [0.0, 1.0, 0.0]).map(|p| shape_may_touch_simd(&p, &g, 0)).unwrap_or(false));
+    }
+}
+
+/// The pre-test rejects far blocks and keeps near ones (it is not vacuous), and the padding
+/// block of a cloth far from the sphere is rejected too.
+#[test]
+#[allow(clippy::needless_range_loop)] // `i` indexes nine arrays alike
+fn sphere_pretest_rejects_far_blocks_only() {
+    let len = 2 * LANES;
+    let mut v: [Vec<f32>; 9] = std::array::from_fn(|_| vec![0.0; len]);
+    for i in 0..len {
+        // block 0 rests 1 mm above the unit sphere's top, block 1 is 0.5 m above it
+        let y = if i < LANES { 1.001 } else { 1.5 };
+        v[1][i] = y;
+        v[4][i] = y - 1e-4;
+        v[6][i] = 1.0;
+        v[7][i] = 0.002;
+        v[8][i] = 0.005;
+        v[0][i] = 1e-3 * i as f32;
+        v[3][i] = 1e-3 * i as f32;
+    }
+    let g = input_reach(&v, 8, len, [0.0; 3]);
+    let sphere = Shape::Sphere {
+        center: [0.0; 3],
+        radius: 1.0,
+    };
+    assert!(shape_may_touch_simd(&sphere, &g, 0) && shape_may_touch_scalar(&sphere, &g, 0));
+    assert!(!shape_may_touch_simd(&sphere, &g, 1) && !shape_may_touch_scalar(&sphere, &g, 1));
+    let mut out = vec![0.0; SLOT_BLOCK];
+    shape_block_simd(&sphere, &g, 0, &mut out);
+    assert!(normals_set(&out), "the near block touches");
+}
+
+/// The sphere's SIMD contacts equal the scalar ones in every case the test tells apart, in one
+/// block: in proximity, predicted exactly at the centre (normal from the start, or `up` when
+/// the start is at the centre too), a path crossing the ball, a miss, and a pinned particle.
+#[test]
+fn sphere_lanes_equal_scalar_in_every_case() {
+    let c = [0.25f32, -0.5, 1.0];
+    let at = |d: [f32; 3]| [c[0] + d[0], c[1] + d[1], c[2] + d[2]];
+    // (start, prediction) per lane
+    let paths = [
+        (at([0.0, 1.3, 0.0]), at([0.01, 1.002, 0.0])), // proximity
+        (at([0.3, 0.4, 0.1]), c),                      // at the centre, normal from the start
+        (c, c),                                        // at the centre, start there too: up
+        (at([-1.5, 0.2, 0.0]), at([1.5, 0.25, 0.0])),  // crosses the ball
+        (at([0.0, 2.0, 0.0]), at([0.0, 1.9, 0.0])),    // a miss
+        (at([0.0, 1.2, 0.0]), at([0.0, -1.2, 0.0])),   // straight through the centre
+        (at([0.9, 0.0, 0.0]), at([0.99, 0.0, 0.0])),   // inside, near the surface
+        (at([0.0, 1.001, 0.0]), at([0.0, 1.0, 0.0])),  // pinned below
+    ];
+    let mut v: [Vec<f32>; 8] = std::array::from_fn(|_| vec![0.0; LANES]);
+    for (i, (x, p)) in paths.iter().enumerate() {
+        for k in 0..3 {
+            v[k][i] = x[k];
+            v[3 + k][i] = p[k];
+        }
+        v[6][i] = if i == 7 { 0.0 } else { 1.0 };
+        v[7][i] = 0.005;
+    }
+    let g = input(&v, LANES, [0.0; 3]);
+    let sphere = Shape::Sphere { center: c, radius: 1.0 };
+    let (mut a, mut s) = (vec![7.0; SLOT_BLOCK], vec![7.0; SLOT_BLOCK]);
+    shape_block_simd(&sphere, &g, 0, &mut a);
+    shape_block_scalar(&sphere, &g, 0, &mut s);
+    let bits = |o: &[f32]| o.iter().map(|f| f.to_bits()).collect::<Vec<_>>();
+    assert_eq!(bits(&a), bits(&s));
+    let normal = |l: usize| [3, 4, 5].map(|k| s[k * LANES + l]);
+    for l in [0, 1, 2, 3, 5, 6] {
+        assert_ne!(normal(l), [0.0; 3], "lane {l} touches");
+    }
+    assert_eq!(normal(2), [0.0, 1.0, 0.0], "start and prediction at the centre: up");
+    assert_eq!(normal(4), [0.0; 3], "the miss");
+    assert_eq!(normal(7), [0.0; 3], "pinned");
+}
