@@ -1,7 +1,7 @@
 //! Obstacles in the world: analytic [`Shape`](crate::model::shapes::Shape)s and triangle meshes, static or moving with a
 //! constant velocity, and their part of the step (Landovskaya, Landovsky & Frolovsky).
 //!
-//! Per substep of length `h` ending at time `t` (`src/world/step.rs`):
+//! Per substep of length `h` ending at time `t` (`src/world/step/`):
 //!
 //! 1. **Place.** Every moving obstacle is put at `start + u t` (meshes: the base mesh
 //!    translated, then the broadphase rebuilt, or refitted for a BVH). Positions are a

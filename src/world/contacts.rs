@@ -4,7 +4,7 @@
 //! drift `x_{n+1} = x_n + h v`. When the world has obstacles, self-collision or strands with
 //! scalps, that drift writes
 //! the prediction `p = x_n + h v` instead of `x`, and the collision stages of the XPBD step
-//! (`src/world/step.rs`) run on it exactly as they do after XPBD's constraint sweeps:
+//! (`src/world/step/`) run on it exactly as they do after XPBD's constraint sweeps:
 //!
 //! ```text
 //! obstacle contacts of x -> p, back along the path     [obstacles]         (if any)

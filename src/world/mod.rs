@@ -11,16 +11,13 @@ pub mod checkpoint;
 pub(crate) mod contacts;
 pub(crate) mod describe;
 pub(crate) mod forces;
-mod fusion;
 pub mod metrics;
 pub(crate) mod obstacles;
 pub(crate) mod self_collision;
 pub mod stage_clock;
-pub(crate) mod stages;
 pub mod step;
 pub mod strands;
 pub mod threads;
-mod update_pass;
 
 use std::sync::Arc;
 
@@ -50,7 +47,7 @@ pub struct World {
     pub(crate) damping_rate: Vec<f32>,
     pub(crate) has_damping: bool,
     /// Whether a substep's update pass also runs the next substep's predict, chunk by chunk
-    /// (`src/world/step.rs`; off only in tests that hold the fused path to the separate passes).
+    /// (`src/world/step/`; off only in tests that hold the fused path to the separate passes).
     pub(crate) fuse_predict: bool,
     pub(crate) damp_factor: Vec<f32>,
     pub(crate) damp_h: f32,

@@ -2,7 +2,7 @@
 //! stages of all-shape obstacles, the guard's finite check (last substep), the next
 //! substep's predict (and its obstacle contacts and clamp mean), chunk by chunk; as the
 //! sweep's wave when the step runs one. Element-wise, so the same bits as separate passes
-//! (`step_fusion_tests.rs`).
+//! (`fusion_tests.rs`).
 
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
@@ -12,7 +12,7 @@ use crate::integrate::{predict, update, PredictParams};
 use crate::obstacles::chunkwise::ChunkObstacles;
 use crate::obstacles::ObstacleSet;
 use crate::self_collision::mean::MeanParts;
-use crate::world::fusion::Fusion;
+use crate::world::step::fusion::Fusion;
 use crate::world::World;
 
 /// What the update pass of substep `s` of `n_sub` reads besides the world.

@@ -18,7 +18,7 @@
 //!     obstacle velocity pass: normal part, friction     [obstacles]        (if any)
 //!       (both chunk by chunk in one pass; the last substep's pass also checks that the
 //!        chunk's x, v are finite, for the guard)
-//!   Fused forms, the same bits (`world/fusion.rs` decides which run): obstacles that are
+//!   Fused forms, the same bits (`fusion.rs` decides which run): obstacles that are
 //!   all shapes run their contacts after each chunk's predict, their last projection before
 //!   its update and their velocity pass after it (`obstacles::chunkwise`); a world that is
 //!   one grid cloth swept once a substep runs the sweep and the update pass as one wave
@@ -37,6 +37,10 @@
 //!   kinematic pins land exactly on their targets                     [embed::kinematic]
 //! ```
 
+mod fusion;
+pub(crate) mod stages;
+mod update_pass;
+
 use std::sync::atomic::AtomicU64;
 
 use crate::data::particles::ParticleChunk;
@@ -44,8 +48,8 @@ use crate::error::{positive, Result, WeftError};
 use crate::integrate::{predict, update};
 use crate::model::params::Method;
 use crate::self_collision::mean::MeanParts;
-use crate::world::fusion::Fusion;
-use crate::world::update_pass::{add_mean, substep_predict, timed, SubstepPass};
+use crate::world::step::fusion::Fusion;
+use crate::world::step::update_pass::{add_mean, substep_predict, timed, SubstepPass};
 use crate::world::World;
 
 /// Index of the first entry below `n` that is not finite in any of `arrays`.
@@ -370,5 +374,4 @@ impl World {
 }
 
 #[cfg(test)]
-#[path = "step_fusion_tests.rs"]
 mod fusion_tests;

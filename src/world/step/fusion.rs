@@ -1,6 +1,6 @@
 //! Which of a step's passes run fused (the "fused forms" of the stage list in
 //! [`world::step`](super::step)): decided once a step from the world's state. Every fused form
-//! gives the same bits as its passes one after the other (`step_fusion_tests.rs`); none runs
+//! gives the same bits as its passes one after the other (`fusion_tests.rs`); none runs
 //! in the stage-by-stage replay of the guard (`check`), which needs every stage apart.
 
 use crate::world::World;
