@@ -160,8 +160,6 @@ pub(super) fn timed(ns: &AtomicU64, f: impl FnOnce()) {
 /// the time it took to the nanoseconds counter beside them.
 pub(super) fn add_mean(sink: Option<(&MeanParts, &AtomicU64)>, c: &crate::data::particles::ParticleChunk<'_>, n: usize, simd: bool) {
     if let Some((m, ns)) = sink {
-        let t0 = std::time::Instant::now();
-        m.add(c.start, [&c.vx[..], &c.vy[..], &c.vz[..]], c.w, n, simd);
-        ns.fetch_add(t0.elapsed().as_nanos() as u64, Ordering::Relaxed);
+        timed(ns, || m.add(c.start, [&c.vx[..], &c.vy[..], &c.vz[..]], c.w, n, simd));
     }
 }
