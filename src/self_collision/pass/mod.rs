@@ -16,6 +16,7 @@
 //! last pass it does not touch, each part its own.
 
 pub(crate) mod pairs;
+pub(crate) mod sums;
 
 use crate::data::exec::Exec;
 use rayon::prelude::*;
@@ -23,7 +24,8 @@ use rayon::prelude::*;
 use crate::data::lanes::{SharedVec3, Vec3x8, LANES};
 use crate::model::self_collision::Response;
 use crate::self_collision::pass::pairs::{PairContact, PairCtx, PairList};
-use crate::self_collision::response::{apply_runs, ApplyInput, ContactSums, SumRows};
+use crate::self_collision::pass::sums::{ContactSums, Record, SumRows, RECORD};
+use crate::self_collision::response::{apply_runs, ApplyInput};
 
 /// Pairs one parallel task tests in the pair pass. Small enough that a list of a few thousand
 /// pairs makes several tasks: the contacts crowd into some stretches of the list (the lower
@@ -94,9 +96,8 @@ pub(crate) struct ContactPass {
     near: Vec<Vec<(u32, u32)>>,
     /// Their contacts (computed in the parallel part), same layout.
     found: Vec<Vec<Option<PairContact>>>,
-    /// Sums and approaching counts of one particle while its contacts are added (zero
-    /// between passes).
-    acc: Vec<([f32; 11], f32)>,
+    /// Each particle's sums while its contacts are added (zero between passes).
+    acc: Vec<Record>,
     /// Blocks the last pass added a contact to, by part (see [`ContactPass::pair_pass`]).
     touched_parts: Vec<Vec<u32>>,
     /// All of them, ascending: their sums are the only non-zero ones.
@@ -118,7 +119,7 @@ impl ContactPass {
         for v in &mut self.pred {
             v.resize(len, 0.0);
         }
-        self.acc.resize(len, ([0.0; 11], 0.0));
+        self.acc.resize(len, [0.0; RECORD]);
         self.hit.resize(len / LANES, false);
         self.damping.clear();
         self.damping.extend((0..len).map(|i| damping.get(i).copied().unwrap_or(0.0)));
@@ -182,7 +183,7 @@ impl ContactPass {
             // One thread: each chunk's contacts are added as soon as they are found, while
             // they are in cache (the same order as below, so the same sums).
             let (near, found) = (&mut self.near[0], &mut self.found[0]);
-            let mut sums = PartSums::begin(0, &mut self.acc, &mut self.hit, &old);
+            let mut sums = PartSums::begin(0, &mut self.acc, &mut self.hit, &old, simd);
             for c in 0..chunks {
                 find(c, (&mut *near, &mut *found));
                 sums.add(near, found);
@@ -205,8 +206,8 @@ impl ContactPass {
         };
         let blocks = self.hit.len().div_ceil(parts).max(1);
         let (near, found) = (&self.near[..chunks], &self.found[..chunks]);
-        let part = |part: usize, acc: &mut [([f32; 11], f32)], hit: &mut [bool], rows: SumRows<'_>, touched: &mut Vec<u32>| {
-            let mut sums = PartSums::begin(part * blocks, acc, hit, &old);
+        let part = |part: usize, acc: &mut [Record], hit: &mut [bool], rows: SumRows<'_>, touched: &mut Vec<u32>| {
+            let mut sums = PartSums::begin(part * blocks, acc, hit, &old, simd);
             for (near, found) in near.iter().zip(found) {
                 sums.add(near, found);
             }
@@ -310,22 +311,24 @@ impl ContactPass {
 /// added in list order (see [`ContactPass::pair_pass`]).
 struct PartSums<'a> {
     b0: usize,
-    acc: &'a mut [([f32; 11], f32)],
+    acc: &'a mut [Record],
     hit: &'a mut [bool],
     /// The part's blocks of the last pass.
     mine: &'a [u32],
+    /// Store the touched blocks' sums with lane transposes (else record by record, the twin).
+    simd: bool,
 }
 
 impl<'a> PartSums<'a> {
     /// Starts the part of blocks from `b0` (as many as `hit` holds), `old` the blocks the last
     /// pass touched (ascending).
-    fn begin(b0: usize, acc: &'a mut [([f32; 11], f32)], hit: &'a mut [bool], old: &'a [u32]) -> Self {
+    fn begin(b0: usize, acc: &'a mut [Record], hit: &'a mut [bool], old: &'a [u32], simd: bool) -> Self {
         let mine = old.partition_point(|&b| (b as usize) < b0)..old.partition_point(|&b| (b as usize) < b0 + hit.len());
         let mine = &old[mine];
         for &b in mine {
             hit[b as usize - b0] = false;
         }
-        PartSums { b0, acc, hit, mine }
+        PartSums { b0, acc, hit, mine, simd }
     }
 
     /// Adds the contacts `found` of the pairs `near` to the sides that belong to the part.
@@ -335,9 +338,10 @@ impl<'a> PartSums<'a> {
         for (&(i, j), contact) in near.iter().zip(found) {
             let Some(c) = contact else { continue };
             for (side, a) in [(0, i as usize), (1, j as usize)] {
-                let Some((out, approaching)) = a.checked_sub(first_id).and_then(|k| self.acc.get_mut(k)) else {
+                let Some(rec) = a.checked_sub(first_id).and_then(|k| self.acc.get_mut(k)) else {
                     continue;
                 };
+                let (out, approaching) = split_record(rec);
                 if c.add_to(side, out, approaching) {
                     self.hit[(a - first_id) / LANES] = true;
                 }
@@ -357,13 +361,20 @@ impl<'a> PartSums<'a> {
         touched.clear();
         for (b, _) in self.hit.iter().enumerate().filter(|(_, h)| **h) {
             let run = &mut self.acc[b * LANES..(b + 1) * LANES];
-            rows.set_block(b, |l| {
-                let (mut out, approaching) = run[l];
-                PairCtx::finish(&mut out, approaching);
-                out
-            });
-            run.fill(([0.0; 11], 0.0));
+            for rec in run.iter_mut() {
+                let (out, approaching) = split_record(rec);
+                PairCtx::finish(out, *approaching);
+            }
+            rows.set_records(b, run, self.simd);
+            run.fill([0.0; RECORD]);
             touched.push((b0 + b) as u32);
         }
     }
+}
+
+/// The sums and the approaching count of a record.
+#[inline(always)]
+fn split_record(rec: &mut Record) -> (&mut [f32; 11], &mut f32) {
+    let (out, rest) = rec.split_at_mut(11);
+    (out.try_into().expect("eleven sums"), &mut rest[0])
 }

@@ -1,0 +1,179 @@
+//! The per-particle contact sums the pair pass leaves for the velocity correction
+//! ([`crate::self_collision::response`]): eleven arrays padded to the lane width, written a
+//! block of eight particles at a time from the records the pass adds contacts into.
+
+use crate::data::lanes::{store, F32s, LANES};
+
+/// Values of a particle's [`Record`]: its eleven sums and its approaching count.
+pub(crate) const RECORD: usize = 12;
+
+/// A particle's sums `[c(3), f(3), n(3), gap, count]` and approaching count, one record while
+/// the pass adds its contacts.
+pub(crate) type Record = [f32; RECORD];
+
+/// Per-particle contact sums from the pair pass, padded to the lane width.
+#[derive(Clone, Debug, Default)]
+pub struct ContactSums {
+    /// Position corrections, summed.
+    pub c: [Vec<f32>; 3],
+    /// Partners' displacements this substep, summed.
+    pub f: [Vec<f32>; 3],
+    /// Unit contact normals, summed.
+    pub n: [Vec<f32>; 3],
+    /// Signed gaps `dist - min_dist`, summed.
+    pub gap: Vec<f32>,
+    /// Number of contacts.
+    pub count: Vec<f32>,
+}
+
+/// The arrays of a [`ContactSums`] in the order of its eleven-value layout, all `len` long
+/// ([`ContactSums::rows`]).
+pub(crate) struct SumRows<'a> {
+    len: usize,
+    a: [&'a mut [f32]; 11],
+}
+
+impl<'a> SumRows<'a> {
+    /// The rows `..at` and `at..` (`at` clamped to the length), for parts written in parallel.
+    pub(crate) fn split_at(self, at: usize) -> (SumRows<'a>, SumRows<'a>) {
+        let at = at.min(self.len);
+        let mut lo: [&'a mut [f32]; 11] = Default::default();
+        let mut hi: [&'a mut [f32]; 11] = Default::default();
+        for ((a, l), h) in self.a.into_iter().zip(&mut lo).zip(&mut hi) {
+            (*l, *h) = a.split_at_mut(at);
+        }
+        (SumRows { len: at, a: lo }, SumRows { len: self.len - at, a: hi })
+    }
+
+    /// Stores block `b`'s sums from its eight records (the first eleven values of each). With
+    /// `simd`, two 8 x 8 lane transposes (records' values 0..8 and 4..12) and a vector store a
+    /// row; else [`SumRows::set_block`] value by value (the twin: the same values either way). A
+    /// block past the arrays is ignored.
+    #[inline]
+    pub(crate) fn set_records(&mut self, b: usize, recs: &[Record], simd: bool) {
+        let k = b * LANES;
+        if !(simd && recs.len() == LANES && k + LANES <= self.len) {
+            self.set_block(b, |l| std::array::from_fn(|c| recs[l][c]));
+            return;
+        }
+        let half = |from: usize| {
+            let rows: [F32s; LANES] = std::array::from_fn(|l| {
+                let a: [f32; LANES] = recs[l][from..from + LANES].try_into().expect("eight values");
+                F32s::from(a)
+            });
+            F32s::transpose(rows)
+        };
+        let (lo, hi) = (half(0), half(4));
+        for (c, row) in self.a.iter_mut().enumerate() {
+            store(row, k, if c < LANES { lo[c] } else { hi[c - 4] });
+        }
+    }
+
+    /// Stores the rows of block `b` (particles `b * LANES ..`, local to these rows) from
+    /// `v(l)` for lane `l`; a block past the arrays is ignored.
+    #[inline]
+    pub(crate) fn set_block(&mut self, b: usize, v: impl Fn(usize) -> [f32; 11]) {
+        let k = b * LANES;
+        if k + LANES <= self.len {
+            let rows: [[f32; 11]; LANES] = std::array::from_fn(v);
+            for (c, a) in self.a.iter_mut().enumerate() {
+                for (d, r) in a[k..k + LANES].iter_mut().zip(&rows) {
+                    *d = r[c];
+                }
+            }
+        }
+    }
+}
+
+impl ContactSums {
+    /// Sums for `len` particles (a multiple of the lane width), all zero.
+    pub fn new(len: usize) -> Self {
+        let z = || vec![0.0; len];
+        ContactSums {
+            c: [z(), z(), z()],
+            f: [z(), z(), z()],
+            n: [z(), z(), z()],
+            gap: z(),
+            count: z(),
+        }
+    }
+
+    /// The eleven arrays cut to their common length, for the pair pass's block stores
+    /// ([`SumRows::set_block`]), split into parts with [`SumRows::split_at`].
+    pub(crate) fn rows(&mut self) -> SumRows<'_> {
+        let len = self
+            .c
+            .iter()
+            .chain(&self.f)
+            .chain(&self.n)
+            .chain([&self.gap, &self.count])
+            .map(Vec::len)
+            .min()
+            .unwrap_or(0);
+        let [c0, c1, c2] = &mut self.c;
+        let [f0, f1, f2] = &mut self.f;
+        let [n0, n1, n2] = &mut self.n;
+        SumRows {
+            len,
+            a: [c0, c1, c2, f0, f1, f2, n0, n1, n2, &mut self.gap, &mut self.count].map(|v| &mut v[..len]),
+        }
+    }
+
+    /// Stores particle `k`'s sums from one array laid out `c (3), f (3), n (3), gap, count`.
+    #[inline]
+    pub fn set(&mut self, k: usize, v: &[f32; 11]) {
+        for a in 0..3 {
+            self.c[a][k] = v[a];
+            self.f[a][k] = v[3 + a];
+            self.n[a][k] = v[6 + a];
+        }
+        self.gap[k] = v[9];
+        self.count[k] = v[10];
+    }
+
+    /// Number of entries.
+    pub fn len(&self) -> usize {
+        self.count.len()
+    }
+
+    /// Whether there are no entries.
+    pub fn is_empty(&self) -> bool {
+        self.count.is_empty()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The touched blocks' sums stored with lane transposes equal the value-by-value store, bit
+    /// for bit (signed zeros, NaN payloads and subnormals included), in every block of a part's
+    /// rows; a block past the rows is ignored by both.
+    #[test]
+    fn block_records_store_the_same_bits_by_lanes_and_one_by_one() {
+        let mut r = crate::test_rng::signed(77);
+        let specials = [-0.0f32, f32::from_bits(0x7fc0_1234), f32::from_bits(1), f32::INFINITY];
+        let len = 5 * LANES;
+        let recs: Vec<Record> = (0..len)
+            .map(|i| std::array::from_fn(|c| if (i + c) % 13 == 0 { specials[(i + c) % 4] } else { r() }))
+            .collect();
+        let store = |simd: bool| {
+            let mut s = ContactSums::new(len);
+            let mut rows = s.rows();
+            for b in 0..=len / LANES {
+                let run = &recs[(b * LANES).min(len - LANES)..][..LANES];
+                rows.set_records(b, run, simd);
+            }
+            let all = [
+                &s.c[0], &s.c[1], &s.c[2], &s.f[0], &s.f[1], &s.f[2], &s.n[0], &s.n[1], &s.n[2], &s.gap, &s.count,
+            ];
+            all.iter().flat_map(|a| a.iter().map(|v| v.to_bits())).collect::<Vec<u32>>()
+        };
+        let lanes = store(true);
+        assert_eq!(lanes, store(false));
+        // Row `c` of particle `k` holds value `c` of its record.
+        for (c, row) in lanes.chunks(len).enumerate() {
+            assert!(row.iter().zip(&recs).all(|(got, rec)| *got == rec[c].to_bits()), "row {c}");
+        }
+    }
+}
