@@ -30,8 +30,22 @@ pub struct SelfCollisionStats {
     pub failed_steps: u64,
     /// The error of the last such step.
     pub last_error: Option<String>,
+    /// Pairs in the step's lists, averaged over the steps that built them: what each substep's
+    /// pair pass tests.
+    pub pairs_per_step: f64,
+    /// Pairs the pair pass found in contact, averaged over its substeps: what it adds to the
+    /// sums and the correction applies.
+    pub contacts_per_substep: f64,
     #[serde(skip)]
     sum_pct: f64,
+    #[serde(skip)]
+    sum_pairs: f64,
+    #[serde(skip)]
+    listed_steps: u64,
+    #[serde(skip)]
+    sum_contacts: f64,
+    #[serde(skip)]
+    passes: u64,
 }
 
 /// The self-collision time split by phase, s (summed over the steps; the speed clamp is the
@@ -59,6 +73,20 @@ impl SelfCollisionStats {
         self.average_pct = self.sum_pct / self.measured as f64;
         self.max_pct = self.max_pct.max(pct);
         self.last_pct = pct;
+    }
+
+    /// Counts a step's lists of `pairs` pairs.
+    pub(crate) fn record_pairs(&mut self, pairs: usize) {
+        self.listed_steps += 1;
+        self.sum_pairs += pairs as f64;
+        self.pairs_per_step = self.sum_pairs / self.listed_steps as f64;
+    }
+
+    /// Counts a pair pass that found `contacts` pairs in contact.
+    pub(crate) fn record_contacts(&mut self, contacts: usize) {
+        self.passes += 1;
+        self.sum_contacts += contacts as f64;
+        self.contacts_per_substep = self.sum_contacts / self.passes as f64;
     }
 
     /// Mean self-collision time per step, ms.

@@ -92,6 +92,29 @@ fn assert_same_bits(got: &[[f32; 11]], want: &[[f32; 11]], p: Option<(&Positions
     }
 }
 
+/// Pairs in contact by the reference's one-sided test, tried from each free end (every pair
+/// tested, rest rule applied): what the pass's contact count must be.
+fn reference_contacts(data: &SelfCollisionData, x: &[Vec<f32>; 3], p: &[Vec<f32>; 3], w: &[f32], n: usize) -> usize {
+    let a = data.active().unwrap();
+    let ctx = PairCtx {
+        x: [&x[0], &x[1], &x[2]],
+        p: [&p[0], &p[1], &p[2]],
+        w,
+        rest4: &data.rest4,
+        d: a.d,
+        response: a.response,
+    };
+    let adds = |i: usize, j: usize| {
+        let (mut out, mut approaching) = ([0.0f32; 11], 0.0f32);
+        ctx.add_contact(i, j, &mut out, &mut approaching);
+        out[10] > 0.0
+    };
+    (0..n)
+        .flat_map(|i| (i + 1..n).map(move |j| (i, j)))
+        .filter(|&(i, j)| !rest_skipped(&data.rest, &data.cloth_of, i, j, a.skip) && (adds(i, j) || adds(j, i)))
+        .count()
+}
+
 /// The reference: every pair tested (no broadphase, rest rule applied), the kernel run on all
 /// particles.
 #[allow(clippy::type_complexity)]
@@ -172,6 +195,13 @@ fn compact_step_equals_recomputation_from_scratch() {
             }
         }
         assert!(data.pair_count() > 0);
+        // Every run above listed the same pairs and found the same contacts: the means are
+        // those of one pass.
+        let st = &data.stats;
+        assert_eq!(st.pairs_per_step, data.pair_count() as f64, "case {case}");
+        let contacts = reference_contacts(&data, &x, &p, &w, n);
+        assert!(contacts > 0);
+        assert_eq!(st.contacts_per_substep, contacts as f64, "case {case}");
     }
 }
 
@@ -368,52 +398,13 @@ fn contacts_added_in_parallel_parts_equal_the_serial_pass() {
         contacts as usize >= crate::self_collision::pass::PARALLEL_CONTACTS,
         "{contacts} contacts"
     );
+    let counted = data.state.as_ref().unwrap().pass.contacts();
+    assert_eq!(counted, reference_contacts(&data, &x, &p, &w, n));
     for threads in [2, 3] {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         let (got_p, got) = pool.install(|| compact(&mut data, &x, &p, &w, n, Exec::Parallel));
         assert_same_bits(&got, &want, Some((&got_p, &want_p)), n, &format!("{threads} threads"));
+        // The parts count each contact once, by the part that holds its `i`.
+        assert_eq!(data.state.as_ref().unwrap().pass.contacts(), counted, "{threads} threads");
     }
-}
-
-/// The particles' travels: the floor at rest; `TRAVEL_GROWTH` times the speed relative to
-/// the free particles' mean over a step, or the mean's speed if larger (a pinned particle at
-/// rest while the others fall); the setting's bound for fast or non-finite velocities, each
-/// particle its own; and the query reach follows the largest while the rest-neighbour radius
-/// keeps the setting's.
-#[test]
-fn step_travel_follows_the_velocities() {
-    let mut rng = signed(7);
-    let (mut data, _) = folded(4, 4, 0.01, 0.02, 0.0, &mut rng);
-    data.config = Some(SelfCollision::default());
-    let n = 16;
-    let d = data.distance();
-    let mut w = vec![1.0f32; n];
-    w[0] = 0.0;
-    let travel = |data: &mut SelfCollisionData, vy: &[f32], dt: f32| {
-        let zero = vec![0.0f32; n];
-        data.adapt_travel([&zero, vy, &zero], &w, n, dt, Exec::Parallel);
-        data.step_travel().unwrap()
-    };
-    assert_eq!(data.step_travel(), None);
-    assert_eq!(travel(&mut data, &[0.0; 16], 0.01), TRAVEL_FLOOR);
-    // The free particles fall at 1 m/s, the pinned one stays: u = 1 m/s.
-    let mut vy = vec![-1.0f32; n];
-    vy[0] = 0.0;
-    let t = travel(&mut data, &vy, 0.004);
-    assert!((t - TRAVEL_GROWTH * 0.004 / d).abs() < 1e-5, "{t}");
-    assert!(data.step_travels(n).iter().all(|&e| e == t));
-    let a = data.active().unwrap();
-    assert_eq!(a.travel, t);
-    assert_eq!(a.q, d + (t + t) * d);
-    assert_eq!(a.skip, SelfCollision::default().rest_skip_factor() * d);
-    assert_eq!(travel(&mut data, &vy, 1.0), SelfCollision::default().travel);
-    // One fast particle: its own travel is the bound, the others keep theirs (the mean's
-    // speed, 5/3 m/s, above theirs relative to it).
-    vy[3] = -11.0;
-    assert_eq!(travel(&mut data, &vy, 0.002), SelfCollision::default().travel);
-    let each = data.step_travels(n).to_vec();
-    assert!(each[3] == 1.0 && each[4] < 1.0 && each[4] > TRAVEL_FLOOR, "{each:?}");
-    vy[5] = f32::NAN;
-    assert_eq!(travel(&mut data, &vy, 0.004), SelfCollision::default().travel);
-    assert_eq!(data.step_travels(n)[5], 1.0);
 }

@@ -262,6 +262,7 @@ impl SelfCollisionData {
         }
         if let Some(st) = &mut self.state {
             st.pass.prepare(n, damping);
+            self.stats.record_pairs(st.lists.total());
         }
         let ph = &mut self.stats.phases;
         ph.step_start_s += t0.elapsed().as_secs_f64();
@@ -305,6 +306,7 @@ impl SelfCollisionData {
         };
         st.pass.pair_pass(&ctx, st.rows.list(&st.lists.ids), exec);
         self.stats.phases.pairs_s += t0.elapsed().as_secs_f64();
+        self.stats.record_contacts(st.pass.contacts());
     }
 
     /// The velocity-correction kernel on the blocks the pair pass touched, on the predicted

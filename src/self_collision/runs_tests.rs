@@ -72,8 +72,9 @@ fn derived_box_centres_equal_the_kept_copy() {
     }
 }
 
-/// The fold at 48 x 48 (its pair list spans several chunks once folded, so the pass runs in
-/// parallel): 1 and 2 threads and the scalar backend (serial) give the same bits every step.
+/// The fold at 64 x 64 (its pair list spans several chunks once folded, so the pass runs in
+/// parallel): 1 and 2 threads and the scalar backend (serial) give the same bits every step,
+/// and count the same pairs and contacts.
 #[test]
 fn fold_with_parallel_pair_chunks_is_bitwise_on_any_thread_count() {
     let make = |threads: usize, backend: crate::Backend| {
@@ -104,4 +105,17 @@ fn fold_with_parallel_pair_chunks_is_bitwise_on_any_thread_count() {
         }
     }
     assert!(ranged > 4, "the pair list spanned several chunks in {ranged} steps");
+    // The lists' and the contacts' means count the same pairs whichever path the pass took.
+    let st = one.self_collision_stats();
+    assert!(
+        st.contacts_per_substep > 0.0 && st.contacts_per_substep < st.pairs_per_step,
+        "{st:?}"
+    );
+    for w in &others {
+        let o = w.self_collision_stats();
+        assert_eq!(
+            (o.pairs_per_step, o.contacts_per_substep),
+            (st.pairs_per_step, st.contacts_per_substep)
+        );
+    }
 }

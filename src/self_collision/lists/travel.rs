@@ -195,6 +195,7 @@ impl Tally {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::self_collision::{SelfCollision, SelfCollisionData};
     use crate::test_rng::signed;
 
     /// The lanes, the scalar twin and the parallel chunks give the same travels and tallies,
@@ -280,5 +281,49 @@ mod tests {
         assert_eq!(members(&[1.0, 1.0, inside, inside, inside]), edge);
         assert_eq!(members(&[inside; 5]), inside, "capped at the largest travel");
         assert_eq!(members(&[]), TRAVEL_FLOOR);
+    }
+
+    /// The particles' travels: the floor at rest; `TRAVEL_GROWTH` times the speed relative to
+    /// the free particles' mean over a step, or the mean's speed if larger (a pinned particle at
+    /// rest while the others fall); the setting's bound for fast or non-finite velocities, each
+    /// particle its own; and the query reach follows the largest while the rest-neighbour radius
+    /// keeps the setting's.
+    #[test]
+    fn step_travel_follows_the_velocities() {
+        let mut data = SelfCollisionData::default();
+        let rest: Vec<[f32; 3]> = (0..16).map(|i| [(i % 4) as f32 * 0.01, 0.0, (i / 4) as f32 * 0.01]).collect();
+        data.add_cloth(&rest, 0, 0.01, 0.01);
+        data.config = Some(SelfCollision::default());
+        let n = 16;
+        let d = data.distance();
+        let mut w = vec![1.0f32; n];
+        w[0] = 0.0;
+        let travel = |data: &mut SelfCollisionData, vy: &[f32], dt: f32| {
+            let zero = vec![0.0f32; n];
+            data.adapt_travel([&zero, vy, &zero], &w, n, dt, Exec::Parallel);
+            data.step_travel().unwrap()
+        };
+        assert_eq!(data.step_travel(), None);
+        assert_eq!(travel(&mut data, &[0.0; 16], 0.01), TRAVEL_FLOOR);
+        // The free particles fall at 1 m/s, the pinned one stays: u = 1 m/s.
+        let mut vy = vec![-1.0f32; n];
+        vy[0] = 0.0;
+        let t = travel(&mut data, &vy, 0.004);
+        assert!((t - TRAVEL_GROWTH * 0.004 / d).abs() < 1e-5, "{t}");
+        assert!(data.step_travels(n).iter().all(|&e| e == t));
+        let a = data.active().unwrap();
+        assert_eq!(a.travel, t);
+        assert_eq!(a.q, d + (t + t) * d);
+        assert_eq!(a.skip, SelfCollision::default().rest_skip_factor() * d);
+        assert_eq!(travel(&mut data, &vy, 1.0), SelfCollision::default().travel);
+        // One fast particle: its own travel is the bound, the others keep theirs (the mean's
+        // speed, 5/3 m/s, above theirs relative to it).
+        vy[3] = -11.0;
+        assert_eq!(travel(&mut data, &vy, 0.002), SelfCollision::default().travel);
+        let each = data.step_travels(n).to_vec();
+        assert!(each[3] == 1.0 && each[4] < 1.0 && each[4] > TRAVEL_FLOOR, "{each:?}");
+        vy[5] = f32::NAN;
+        assert_eq!(travel(&mut data, &vy, 0.004), SelfCollision::default().travel);
+        assert_eq!(data.step_travels(n)[5], 1.0);
     }
 }

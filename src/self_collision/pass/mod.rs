@@ -24,7 +24,7 @@ use rayon::prelude::*;
 use crate::data::lanes::{SharedVec3, Vec3x8, LANES};
 use crate::model::self_collision::Response;
 use crate::self_collision::pass::pairs::{PairContact, PairCtx, PairList};
-use crate::self_collision::pass::sums::{ContactSums, Record, SumRows, RECORD};
+use crate::self_collision::pass::sums::{ContactSums, PartSums, Record, SumRows, RECORD};
 use crate::self_collision::response::{apply_runs, ApplyInput};
 
 /// Pairs one parallel task tests in the pair pass. Small enough that a list of a few thousand
@@ -104,6 +104,10 @@ pub(crate) struct ContactPass {
     touched: Vec<u32>,
     /// Whether each block is in `touched`.
     hit: Vec<bool>,
+    /// Pairs in contact the last pass found (with at least one free particle), and each
+    /// part's share of them (the pairs whose `i` it holds).
+    contacts: usize,
+    part_contacts: Vec<usize>,
 }
 
 impl ContactPass {
@@ -137,6 +141,11 @@ impl ContactPass {
     #[cfg(test)]
     pub(crate) fn sums(&self) -> &ContactSums {
         &self.sums
+    }
+
+    /// Number of pairs the last pass found in contact.
+    pub(crate) fn contacts(&self) -> usize {
+        self.contacts
     }
 
     /// Number of blocks the last pass wrote contacts to.
@@ -188,7 +197,7 @@ impl ContactPass {
                 find(c, (&mut *near, &mut *found));
                 sums.add(near, found);
             }
-            sums.finish(self.sums.rows(), &mut self.touched_parts[0]);
+            self.contacts = sums.finish(self.sums.rows(), &mut self.touched_parts[0]);
             self.collect_touched(old, 1);
             return;
         }
@@ -211,10 +220,15 @@ impl ContactPass {
             for (near, found) in near.iter().zip(found) {
                 sums.add(near, found);
             }
-            sums.finish(rows, touched);
+            sums.finish(rows, touched)
         };
         self.touched_parts.resize_with(parts.max(self.touched_parts.len()), Vec::new);
+        self.part_contacts.resize(parts.max(self.part_contacts.len()), 0);
         let touched_parts = &mut self.touched_parts[..parts];
+        let counts = &mut self.part_contacts[..parts];
+        // A few particles may make fewer chunks of blocks than parts: the others add nothing.
+        touched_parts.iter_mut().for_each(Vec::clear);
+        counts.fill(0);
         let mut rows = self.sums.rows();
         if parts > 1 {
             let mut split: [Option<SumRows<'_>>; MAX_PARTS] = Default::default();
@@ -228,15 +242,17 @@ impl ContactPass {
                 .zip(self.hit.par_chunks_mut(blocks))
                 .zip(split.par_iter_mut())
                 .zip(touched_parts.par_iter_mut())
+                .zip(counts.par_iter_mut())
                 .enumerate()
-                .for_each(|(p, (((acc, hit), rows), t))| {
+                .for_each(|(p, ((((acc, hit), rows), t), count))| {
                     if let Some(rows) = rows.take() {
-                        part(p, acc, hit, rows, t);
+                        *count = part(p, acc, hit, rows, t);
                     }
                 });
         } else {
-            part(0, &mut self.acc, &mut self.hit, rows, &mut touched_parts[0]);
+            counts[0] = part(0, &mut self.acc, &mut self.hit, rows, &mut touched_parts[0]);
         }
+        self.contacts = counts.iter().sum();
         self.collect_touched(old, parts);
     }
 
@@ -305,76 +321,4 @@ impl ContactPass {
             apply_runs(&inp(x, w, v), [px, py, pz], runs, ap.response, simd);
         }
     }
-}
-
-/// The sums of one part of the particles (whole blocks from `b0`) while its contacts are
-/// added in list order (see [`ContactPass::pair_pass`]).
-struct PartSums<'a> {
-    b0: usize,
-    acc: &'a mut [Record],
-    hit: &'a mut [bool],
-    /// The part's blocks of the last pass.
-    mine: &'a [u32],
-    /// Store the touched blocks' sums with lane transposes (else record by record, the twin).
-    simd: bool,
-}
-
-impl<'a> PartSums<'a> {
-    /// Starts the part of blocks from `b0` (as many as `hit` holds), `old` the blocks the last
-    /// pass touched (ascending).
-    fn begin(b0: usize, acc: &'a mut [Record], hit: &'a mut [bool], old: &'a [u32], simd: bool) -> Self {
-        let mine = old.partition_point(|&b| (b as usize) < b0)..old.partition_point(|&b| (b as usize) < b0 + hit.len());
-        let mine = &old[mine];
-        for &b in mine {
-            hit[b as usize - b0] = false;
-        }
-        PartSums { b0, acc, hit, mine, simd }
-    }
-
-    /// Adds the contacts `found` of the pairs `near` to the sides that belong to the part.
-    #[inline]
-    fn add(&mut self, near: &[(u32, u32)], found: &[Option<PairContact>]) {
-        let first_id = self.b0 * LANES;
-        for (&(i, j), contact) in near.iter().zip(found) {
-            let Some(c) = contact else { continue };
-            for (side, a) in [(0, i as usize), (1, j as usize)] {
-                let Some(rec) = a.checked_sub(first_id).and_then(|k| self.acc.get_mut(k)) else {
-                    continue;
-                };
-                let (out, approaching) = split_record(rec);
-                if c.add_to(side, out, approaching) {
-                    self.hit[(a - first_id) / LANES] = true;
-                }
-            }
-        }
-    }
-
-    /// Zeroes the last pass's blocks this one did not touch, stores the sums of the touched
-    /// blocks into `rows` (the part's) and lists them in `touched`.
-    fn finish(self, mut rows: SumRows<'_>, touched: &mut Vec<u32>) {
-        let b0 = self.b0;
-        for &b in self.mine {
-            if !self.hit[b as usize - b0] {
-                rows.set_block(b as usize - b0, |_| [0.0; 11]);
-            }
-        }
-        touched.clear();
-        for (b, _) in self.hit.iter().enumerate().filter(|(_, h)| **h) {
-            let run = &mut self.acc[b * LANES..(b + 1) * LANES];
-            for rec in run.iter_mut() {
-                let (out, approaching) = split_record(rec);
-                PairCtx::finish(out, *approaching);
-            }
-            rows.set_records(b, run, self.simd);
-            run.fill([0.0; RECORD]);
-            touched.push((b0 + b) as u32);
-        }
-    }
-}
-
-/// The sums and the approaching count of a record.
-#[inline(always)]
-fn split_record(rec: &mut Record) -> (&mut [f32; 11], &mut f32) {
-    let (out, rest) = rec.split_at_mut(11);
-    (out.try_into().expect("eleven sums"), &mut rest[0])
 }

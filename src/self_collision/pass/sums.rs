@@ -1,8 +1,10 @@
 //! The per-particle contact sums the pair pass leaves for the velocity correction
 //! ([`crate::self_collision::response`]): eleven arrays padded to the lane width, written a
-//! block of eight particles at a time from the records the pass adds contacts into.
+//! block of eight particles at a time from the records one part of the particles adds its
+//! contacts into ([`PartSums`]).
 
 use crate::data::lanes::{store, F32s, LANES};
+use crate::self_collision::pass::pairs::{PairContact, PairCtx};
 
 /// Values of a particle's [`Record`]: its eleven sums and its approaching count.
 pub(crate) const RECORD: usize = 12;
@@ -140,6 +142,91 @@ impl ContactSums {
     pub fn is_empty(&self) -> bool {
         self.count.is_empty()
     }
+}
+
+/// The sums of one part of the particles (whole blocks from `b0`) while its contacts are
+/// added in list order (see `ContactPass::pair_pass`).
+pub(crate) struct PartSums<'a> {
+    b0: usize,
+    acc: &'a mut [Record],
+    hit: &'a mut [bool],
+    /// The part's blocks of the last pass.
+    mine: &'a [u32],
+    /// Store the touched blocks' sums with lane transposes (else record by record, the twin).
+    simd: bool,
+    /// Contacts whose `i` the part holds.
+    contacts: usize,
+}
+
+impl<'a> PartSums<'a> {
+    /// Starts the part of blocks from `b0` (as many as `hit` holds), `old` the blocks the last
+    /// pass touched (ascending).
+    pub(crate) fn begin(b0: usize, acc: &'a mut [Record], hit: &'a mut [bool], old: &'a [u32], simd: bool) -> Self {
+        let mine = old.partition_point(|&b| (b as usize) < b0)..old.partition_point(|&b| (b as usize) < b0 + hit.len());
+        let mine = &old[mine];
+        for &b in mine {
+            hit[b as usize - b0] = false;
+        }
+        PartSums {
+            b0,
+            acc,
+            hit,
+            mine,
+            simd,
+            contacts: 0,
+        }
+    }
+
+    /// Adds the contacts `found` of the pairs `near` to the sides that belong to the part.
+    #[inline]
+    pub(crate) fn add(&mut self, near: &[(u32, u32)], found: &[Option<PairContact>]) {
+        let first_id = self.b0 * LANES;
+        for (&(i, j), contact) in near.iter().zip(found) {
+            let Some(c) = contact else { continue };
+            for (side, a) in [(0, i as usize), (1, j as usize)] {
+                let Some(rec) = a.checked_sub(first_id).and_then(|k| self.acc.get_mut(k)) else {
+                    continue;
+                };
+                // Each contact counted once, by the part that holds its `i`.
+                self.contacts += usize::from(side == 0);
+                let (out, approaching) = split_record(rec);
+                if c.add_to(side, out, approaching) {
+                    self.hit[(a - first_id) / LANES] = true;
+                }
+            }
+        }
+    }
+
+    /// Zeroes the last pass's blocks this one did not touch, stores the sums of the touched
+    /// blocks into `rows` (the part's) and lists them in `touched`; returns the part's
+    /// contacts.
+    pub(crate) fn finish(self, mut rows: SumRows<'_>, touched: &mut Vec<u32>) -> usize {
+        let b0 = self.b0;
+        for &b in self.mine {
+            if !self.hit[b as usize - b0] {
+                rows.set_block(b as usize - b0, |_| [0.0; 11]);
+            }
+        }
+        touched.clear();
+        for (b, _) in self.hit.iter().enumerate().filter(|(_, h)| **h) {
+            let run = &mut self.acc[b * LANES..(b + 1) * LANES];
+            for rec in run.iter_mut() {
+                let (out, approaching) = split_record(rec);
+                PairCtx::finish(out, *approaching);
+            }
+            rows.set_records(b, run, self.simd);
+            run.fill([0.0; RECORD]);
+            touched.push((b0 + b) as u32);
+        }
+        self.contacts
+    }
+}
+
+/// The sums and the approaching count of a record.
+#[inline(always)]
+fn split_record(rec: &mut Record) -> (&mut [f32; 11], &mut f32) {
+    let (out, rest) = rec.split_at_mut(11);
+    (out.try_into().expect("eleven sums"), &mut rest[0])
 }
 
 #[cfg(test)]

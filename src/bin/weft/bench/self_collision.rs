@@ -38,6 +38,12 @@ struct SelfCollisionFigure {
     max_violation_m: f64,
     /// Layer crossings summed over the steps (`self_collision::audit::count_crossings`).
     crossings: u64,
+    /// Pairs in the step's lists per particle, averaged over the steps: what each substep's
+    /// pair pass tests.
+    pairs_per_particle: f64,
+    /// Pairs in contact per particle, averaged over the substeps: what the pass adds and the
+    /// correction applies.
+    contacts_per_particle_substep: f64,
     /// Mean wall ms per step of each stage of the stage clock, with self-collision.
     stages_ms: Vec<(&'static str, f64)>,
     /// The same without self-collision.
@@ -230,6 +236,8 @@ pub fn bench_self_collision(
                 avg_collision_pct: w.self_collision_stats().average_pct,
                 max_violation_m: deepest,
                 crossings,
+                pairs_per_particle: w.self_collision_stats().pairs_per_step / n.max(1) as f64,
+                contacts_per_particle_substep: w.self_collision_stats().contacts_per_substep / n.max(1) as f64,
                 stages_ms: stages_ms(w),
                 stages_ms_without: stages_ms(&off.world),
             });
@@ -264,7 +272,7 @@ pub fn bench_self_collision(
     let travel = travel.map_or("each scene's".to_string(), |t| t.to_string());
     println!("self-collision suite, {steps} steps a run, travel {travel}; step ms with self-collision (median, p95) and without (median)");
     println!(
-        "{:<8} {:>7} {:>3} {:>3} {:>9} {:>6} {:>8} {:>8} {:>8} {:>6} {:>6} {:>9} {:>10} {:>9}",
+        "{:<8} {:>7} {:>3} {:>3} {:>9} {:>6} {:>8} {:>8} {:>8} {:>6} {:>6} {:>9} {:>10} {:>9} {:>7} {:>8}",
         "scene",
         "parts",
         "sub",
@@ -278,11 +286,13 @@ pub fn bench_self_collision(
         "vs 1t",
         "avg coll%",
         "violation",
-        "crossings"
+        "crossings",
+        "pairs/p",
+        "cont/p/s"
     );
     for r in &rows {
         println!(
-            "{:<8} {:>7} {:>3} {:>3} {:>9.1} {:>5.0}% {:>8.3} {:>8.3} {:>8.3} {:>5.2}x {:>5.2}x {:>9.4} {:>10.2e} {:>9}",
+            "{:<8} {:>7} {:>3} {:>3} {:>9.1} {:>5.0}% {:>8.3} {:>8.3} {:>8.3} {:>5.2}x {:>5.2}x {:>9.4} {:>10.2e} {:>9} {:>7.2} {:>8.3}",
             r.scene,
             r.particles,
             r.substeps,
@@ -296,7 +306,9 @@ pub fn bench_self_collision(
             r.speedup_over_1_thread,
             r.avg_collision_pct,
             r.max_violation_m,
-            r.crossings
+            r.crossings,
+            r.pairs_per_particle,
+            r.contacts_per_particle_substep
         );
     }
     println!("mean ms per step by stage (with / without self-collision):");
