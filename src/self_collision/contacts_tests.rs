@@ -92,18 +92,25 @@ fn assert_same_bits(got: &[[f32; 11]], want: &[[f32; 11]], p: Option<(&Positions
     }
 }
 
-/// Pairs in contact by the reference's one-sided test, tried from each free end (every pair
-/// tested, rest rule applied): what the pass's contact count must be.
-fn reference_contacts(data: &SelfCollisionData, x: &[Vec<f32>; 3], p: &[Vec<f32>; 3], w: &[f32], n: usize) -> usize {
+/// The pair context of the reference: the start and predicted positions `x`, `p` and inverse
+/// masses `w` with the data's rest records and active settings.
+fn reference_ctx<'a>(data: &'a SelfCollisionData, x: &'a [Vec<f32>; 3], p: &'a [Vec<f32>; 3], w: &'a [f32]) -> PairCtx<'a> {
     let a = data.active().unwrap();
-    let ctx = PairCtx {
+    PairCtx {
         x: [&x[0], &x[1], &x[2]],
         p: [&p[0], &p[1], &p[2]],
         w,
         rest4: &data.rest4,
         d: a.d,
         response: a.response,
-    };
+    }
+}
+
+/// Pairs in contact by the reference's one-sided test, tried from each free end (every pair
+/// tested, rest rule applied): what the pass's contact count must be.
+fn reference_contacts(data: &SelfCollisionData, x: &[Vec<f32>; 3], p: &[Vec<f32>; 3], w: &[f32], n: usize) -> usize {
+    let a = data.active().unwrap();
+    let ctx = reference_ctx(data, x, p, w);
     let adds = |i: usize, j: usize| {
         let (mut out, mut approaching) = ([0.0f32; 11], 0.0f32);
         ctx.add_contact(i, j, &mut out, &mut approaching);
@@ -129,14 +136,7 @@ fn reference(data: &SelfCollisionData, x: &[Vec<f32>; 3], p: &[Vec<f32>; 3], w: 
         )
     })
     .unwrap();
-    let ctx = PairCtx {
-        x: [&x[0], &x[1], &x[2]],
-        p: [&p[0], &p[1], &p[2]],
-        w,
-        rest4: &data.rest4,
-        d: a.d,
-        response: a.response,
-    };
+    let ctx = reference_ctx(data, x, p, w);
     let sums: Vec<[f32; 11]> = (0..n).map(|i| ctx.sums(&all, i)).collect();
     let len = p[0].len();
     let mut full = ContactSums::new(len);
