@@ -104,10 +104,8 @@ pub(crate) struct ContactPass {
     touched: Vec<u32>,
     /// Whether each block is in `touched`.
     hit: Vec<bool>,
-    /// Pairs in contact the last pass found (with at least one free particle), and each
-    /// part's share of them (the pairs whose `i` it holds).
+    /// Pairs in contact the last pass found (with at least one free particle).
     contacts: usize,
-    part_contacts: Vec<usize>,
 }
 
 impl ContactPass {
@@ -223,14 +221,11 @@ impl ContactPass {
             sums.finish(rows, touched)
         };
         self.touched_parts.resize_with(parts.max(self.touched_parts.len()), Vec::new);
-        self.part_contacts.resize(parts.max(self.part_contacts.len()), 0);
         let touched_parts = &mut self.touched_parts[..parts];
-        let counts = &mut self.part_contacts[..parts];
         // A few particles may make fewer chunks of blocks than parts: the others add nothing.
         touched_parts.iter_mut().for_each(Vec::clear);
-        counts.fill(0);
         let mut rows = self.sums.rows();
-        if parts > 1 {
+        self.contacts = if parts > 1 {
             let mut split: [Option<SumRows<'_>>; MAX_PARTS] = Default::default();
             for s in split.iter_mut().take(parts) {
                 let (lo, hi) = rows.split_at(blocks * LANES);
@@ -242,17 +237,12 @@ impl ContactPass {
                 .zip(self.hit.par_chunks_mut(blocks))
                 .zip(split.par_iter_mut())
                 .zip(touched_parts.par_iter_mut())
-                .zip(counts.par_iter_mut())
                 .enumerate()
-                .for_each(|(p, ((((acc, hit), rows), t), count))| {
-                    if let Some(rows) = rows.take() {
-                        *count = part(p, acc, hit, rows, t);
-                    }
-                });
+                .map(|(p, (((acc, hit), rows), t))| rows.take().map_or(0, |rows| part(p, acc, hit, rows, t)))
+                .sum()
         } else {
-            counts[0] = part(0, &mut self.acc, &mut self.hit, rows, &mut touched_parts[0]);
-        }
-        self.contacts = counts.iter().sum();
+            part(0, &mut self.acc, &mut self.hit, rows, &mut touched_parts[0])
+        };
         self.collect_touched(old, parts);
     }
 
