@@ -3,8 +3,9 @@
 //! Each colour stores `a, b, rest, compliance, lambda` as separate arrays padded to the lane
 //! width with dummy constraints on the particle sink (inverse mass 0, so they move nothing).
 //! Padding sits only at the end of a colour, so only the last parallel chunk touches the sink.
-//! The SIMD kernel and the scalar twin perform the same operations in the same order without
-//! fused multiply-add, so they agree bit for bit; within a colour no particle repeats, so the
+//! The SIMD kernel and the scalar twin perform the same operations in the same order (fused
+//! multiply-adds only in the grid classes' projection, named in both: `constraints::project`),
+//! so they agree bit for bit; within a colour no particle repeats, so the
 //! order of constraints (and therefore chunking and thread count) cannot change the result.
 //!
 //! That freedom is used for speed: each colour is sorted by index offset `b − a`, then by `a`,

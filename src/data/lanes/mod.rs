@@ -10,8 +10,11 @@
 //! and gathers (`gather`), the permutations of a sixteen-particle window (`window`), and the
 //! shared write handle (`shared`); all are re-exported here.
 //!
-//! No kernel uses fused multiply-add: `a * b + c` rounds twice in both the SIMD kernels and
-//! their scalar twins, so the two agree bit for bit whatever target features the build enables.
+//! A kernel never fuses `a * b + c` implicitly: it rounds twice in both the SIMD kernels and
+//! their scalar twins. Where a kernel fuses, it says so with [`mul_add`] in its lanes and
+//! `f32::mul_add` in its twin: one rounding on every target (the FMA instruction where the build
+//! enables it, else a correctly rounded fallback), so the two still agree bit for bit whatever
+//! target features the build enables, and a build without FMA is slower, not different.
 
 mod gather;
 mod shared;
@@ -28,6 +31,22 @@ pub const LANES: usize = 8;
 
 /// The lane type.
 pub type F32s = f32x8;
+
+/// `a * b + c` with one rounding in every lane, on every target: lane for lane the value of
+/// `f32::mul_add`. The FMA instruction when the build enables it; otherwise `f32::mul_add` lane
+/// by lane (correctly rounded, slower), never the twice-rounded product and sum.
+#[inline(always)]
+pub fn mul_add(a: F32s, b: F32s, c: F32s) -> F32s {
+    #[cfg(all(any(target_arch = "x86", target_arch = "x86_64"), target_feature = "avx", target_feature = "fma"))]
+    {
+        a.mul_add(b, c)
+    }
+    #[cfg(not(all(any(target_arch = "x86", target_arch = "x86_64"), target_feature = "avx", target_feature = "fma")))]
+    {
+        let (a, b, c) = (a.to_array(), b.to_array(), c.to_array());
+        F32s::from(std::array::from_fn::<f32, LANES, _>(|l| a[l].mul_add(b[l], c[l])))
+    }
+}
 
 /// Rounds `n` up to a multiple of [`LANES`].
 #[inline]

@@ -91,3 +91,44 @@ fn split16_deals_the_named_elements_and_merge16_inverts_it() {
         assert_eq!((l2.to_array(), h2.to_array()), (lo.to_array(), hi.to_array()));
     }
 }
+
+/// `mul_add` rounds once in every lane, as `f32::mul_add` does, on any build: a case whose
+/// product needs more than 24 bits (the fused result keeps what the twice-rounded one loses),
+/// signed zeros, infinities, NaN and random values.
+#[test]
+fn mul_add_rounds_once_like_the_scalar_mul_add() {
+    let e = f32::EPSILON;
+    let (a, b, c) = (1.0 + e, 1.0 - e, -1.0f32);
+    assert_eq!(a.mul_add(b, c), -e * e, "f32::mul_add is fused");
+    assert_eq!(a * b + c, 0.0, "the product alone rounds to one");
+    let mut rng = crate::test_rng::signed(41);
+    let specials = [
+        a,
+        b,
+        c,
+        -0.0,
+        0.0,
+        f32::INFINITY,
+        f32::NEG_INFINITY,
+        f32::NAN,
+        f32::MAX,
+        f32::from_bits(1),
+    ];
+    let mut values: Vec<f32> = specials.to_vec();
+    values.extend((0..54).map(|_| 1e3 * rng()));
+    for w in values.chunks_exact(3 * LANES) {
+        let [x, y, z] = [0, 1, 2].map(|k| F32s::from(<[f32; LANES]>::try_from(&w[k * LANES..(k + 1) * LANES]).unwrap()));
+        let got = mul_add(x, y, z).to_array();
+        for l in 0..LANES {
+            let want = w[l].mul_add(w[LANES + l], w[2 * LANES + l]);
+            assert_eq!(
+                got[l].to_bits(),
+                want.to_bits(),
+                "lane {l}: {} * {} + {}",
+                w[l],
+                w[LANES + l],
+                w[2 * LANES + l]
+            );
+        }
+    }
+}
