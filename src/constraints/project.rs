@@ -8,7 +8,7 @@
 //! rounding the small worlds and their recorded results keep). The grid form also fuses its
 //! products and sums (the squared length, `-C - α̃ λ`, the position updates and `λ + Δλ`: ten
 //! of its thirty operations), with one rounding on every target ([`mul_add`]): the grid sweep
-//! is bound by its operations, and this makes it about a tenth faster.
+//! is bound by its floating-point operations (`docs/performance.md`), so fewer make it faster.
 
 use crate::data::lanes::{mul_add, F32s, Vec3x8};
 use crate::model::params::MIN_LENGTH;
@@ -90,6 +90,6 @@ pub(crate) fn project8<const ONE_DIV: bool>(
     let denom = wa + wb + alpha;
     let valid = len.simd_gt(F32s::splat(MIN_LENGTH)) & denom.simd_gt(zero);
     let dl = valid.select((-c - alpha * lam) / denom, zero);
-    let (sc, dl) = (valid.select(dl / len, zero), dl);
+    let sc = valid.select(dl / len, zero);
     (pa - d.scale(wa * sc), pb + d.scale(wb * sc), lam + dl)
 }
