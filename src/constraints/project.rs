@@ -26,21 +26,22 @@ pub(crate) fn project1<const ONE_DIV: bool>(
     lam: f32,
 ) -> ([f32; 3], [f32; 3], f32) {
     let (dx, dy, dz) = (pb[0] - pa[0], pb[1] - pa[1], pb[2] - pa[2]);
+    let len = if ONE_DIV {
+        dz.mul_add(dz, dy.mul_add(dy, dx * dx))
+    } else {
+        dx * dx + dy * dy + dz * dz
+    }
+    .sqrt();
+    let c = len - rest;
+    let denom = wa + wb + alpha;
+    let valid = len > MIN_LENGTH && denom > 0.0;
     if ONE_DIV {
-        let len = dz.mul_add(dz, dy.mul_add(dy, dx * dx)).sqrt();
-        let c = len - rest;
-        let denom = wa + wb + alpha;
-        let valid = len > MIN_LENGTH && denom > 0.0;
         let s = if valid { (-alpha).mul_add(lam, -c) / (denom * len) } else { 0.0 };
         let (sa, sb) = (wa * s, wb * s);
         let pa = [(-dx).mul_add(sa, pa[0]), (-dy).mul_add(sa, pa[1]), (-dz).mul_add(sa, pa[2])];
         let pb = [dx.mul_add(sb, pb[0]), dy.mul_add(sb, pb[1]), dz.mul_add(sb, pb[2])];
         return (pa, pb, if valid { s.mul_add(len, lam) } else { lam });
     }
-    let len = (dx * dx + dy * dy + dz * dz).sqrt();
-    let c = len - rest;
-    let denom = wa + wb + alpha;
-    let valid = len > MIN_LENGTH && denom > 0.0;
     let (s, dl) = if !valid {
         (0.0, 0.0)
     } else {
@@ -66,11 +67,16 @@ pub(crate) fn project8<const ONE_DIV: bool>(
 ) -> (Vec3x8, Vec3x8, F32s) {
     let zero = F32s::ZERO;
     let d = pb - pa;
+    let len = if ONE_DIV {
+        mul_add(d.z, d.z, mul_add(d.y, d.y, d.x * d.x))
+    } else {
+        d.length_sq()
+    }
+    .sqrt();
+    let c = len - rest;
+    let denom = wa + wb + alpha;
+    let valid = len.simd_gt(F32s::splat(MIN_LENGTH)) & denom.simd_gt(zero);
     if ONE_DIV {
-        let len = mul_add(d.z, d.z, mul_add(d.y, d.y, d.x * d.x)).sqrt();
-        let c = len - rest;
-        let denom = wa + wb + alpha;
-        let valid = len.simd_gt(F32s::splat(MIN_LENGTH)) & denom.simd_gt(zero);
         let sc = valid.select(mul_add(-alpha, lam, -c) / (denom * len), zero);
         let (sa, sb) = (wa * sc, wb * sc);
         let pa = Vec3x8 {
@@ -85,10 +91,6 @@ pub(crate) fn project8<const ONE_DIV: bool>(
         };
         return (pa, pb, valid.select(mul_add(sc, len, lam), lam));
     }
-    let len = d.length_sq().sqrt();
-    let c = len - rest;
-    let denom = wa + wb + alpha;
-    let valid = len.simd_gt(F32s::splat(MIN_LENGTH)) & denom.simd_gt(zero);
     let dl = valid.select((-c - alpha * lam) / denom, zero);
     let sc = valid.select(dl / len, zero);
     (pa - d.scale(wa * sc), pb + d.scale(wb * sc), lam + dl)
