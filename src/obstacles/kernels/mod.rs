@@ -7,7 +7,9 @@
 //! [`ShapeContact`](crate::model::shapes::ShapeContact) (or of a mesh face), in blocks of eight
 //! with a per-block "touched" flag ([`Slots`], `obstacle_slots.rs`). "No contact" is the zero
 //! normal. `a` is the approach speed `max(0, -n.(v - u))` of the predicted velocity when the
-//! contact was found ([`fill_approach`]). Every pass skips blocks whose flag is down.
+//! contact was found ([`fill_approach`]). Every pass skips blocks whose flag is down; the
+//! lane passes also skip, within a block, each obstacle whose flag is down (a cloth on the
+//! floor beside a ball then pays for the floor only).
 //!
 //! **Sphere pre-test.** Most blocks of a large cloth are far from a sphere. Before the full
 //! sphere test (three square roots, divisions) a block runs [`shape_may_touch_simd`]: the
@@ -321,6 +323,9 @@ pub fn project_simd<S: SlotBlocks>(slots: &[S], th: &[f32], start: usize, p: [&m
         let mut q = Vec3x8::load(px, py, pz, j);
         let t = crate::data::lanes::load(th, g);
         for s in slots {
+            if !s.touched()[b] {
+                continue;
+            }
             let (c, n, set) = simd::slot_lanes(s.data(), b);
             let d = (t - n.dot(q - c)).max(zero);
             q = Vec3x8::select(set, q + n.scale(d), q);

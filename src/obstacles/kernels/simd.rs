@@ -59,6 +59,9 @@ pub fn resolve_simd<S: SlotBlocks>(
         let t = load(th, g);
         let x0 = Vec3x8::load(x[0], x[1], x[2], j);
         for ((s, u), &mesh) in slots.iter().zip(shifts).zip(mesh) {
+            if !s.touched()[b] {
+                continue;
+            }
             let (c, n, set) = slot_lanes(s.data(), b);
             let xr = x0 - Vec3x8::splat(*u);
             let (hx, hp) = (n.dot(xr - c), n.dot(q - c));
@@ -102,6 +105,9 @@ pub fn velocity_pass_simd<S: SlotBlocks>(
         let limit = load(th, g) + F32s::splat(TOUCH_SLACK);
         let mut vel = Vec3x8::load(vx, vy, vz, j);
         for (s, &(u, mu)) in slots.iter().zip(motion) {
+            if !s.touched()[b] {
+                continue;
+            }
             let (c, n, set) = slot_lanes(s.data(), b);
             let touch = set & !n.dot(q - c).simd_gt(limit);
             let a = load(s.data(), b * crate::obstacles::kernels::SLOT_BLOCK + 6 * LANES);
