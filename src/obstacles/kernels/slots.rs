@@ -14,6 +14,7 @@
 //! ([`Slots::write`], the generators through `obstacles::for_blocks`).
 
 use crate::data::lanes::LANES;
+use wide::u32x8;
 
 /// Floats per block of eight slots.
 pub const SLOT_BLOCK: usize = 7 * LANES;
@@ -183,7 +184,7 @@ pub fn block_touched<S: SlotBlocks>(slots: &[S], b: usize) -> bool {
 /// block's touched flag.
 #[inline]
 pub fn block_nonzero(block: &[f32]) -> bool {
-    block.iter().fold(0u32, |a, &c| a | c.to_bits()) != 0
+    or_bits(block) != 0
 }
 
 /// Does one slot block (its [`SLOT_BLOCK`] floats) hold a normal other than zero? The same as
@@ -191,7 +192,22 @@ pub fn block_nonzero(block: &[f32]) -> bool {
 /// of every component but the sign, or-ed together.
 #[inline]
 pub fn normals_set(block: &[f32]) -> bool {
-    block[3 * LANES..6 * LANES].iter().fold(0u32, |a, &c| a | (c.to_bits() << 1)) != 0
+    // Shifting left drops the sign bit; it distributes over the `or`.
+    or_bits(&block[3 * LANES..6 * LANES]) << 1 != 0
+}
+
+/// The bits of every value of `values` or-ed together: a vector `or` a group of [`LANES`]
+/// values (a plain fold left a slot block's last 24 values to a scalar loop), then the rest.
+#[inline]
+fn or_bits(values: &[f32]) -> u32 {
+    let groups = values.chunks_exact(LANES);
+    let rest = groups.remainder().iter().fold(0u32, |a, &c| a | c.to_bits());
+    let mut acc = u32x8::ZERO;
+    for g in groups {
+        let g: [f32; LANES] = g.try_into().expect("a group of lane width");
+        acc |= u32x8::from(bytemuck::cast::<[f32; LANES], [u32; LANES]>(g));
+    }
+    acc.to_array().iter().fold(rest, |a, &b| a | b)
 }
 
 /// The next particle index from `i` (of a run starting at particle `start`, `len` long) that
