@@ -4,7 +4,6 @@
 //! every particle. Bit for bit, for the three responses, SIMD and scalar, serial and parallel
 //! on one and two threads.
 
-use super::lists::rest_skipped;
 use super::*;
 use crate::data::exec::Exec;
 use crate::self_collision::response::{apply, ApplyInput, ContactSums};
@@ -118,7 +117,7 @@ fn reference_contacts(data: &SelfCollisionData, x: &[Vec<f32>; 3], p: &[Vec<f32>
     };
     (0..n)
         .flat_map(|i| (i + 1..n).map(move |j| (i, j)))
-        .filter(|&(i, j)| !rest_skipped(&data.rest, &data.cloth_of, i, j, a.skip) && (adds(i, j) || adds(j, i)))
+        .filter(|&(i, j)| !data.rest_data().skipped(i, j, a.skip) && (adds(i, j) || adds(j, i)))
         .count()
 }
 
@@ -131,7 +130,7 @@ fn reference(data: &SelfCollisionData, x: &[Vec<f32>; 3], p: &[Vec<f32>; 3], w: 
     all.fill_serial(n, |i, buf| {
         buf.extend(
             (0..n)
-                .filter(|&j| j != i && !rest_skipped(&data.rest, &data.cloth_of, i, j, a.skip))
+                .filter(|&j| j != i && !data.rest_data().skipped(i, j, a.skip))
                 .map(|j| j as u32),
         )
     })
@@ -225,13 +224,7 @@ fn rest_neighbours_are_never_listed() {
     for (i, j) in lists.pairs() {
         let (ri, rj) = (i as usize / cols, j as usize / cols);
         assert!(ri.abs_diff(rj) >= 3, "{i} {j}");
-        assert!(!rest_skipped(
-            &data.rest,
-            &data.cloth_of,
-            i as usize,
-            j as usize,
-            REST_SKIP_FACTOR * d
-        ));
+        assert!(!data.rest_data().skipped(i as usize, j as usize, REST_SKIP_FACTOR * d));
     }
     // A flat cloth: the step has nothing to do.
     let flat: Vec<f32> = (0..n).map(|i| (i / cols) as f32 * s).collect();

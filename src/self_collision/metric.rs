@@ -9,7 +9,7 @@ use crate::data::exec::Exec;
 use rayon::prelude::*;
 
 use crate::error::Result;
-use crate::self_collision::{dist2, SelfBroadphase, SelfCollisionData, PENETRATION_TOLERANCE};
+use crate::self_collision::{dist2, SelfCollisionData, PENETRATION_TOLERANCE};
 
 impl SelfCollisionData {
     /// Measures the penetration of the state the lists were just built from (once per step
@@ -50,21 +50,16 @@ impl SelfCollisionData {
             return Ok(());
         };
         let broadphase = self.config.as_ref().map(|c| c.broadphase).unwrap_or_default();
-        let keep = |i: usize, j: u32| self.cloth_of[i] != self.cloth_of[j as usize] || dist2(&self.rest, i, j as usize) > far2;
+        let rest = self.rest_data();
+        let keep = |i: usize, j: u32| rest.cloth_of[i] != rest.cloth_of[j as usize] || dist2(&rest.pos, i, j as usize) > far2;
+        let exec = Exec::new(true, parallel);
+        let fresh = st.fresh;
+        let (bp, [_, _, probe]) = st.broadphase(broadphase);
         // The step's broadphase, unless it kept older candidates.
-        let built = if st.fresh {
-            Ok(())
-        } else {
-            self.build_structure(&mut st, x, n, a.q, broadphase, Exec::new(true, parallel))
-        };
-        st.fresh = built.is_ok();
-        let r = built.and_then(|_| match &st.tree {
-            Some(t) if broadphase == SelfBroadphase::AabbTree => {
-                t.query_exec(x[0], x[1], x[2], n, lim, &mut st.probe, Exec::new(true, parallel), false, &keep)
-            }
-            _ if parallel => st.hash.query_filtered(x[0], x[1], x[2], n, lim, &keep, &mut st.probe),
-            _ => st.hash.query_filtered_serial(x[0], x[1], x[2], n, lim, &keep, &mut st.probe),
-        });
+        let built = if fresh { Ok(()) } else { bp.build(x, n, a.q, rest, exec) };
+        let ok = built.is_ok();
+        let r = built.and_then(|_| bp.partners(x, n, lim, &keep, probe, exec));
+        st.fresh = ok;
         self.state = Some(st);
         r
     }

@@ -16,7 +16,8 @@
 //!   [`TRAVEL_GROWTH`] 1.5). Two particles then close in by at most `T_i + T_j`, so the pair
 //!   is listed when closer than its reach `d + T_i + T_j`: two particles at rest within
 //!   `1.5 d`, two fast ones within `(1 + 2 travel) d`. The broadphase (the spatial hash, a
-//!   counting sort of the particles over cells, or the AABB tree, refitted) lists, from the
+//!   counting sort of the particles over cells, or the AABB tree, refitted; one trait,
+//!   `broadphase`, answers the same query with either) lists, from the
 //!   positions `x` at the start of the step, every pair within its own reach, `d` the
 //!   collision distance. The tree searches the step's query radius `q = d + 2 max T_i` and
 //!   keeps each pair within its own reach in its filter. The hash's cells are as wide as the
@@ -89,6 +90,7 @@
 //! and averaged over the steps ([`SelfCollisionStats`]).
 
 pub mod audit;
+pub(crate) mod broadphase;
 pub mod clamp;
 pub mod config;
 pub mod hash;
@@ -103,13 +105,13 @@ use crate::data::exec::Exec;
 use std::time::Instant;
 
 use crate::error::{positive, Result, WeftError};
+use crate::self_collision::broadphase::{Broadphase, Tree};
 use crate::self_collision::hash::SpatialHash;
 use crate::self_collision::lists::reuse::Reuse;
 use crate::self_collision::neighbours::Neighbours;
 use crate::self_collision::pass::pairs::{PairCtx, PairRows};
 pub(crate) use crate::self_collision::pass::ApplyParams;
 use crate::self_collision::pass::{ContactPass, PredictionSink};
-use crate::self_collision::tree::ParticleTree;
 
 pub use crate::model::self_collision::{
     Response, SelfBroadphase, SelfCollision, BOX_RADIUS, CELL_FACTOR, MAX_TRAVEL, QUERY_FACTOR, RELAXATION, REST_SKIP_FACTOR,
@@ -159,7 +161,7 @@ pub struct SelfCollisionData {
 #[derive(Clone, Debug, Default)]
 struct State {
     hash: SpatialHash,
-    tree: Option<ParticleTree>,
+    tree: Tree,
     /// Candidates within `q` plus the skin at their build, kept across steps while they hold.
     cand: Neighbours,
     reuse: Reuse,
@@ -176,6 +178,18 @@ struct State {
     /// Whether the hash or tree was built from this step's start (not kept with the
     /// candidates).
     fresh: bool,
+}
+
+impl State {
+    /// The broadphase of kind `kind`, with the lists it fills: the candidates, the step's
+    /// lists and the metric's.
+    fn broadphase(&mut self, kind: SelfBroadphase) -> (&mut dyn Broadphase, [&mut Neighbours; 3]) {
+        let bp: &mut dyn Broadphase = match kind {
+            SelfBroadphase::Hash => &mut self.hash,
+            SelfBroadphase::AabbTree => &mut self.tree,
+        };
+        (bp, [&mut self.cand, &mut self.lists, &mut self.probe])
+    }
 }
 
 /// What the step needs each substep.

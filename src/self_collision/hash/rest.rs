@@ -12,7 +12,7 @@
 //! (with the particles' travels attached, [`SpatialHash::attach_travel`], each pair's own
 //! reach `(d + (t_i + t_j) d)²` stands for `max_dist²`), sorted ascending: the rest-neighbour
 //! rule of Müller's "Ten Minute Physics" self-collision
-//! as the self-collision stage applies it (`rest_skipped` in `crate::self_collision::lists`; the
+//! as the self-collision stage applies it (`RestData::skipped` in `crate::self_collision::broadphase`; the
 //! rest distance is computed there as `(r_i - r_j)` per axis, squared and summed in the same
 //! order, no FMA, so both decide alike).
 //!

@@ -10,11 +10,10 @@ use std::time::Instant;
 
 use crate::data::exec::Exec;
 use crate::error::{Result, WeftError};
+use crate::self_collision::broadphase::{PairQuery, RestData};
 use crate::self_collision::hash::SpatialHash;
 use crate::self_collision::lists::travel::TravelRule;
-use crate::self_collision::neighbours::{pair_reach2, within};
-use crate::self_collision::tree::{ParticleTree, TreeShape};
-use crate::self_collision::{dist2, SelfBroadphase, SelfCollisionData, State, CELL_FACTOR, MAX_PAIRS_PER_PARTICLE};
+use crate::self_collision::{SelfBroadphase, SelfCollisionData, State, MAX_PAIRS_PER_PARTICLE};
 
 /// The error of a step whose pairs passed [`MAX_PAIRS_PER_PARTICLE`], for distance `d` and
 /// reach `q`.
@@ -35,10 +34,6 @@ fn too_many_pairs(d: f32, q: f32) -> WeftError {
 /// The hash's cells are sized for all but at most `n / FAST_SHARE` of the fastest particles,
 /// which search boxes of their own ([`SpatialHash::attach_travel`]).
 const FAST_SHARE: usize = 32;
-
-/// Leaf size of the AABB tree (the paper's depth 5 gives ~312 particles a leaf at 10 000
-/// particles; 16 queries much faster and gives the same pairs).
-const TREE_LEAF: u32 = 16;
 
 impl SelfCollisionData {
     /// Fills the step's lists from `x` (each pair once, rest neighbours dropped) and the flat
@@ -80,7 +75,8 @@ impl SelfCollisionData {
             };
             // The hash searches each pair within its own reach plus the skin (travels raised by
             // half the skin, cells as wide as their members' reach); the tree, or a hash of
-            // equal travels, searches the step's query radius plus the skin.
+            // equal travels, searches the step's query radius plus the skin, and without a skin
+            // keeps each pair within its own reach in its filter.
             let half = skin / (d + d);
             let members = cell + half;
             let reach = if hashed { d + (members + members) * d } else { q + skin };
@@ -88,32 +84,28 @@ impl SelfCollisionData {
                 self.travel_build.clear();
                 self.travel_build.extend((0..n).map(|i| build_travel(i) + half));
             }
-            r = self.build_structure(&mut st, x, n, reach, broadphase, exec);
+            let rest = self.rest_data();
+            let query = PairQuery {
+                x,
+                n,
+                d,
+                reach,
+                travel: match (hashed, skin == 0.0 && !self.travel_uniform) {
+                    (true, _) => Some(&self.travel_build[..]),
+                    (false, true) => Some(travel),
+                    (false, false) => None,
+                },
+                members,
+                rest,
+                skip: a.skip,
+            };
+            let (bp, [cand, lists, _]) = st.broadphase(broadphase);
+            r = bp.build(x, n, reach, rest, exec);
             t1 = Instant::now();
             // With a skin the query fills the candidates, filtered to the lists below; without,
-            // it lists each pair within its own reach (the tree keeps them so in its filter).
-            let out = if skin > 0.0 { &mut st.cand } else { &mut st.lists };
-            let own = skin == 0.0 && !self.travel_uniform;
-            r = r.and_then(|_| match (&st.tree, broadphase) {
-                (Some(t), SelfBroadphase::AabbTree) => {
-                    let (rest, cloth_of, skip) = (&self.rest, &self.cloth_of, a.skip);
-                    let keep = |i: usize, j: u32| {
-                        let j = j as usize;
-                        let within_own = || {
-                            let reach2 = pair_reach2(d, travel[i], travel[j]);
-                            within(x[0][i], x[1][i], x[2][i], x[0][j], x[1][j], x[2][j], reach2)
-                        };
-                        !rest_skipped(rest, cloth_of, i, j, skip) && (!own || within_own())
-                    };
-                    t.query_exec(x[0], x[1], x[2], n, reach, out, exec, true, &keep)
-                }
-                _ => {
-                    if hashed {
-                        st.hash.attach_travel(d, &self.travel_build, members)?;
-                    }
-                    st.hash.query_upper_unskipped_cells_exec(reach, a.skip, out, exec)
-                }
-            });
+            // it lists each pair within its own reach.
+            let out = if skin > 0.0 { cand } else { lists };
+            r = r.and_then(|_| bp.pairs(&query, out, exec));
             if r.is_ok() {
                 st.reuse.built(x, n, a.d, build_travel, broadphase, skin);
                 st.fresh = true;
@@ -160,62 +152,11 @@ impl SelfCollisionData {
         self.travel_cell = rule.members_travel(&tally, n.min(len), n.min(len) / FAST_SHARE);
     }
 
-    /// The cloths' rest positions.
-    fn rest(&self) -> [&[f32]; 3] {
-        [&self.rest[0], &self.rest[1], &self.rest[2]]
-    }
-
-    /// Builds the hash (cell `reach`) or refits the tree on `x`, in parallel when `exec` is.
-    pub(super) fn build_structure(
-        &self,
-        st: &mut State,
-        x: [&[f32]; 3],
-        n: usize,
-        reach: f32,
-        broadphase: SelfBroadphase,
-        exec: Exec,
-    ) -> Result<()> {
-        match broadphase {
-            SelfBroadphase::Hash => build_hash(&mut st.hash, x, n, reach, self.rest(), &self.cloth_of, exec.parallel()),
-            SelfBroadphase::AabbTree => {
-                let t = match st.tree.take() {
-                    Some(mut t) if t.len() == n && exec.parallel() => t.refit(x[0], x[1], x[2], n).map(|_| t),
-                    Some(mut t) if t.len() == n => t.refit_serial(x[0], x[1], x[2], n).map(|_| t),
-                    _ => ParticleTree::build(x[0], x[1], x[2], n, TreeShape::LeafSize(TREE_LEAF)),
-                }?;
-                st.tree = Some(t);
-                Ok(())
-            }
+    /// The cloths' rest positions and groups.
+    pub(super) fn rest_data(&self) -> RestData<'_> {
+        RestData {
+            pos: [&self.rest[0], &self.rest[1], &self.rest[2]],
+            cloth_of: &self.cloth_of,
         }
     }
-}
-
-/// Whether `i` and `j` are rest neighbours: one cloth, rest distance at most `skip`
-/// ([`SelfCollision::rest_skip_factor`] `d`). Such pairs are never contacts (the cloth's own
-/// constraints keep them apart), so the broadphase drops them when it writes the list.
-#[inline]
-pub(super) fn rest_skipped(rest: &[Vec<f32>; 3], cloth_of: &[u32], i: usize, j: usize, skip: f32) -> bool {
-    cloth_of[i] == cloth_of[j] && dist2(rest, i, j) <= skip * skip
-}
-
-/// Builds `hash` on `x` (first `n`) with cells of `reach` (times [`CELL_FACTOR`], widened
-/// to [`SpatialHash::member_spacing`] so that particles on a cell's faces are members of it)
-/// and attaches the cloths' `rest` positions and `cloth_of` ids for the rest rule of its
-/// self-collision query; `parallel` false builds serially (the same hash).
-fn build_hash(
-    hash: &mut SpatialHash,
-    x: [&[f32]; 3],
-    n: usize,
-    reach: f32,
-    rest: [&[f32]; 3],
-    cloth_of: &[u32],
-    parallel: bool,
-) -> Result<()> {
-    let spacing = SpatialHash::member_spacing(reach) * CELL_FACTOR;
-    if parallel {
-        hash.build(x[0], x[1], x[2], n, spacing)?;
-    } else {
-        hash.build_serial(x[0], x[1], x[2], n, spacing)?;
-    }
-    hash.attach_rest(rest, cloth_of)
 }
