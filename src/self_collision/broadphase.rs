@@ -53,6 +53,9 @@ pub(crate) struct PairQuery<'a> {
     pub skip: f32,
 }
 
+/// Which pairs a probe keeps: `keep(i, j)`.
+pub(crate) type Keep<'a> = &'a (dyn Fn(usize, u32) -> bool + Sync);
+
 /// A self-collision broadphase: built on the positions at the step's start, it lists the
 /// step's pairs and the metric's partners.
 pub(crate) trait Broadphase {
@@ -65,15 +68,7 @@ pub(crate) trait Broadphase {
 
     /// For every particle, its partners within `lim` with `keep(i, j)`, each pair in both
     /// lists (the metric's probe, `x` the positions of the build).
-    fn partners(
-        &self,
-        x: [&[f32]; 3],
-        n: usize,
-        lim: f32,
-        keep: &(dyn Fn(usize, u32) -> bool + Sync),
-        out: &mut Neighbours,
-        exec: Exec,
-    ) -> Result<()>;
+    fn partners(&self, x: [&[f32]; 3], n: usize, lim: f32, keep: Keep<'_>, out: &mut Neighbours, exec: Exec) -> Result<()>;
 }
 
 impl Broadphase for SpatialHash {
@@ -97,15 +92,7 @@ impl Broadphase for SpatialHash {
         self.query_upper_unskipped_cells_exec(q.reach, q.skip, out, exec)
     }
 
-    fn partners(
-        &self,
-        x: [&[f32]; 3],
-        n: usize,
-        lim: f32,
-        keep: &(dyn Fn(usize, u32) -> bool + Sync),
-        out: &mut Neighbours,
-        exec: Exec,
-    ) -> Result<()> {
+    fn partners(&self, x: [&[f32]; 3], n: usize, lim: f32, keep: Keep<'_>, out: &mut Neighbours, exec: Exec) -> Result<()> {
         if exec.parallel() {
             self.query_filtered(x[0], x[1], x[2], n, lim, &keep, out)
         } else {
@@ -147,15 +134,7 @@ impl Broadphase for Tree {
         t.query_exec(x[0], x[1], x[2], q.n, reach, out, exec, true, &keep)
     }
 
-    fn partners(
-        &self,
-        x: [&[f32]; 3],
-        n: usize,
-        lim: f32,
-        keep: &(dyn Fn(usize, u32) -> bool + Sync),
-        out: &mut Neighbours,
-        exec: Exec,
-    ) -> Result<()> {
+    fn partners(&self, x: [&[f32]; 3], n: usize, lim: f32, keep: Keep<'_>, out: &mut Neighbours, exec: Exec) -> Result<()> {
         self.built()?.query_exec(x[0], x[1], x[2], n, lim, out, exec, false, &keep)
     }
 }
