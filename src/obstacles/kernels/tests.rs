@@ -182,13 +182,23 @@ fn block_skipping_passes_equal_particle_by_particle() {
     let motion = [([0.0; 3], 0.4), ([0.001, 0.0, 0.0], 0.2)];
     let x: [Vec<f32>; 3] = [0, 1, 2].map(|_| (0..n).map(|_| r() * 0.02).collect());
     let p0: [Vec<f32>; 3] = [0, 1, 2].map(|_| (0..n).map(|_| r() * 0.02).collect());
-    let (mut whole, mut single) = (p0.clone(), p0.clone());
-    let [a, b, c] = &mut whole;
-    resolve_along_path(&slots, &shifts, &[true, false], &th, 0, [&x[0], &x[1], &x[2]], [a, b, c]);
-    let [a, b, c] = &mut whole;
-    project_scalar(&slots, &th, 0, [a, b, c]);
-    let [vw0, vw1, vw2] = &mut whole;
-    velocity_pass(&slots, &motion, &th, 0, [&x[0], &x[1], &x[2]], [vw0, vw1, vw2]);
+    // The three passes over the whole range, one particle at a time or eight (`lanes`).
+    let passes = |lanes: bool| {
+        let mut v = p0.clone();
+        let xs = [&x[0][..], &x[1][..], &x[2][..]];
+        let [a, b, c] = &mut v;
+        if lanes {
+            resolve_simd(&slots, &shifts, &[true, false], &th, 0, xs, [a, b, c]);
+            project_simd(&slots, &th, 0, [a, b, c]);
+            velocity_pass_simd(&slots, &motion, &th, 0, xs, [a, b, c]);
+        } else {
+            resolve_along_path(&slots, &shifts, &[true, false], &th, 0, xs, [a, b, c]);
+            project_scalar(&slots, &th, 0, [a, b, c]);
+            velocity_pass(&slots, &motion, &th, 0, xs, [a, b, c]);
+        }
+        v
+    };
+    let (whole, mut single) = (passes(false), p0.clone());
     for i in 0..n {
         let [a, b, c] = &mut single;
         let xs = [&x[0][i..i + 1], &x[1][i..i + 1], &x[2][i..i + 1]];
@@ -207,14 +217,7 @@ fn block_skipping_passes_equal_particle_by_particle() {
     assert_eq!(whole, single);
     // The lanes skip each obstacle's untouched blocks too (here every touched block holds one
     // obstacle's contacts, not the other's): the same bits.
-    let mut lanes = p0.clone();
-    let [a, b, c] = &mut lanes;
-    resolve_simd(&slots, &shifts, &[true, false], &th, 0, [&x[0], &x[1], &x[2]], [a, b, c]);
-    let [a, b, c] = &mut lanes;
-    project_simd(&slots, &th, 0, [a, b, c]);
-    let [a, b, c] = &mut lanes;
-    velocity_pass_simd(&slots, &motion, &th, 0, [&x[0], &x[1], &x[2]], [a, b, c]);
-    assert_eq!(bits(&lanes), bits(&single));
+    assert_eq!(bits(&passes(true)), bits(&single));
     assert_ne!(whole, p0, "some particles must move");
     assert!(!block_touched(&slots, 2) && block_touched(&slots, 0) && !block_touched(&slots[..1], 1));
 }
