@@ -45,13 +45,13 @@ impl SelfCollisionData {
         let Some(a) = self.active() else { return Ok(()) };
         let d = a.d;
         let lim = d * (1.0 - PENETRATION_TOLERANCE);
-        let far2 = (1.5 * d) * (1.5 * d);
         let Some(mut st) = self.state.take().filter(|s| s.ready) else {
             return Ok(());
         };
         let broadphase = self.config.as_ref().map(|c| c.broadphase).unwrap_or_default();
         let rest = self.rest_data();
-        let keep = |i: usize, j: u32| rest.cloth_of[i] != rest.cloth_of[j as usize] || dist2(&rest.pos, i, j as usize) > far2;
+        // Non-neighbours: another cloth, or more than `1.5 d` apart at rest.
+        let keep = |i: usize, j: u32| !rest.skipped(i, j as usize, 1.5 * d);
         let exec = Exec::new(true, parallel);
         let fresh = st.fresh;
         let (bp, [_, _, probe]) = st.broadphase(broadphase);

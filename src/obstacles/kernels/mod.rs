@@ -323,10 +323,7 @@ pub fn project_simd<S: SlotBlocks>(slots: &[S], th: &[f32], start: usize, p: [&m
         let mut q = Vec3x8::load(px, py, pz, j);
         let t = crate::data::lanes::load(th, g);
         for s in slots {
-            if !s.touched()[b] {
-                continue;
-            }
-            let (c, n, set) = simd::slot_lanes(s.data(), b);
+            let Some((c, n, set)) = simd::slot_lanes(s, b) else { continue };
             let d = (t - n.dot(q - c)).max(zero);
             q = Vec3x8::select(set, q + n.scale(d), q);
         }

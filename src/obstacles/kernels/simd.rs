@@ -17,9 +17,15 @@
 use crate::data::lanes::{load, F32s, Vec3x8, LANES};
 use crate::obstacles::kernels::{block_touched, SlotBlocks, TOUCH_SLACK};
 
-/// Contact point and normal of the eight slots of block `b`, and the lanes holding a contact.
+/// Contact point and normal of the eight slots of block `b` of one obstacle's slots, and the
+/// lanes holding a contact; `None` when the block's flag is down (all `+0.0`: no lane holds a
+/// contact, so a pass leaves every lane as it is).
 #[inline(always)]
-pub(super) fn slot_lanes(s: &[f32], b: usize) -> (Vec3x8, Vec3x8, F32s) {
+pub(super) fn slot_lanes<S: SlotBlocks>(slots: &S, b: usize) -> Option<(Vec3x8, Vec3x8, F32s)> {
+    if !slots.touched()[b] {
+        return None;
+    }
+    let s = slots.data();
     let o = b * crate::obstacles::kernels::SLOT_BLOCK;
     let c = Vec3x8 {
         x: load(s, o),
@@ -33,7 +39,7 @@ pub(super) fn slot_lanes(s: &[f32], b: usize) -> (Vec3x8, Vec3x8, F32s) {
     };
     let zero = F32s::splat(0.0);
     let set = n.x.simd_ne(zero) | n.y.simd_ne(zero) | n.z.simd_ne(zero);
-    (c, n, set)
+    Some((c, n, set))
 }
 
 /// [`resolve_along_path`](crate::obstacles::kernels::resolve_along_path) eight particles at a time (bitwise equal
@@ -59,10 +65,7 @@ pub fn resolve_simd<S: SlotBlocks>(
         let t = load(th, g);
         let x0 = Vec3x8::load(x[0], x[1], x[2], j);
         for ((s, u), &mesh) in slots.iter().zip(shifts).zip(mesh) {
-            if !s.touched()[b] {
-                continue;
-            }
-            let (c, n, set) = slot_lanes(s.data(), b);
+            let Some((c, n, set)) = slot_lanes(s, b) else { continue };
             let xr = x0 - Vec3x8::splat(*u);
             let (hx, hp) = (n.dot(xr - c), n.dot(q - c));
             let back = set & hx.simd_gt(hp) & hx.simd_ge(t);
@@ -105,10 +108,7 @@ pub fn velocity_pass_simd<S: SlotBlocks>(
         let limit = load(th, g) + F32s::splat(TOUCH_SLACK);
         let mut vel = Vec3x8::load(vx, vy, vz, j);
         for (s, &(u, mu)) in slots.iter().zip(motion) {
-            if !s.touched()[b] {
-                continue;
-            }
-            let (c, n, set) = slot_lanes(s.data(), b);
+            let Some((c, n, set)) = slot_lanes(s, b) else { continue };
             let touch = set & !n.dot(q - c).simd_gt(limit);
             let a = load(s.data(), b * crate::obstacles::kernels::SLOT_BLOCK + 6 * LANES);
             let uu = Vec3x8::splat(u);
