@@ -242,6 +242,14 @@ pub struct GridColour {
 }
 
 impl GridColour {
+    /// Whether a sweep writes this colour's multipliers when `reset` (the sweep reads them as
+    /// zero): not for a colour without compliance, whose multipliers neither move a particle
+    /// (they enter as `α̃ λ`) nor count in [`World::metrics`](crate::World::metrics)'
+    /// elastic energy (`½ α f²`), and which a later sweep reads only without reset.
+    pub fn keeps_multipliers(&self, reset: bool) -> bool {
+        !(reset && self.compliance == 0.0)
+    }
+
     pub(crate) fn cl(&self) -> &'static Class {
         &CLASSES[self.class as usize]
     }

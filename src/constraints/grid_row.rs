@@ -15,7 +15,12 @@ use crate::data::lanes::{load, merge16_vec, split16, split16_vec, store, F32s, S
 /// # Safety
 /// No other task touches the row's particles or multipliers.
 #[inline(always)]
-pub(crate) unsafe fn row<const RESET: bool, const STORE: bool>(g: &GridColour, at: usize, lambda: &Multipliers, s: &Sweep<'_>) {
+pub(crate) unsafe fn row<const RESET: bool, const STORE: bool, const CHECK_DENOM: bool>(
+    g: &GridColour,
+    at: usize,
+    lambda: &Multipliers,
+    s: &Sweep<'_>,
+) {
     let cl = g.cl();
     let (per_row, cols) = (g.per_row() as usize, g.spec.cols);
     // SAFETY: the caller owns this row.
@@ -47,10 +52,10 @@ pub(crate) unsafe fn row<const RESET: bool, const STORE: bool>(g: &GridColour, a
             if tail {
                 let j = per_row - LANES;
                 let fresh = order(std::array::from_fn(|l| l as u32)).simd_ge(F32s::splat((blocks * LANES - j) as f32));
-                unsafe { k.run::<RESET, STORE>(first, off, lam, j, Some(fresh)) };
+                unsafe { k.run::<RESET, STORE, CHECK_DENOM>(first, off, lam, j, Some(fresh)) };
             }
             for q in 0..blocks {
-                unsafe { k.run::<RESET, STORE>(first, off, lam, q * LANES, None) };
+                unsafe { k.run::<RESET, STORE, CHECK_DENOM>(first, off, lam, q * LANES, None) };
             }
             if tail {
                 per_row
@@ -63,11 +68,11 @@ pub(crate) unsafe fn row<const RESET: bool, const STORE: bool>(g: &GridColour, a
             let last = cl.last_window(cols).filter(|_| whole > 0 && whole * LANES < per_row);
             if let Some((c, rank)) = last {
                 let fresh = order(WINDOW_LANES).simd_ge(F32s::splat((whole * LANES) as f32 - rank as f32));
-                unsafe { k.window::<RESET, STORE>(row_start + c as usize, split, lam, rank as usize, Some(fresh)) };
+                unsafe { k.window::<RESET, STORE, CHECK_DENOM>(row_start + c as usize, split, lam, rank as usize, Some(fresh)) };
             }
             for q in 0..whole {
                 let i = row_start + cl.col_res() as usize + 16 * q;
-                unsafe { k.window::<RESET, STORE>(i, split, lam, q * LANES, None) };
+                unsafe { k.window::<RESET, STORE, CHECK_DENOM>(i, split, lam, q * LANES, None) };
             }
             last.map_or(whole * LANES, |(_, rank)| (rank as usize + LANES).max(whole * LANES))
         }
@@ -109,11 +114,19 @@ impl Kernel<'_> {
     /// Both runs lie inside the particle arrays, apart, and no other task touches them or
     /// `lam[j..j + 8]`.
     #[inline(always)]
-    unsafe fn run<const RESET: bool, const STORE: bool>(&self, first: usize, off: usize, lam: &mut [f32], j: usize, fresh: Option<F32s>) {
+    unsafe fn run<const RESET: bool, const STORE: bool, const CHECK_DENOM: bool>(
+        &self,
+        first: usize,
+        off: usize,
+        lam: &mut [f32],
+        j: usize,
+        fresh: Option<F32s>,
+    ) {
         let (i, p) = (first + j, self.p);
         let (pa, pb) = unsafe { (p.load_run(i), p.load_run(i + off)) };
         let l0 = if RESET { F32s::ZERO } else { load(lam, j) };
-        let (mut na, mut nb, mut l1) = project8::<true>(pa, pb, load(self.w, i), load(self.w, i + off), self.rest, self.alpha, l0);
+        let (mut na, mut nb, mut l1) =
+            project8::<true, CHECK_DENOM>(pa, pb, load(self.w, i), load(self.w, i + off), self.rest, self.alpha, l0);
         if let Some(m) = fresh {
             (na, nb) = (Vec3x8::select(m, na, pa), Vec3x8::select(m, nb, pb));
             if STORE {
@@ -137,14 +150,21 @@ impl Kernel<'_> {
     /// The window lies inside the particle arrays, and no other task touches it or its
     /// multipliers.
     #[inline(always)]
-    unsafe fn window<const RESET: bool, const STORE: bool>(&self, i: usize, split: Split, lam: &mut [f32], j: usize, fresh: Option<F32s>) {
+    unsafe fn window<const RESET: bool, const STORE: bool, const CHECK_DENOM: bool>(
+        &self,
+        i: usize,
+        split: Split,
+        lam: &mut [f32],
+        j: usize,
+        fresh: Option<F32s>,
+    ) {
         let p = self.p;
         let (lo, hi) = unsafe { (p.load_run(i), p.load_run(i + LANES)) };
         let (pa, pb) = split16_vec(lo, hi, split);
         let (wa, wb) = split16(load(self.w, i), load(self.w, i + LANES), split);
         let Some(m) = fresh else {
             let l0 = if RESET { F32s::ZERO } else { load(lam, j) };
-            let (pa, pb, l1) = project8::<true>(pa, pb, wa, wb, self.rest, self.alpha, l0);
+            let (pa, pb, l1) = project8::<true, CHECK_DENOM>(pa, pb, wa, wb, self.rest, self.alpha, l0);
             let (lo, hi) = merge16_vec(pa, pb, split);
             unsafe {
                 p.store_run(i, lo);
@@ -158,7 +178,7 @@ impl Kernel<'_> {
         let live = m.to_array().map(|v| v.to_bits() != 0);
         let slot = |l: usize| j + WINDOW_LANES[l] as usize;
         let l0: [f32; LANES] = std::array::from_fn(|l| if RESET || !live[l] { 0.0 } else { lam[slot(l)] });
-        let (na, nb, l1) = project8::<true>(pa, pb, wa, wb, self.rest, self.alpha, F32s::from(l0));
+        let (na, nb, l1) = project8::<true, CHECK_DENOM>(pa, pb, wa, wb, self.rest, self.alpha, F32s::from(l0));
         let (lo, hi) = merge16_vec(Vec3x8::select(m, na, pa), Vec3x8::select(m, nb, pb), split);
         unsafe {
             p.store_run(i, lo);

@@ -100,9 +100,20 @@ fn multipliers(colours: &mut [Colour]) -> [Multipliers; MAX_COLOURS] {
 unsafe fn sweep_group<const RESET: bool, const STORE: bool>(colours: &[Colour], lambdas: &[Multipliers], q: usize, s: &Sweep<'_>) {
     for (c, lambda) in colours.iter().zip(lambdas) {
         let Some(g) = &c.grid else { continue };
+        // `α̃ > 0` makes every denominator positive (inverse masses are finite and not
+        // negative), so its rows skip that test; a colour without compliance keeps no
+        // multipliers under reset ([`GridColour::keeps_multipliers`]).
+        let positive = g.compliance * s.inv_h2 > 0.0;
+        let store = STORE && g.keeps_multipliers(RESET);
         for i in g.group(q) {
             // SAFETY: the caller owns the group's rows.
-            unsafe { row::<RESET, STORE>(g, i, lambda, s) };
+            unsafe {
+                match (positive, store) {
+                    (true, _) => row::<RESET, STORE, false>(g, i, lambda, s),
+                    (false, true) => row::<RESET, STORE, true>(g, i, lambda, s),
+                    (false, false) => row::<RESET, false, true>(g, i, lambda, s),
+                }
+            }
         }
     }
 }

@@ -53,7 +53,9 @@ impl World {
         } else if self.last_h > 0.0 {
             let inv_h2 = 1.0 / (self.last_h as f64 * self.last_h as f64);
             for col in &self.distance.colours {
-                for k in 0..col.real {
+                // A constraint without compliance stores no energy (and its colour may keep
+                // no multipliers: `GridColour::keeps_multipliers`).
+                for k in (0..col.real).filter(|&k| col.compliance[k] > 0.0) {
                     let f = col.lambda[k] as f64 * inv_h2;
                     m.elastic += 0.5 * col.compliance[k] as f64 * f * f;
                 }
