@@ -104,6 +104,21 @@ pub fn positive(name: &str, v: f32) -> Result<f32> {
     }
 }
 
+/// Checks that `v` is a mass: finite and strictly positive, with a finite inverse (a
+/// subnormal mass such as `1e-40` has an infinite inverse mass, which no step survives).
+pub fn mass(name: &str, v: f32) -> Result<f32> {
+    positive(name, v)?;
+    if (1.0 / v).is_finite() {
+        Ok(v)
+    } else {
+        Err(WeftError::param(
+            name,
+            v,
+            format!("must be at least {:e} kg (its inverse must be finite)", 1.0 / f32::MAX),
+        ))
+    }
+}
+
 /// Checks that `v` is finite and not negative.
 pub fn non_negative(name: &str, v: f32) -> Result<f32> {
     if v.is_finite() && v >= 0.0 {

@@ -17,7 +17,7 @@
 //! `h` as `v <- v / (1 + c h)`: unconditionally stable, and the paper's coefficients give mild
 //! damping at its time steps.
 
-use crate::error::{non_negative, positive, Result, WeftError};
+use crate::error::{mass, non_negative, positive, Result, WeftError};
 
 /// Material of one cloth piece.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -77,7 +77,7 @@ impl Fabric {
 
     /// Checks every field.
     pub fn validate(&self) -> Result<()> {
-        positive("fabric.mass", self.mass)?;
+        mass("fabric.mass", self.mass)?;
         non_negative("fabric.stretch_compliance", self.stretch_compliance)?;
         non_negative("fabric.shear_compliance", self.shear_compliance)?;
         non_negative("fabric.bend_compliance", self.bend_compliance)?;

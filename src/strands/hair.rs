@@ -21,7 +21,7 @@
 //! [`NurbsCurve::strand`]: super::nurbs::NurbsCurve::strand
 
 use super::scalp::Scalp;
-use crate::error::{non_negative, positive, Result, WeftError};
+use crate::error::{mass, non_negative, positive, Result, WeftError};
 use crate::model::cloth::{ConstraintKind, Edge, MAX_PARTICLES};
 
 /// A group of strands grown on one scalp.
@@ -107,7 +107,7 @@ impl StrandsDesc {
         positive("strands.segment_length", self.segment_length)?;
         non_negative("strands.stretch_compliance", self.stretch_compliance)?;
         non_negative("strands.bend_compliance", self.bend_compliance)?;
-        positive("strands.mass", self.mass)?;
+        mass("strands.mass", self.mass)?;
         non_negative("strands.thickness", self.thickness)?;
         non_negative("strands.damping", self.damping)?;
         Ok(())

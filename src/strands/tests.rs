@@ -103,6 +103,8 @@ fn bad_strand_descriptions_are_errors() {
             ..ok.clone()
         },
         StrandsDesc { mass: -1.0, ..ok.clone() },
+        // an infinite inverse mass
+        StrandsDesc { mass: 1e-40, ..ok.clone() },
         StrandsDesc {
             bend_compliance: f32::INFINITY,
             ..ok.clone()
