@@ -31,7 +31,7 @@ pub(crate) unsafe fn row<const RESET: bool, const STORE: bool, const CHECK_DENOM
     let off = (cl.dr() * cols + b_dc) as usize - a_dc as usize;
     // `α / h²`, one rounding: the lanes and the scalar loop below use the same value
     let alpha = g.compliance * s.inv_h2;
-    let k = Kernel {
+    let k = Kernel::<CHECK_DENOM> {
         rest: F32s::splat(g.rest),
         alpha: F32s::splat(alpha),
         p: &s.p,
@@ -52,10 +52,10 @@ pub(crate) unsafe fn row<const RESET: bool, const STORE: bool, const CHECK_DENOM
             if tail {
                 let j = per_row - LANES;
                 let fresh = order(std::array::from_fn(|l| l as u32)).simd_ge(F32s::splat((blocks * LANES - j) as f32));
-                unsafe { k.run::<RESET, STORE, CHECK_DENOM>(first, off, lam, j, Some(fresh)) };
+                unsafe { k.run::<RESET, STORE>(first, off, lam, j, Some(fresh)) };
             }
             for q in 0..blocks {
-                unsafe { k.run::<RESET, STORE, CHECK_DENOM>(first, off, lam, q * LANES, None) };
+                unsafe { k.run::<RESET, STORE>(first, off, lam, q * LANES, None) };
             }
             if tail {
                 per_row
@@ -68,11 +68,11 @@ pub(crate) unsafe fn row<const RESET: bool, const STORE: bool, const CHECK_DENOM
             let last = cl.last_window(cols).filter(|_| whole > 0 && whole * LANES < per_row);
             if let Some((c, rank)) = last {
                 let fresh = order(WINDOW_LANES).simd_ge(F32s::splat((whole * LANES) as f32 - rank as f32));
-                unsafe { k.window::<RESET, STORE, CHECK_DENOM>(row_start + c as usize, split, lam, rank as usize, Some(fresh)) };
+                unsafe { k.window::<RESET, STORE>(row_start + c as usize, split, lam, rank as usize, Some(fresh)) };
             }
             for q in 0..whole {
                 let i = row_start + cl.col_res() as usize + 16 * q;
-                unsafe { k.window::<RESET, STORE, CHECK_DENOM>(i, split, lam, q * LANES, None) };
+                unsafe { k.window::<RESET, STORE>(i, split, lam, q * LANES, None) };
             }
             last.map_or(whole * LANES, |(_, rank)| (rank as usize + LANES).max(whole * LANES))
         }
@@ -97,15 +97,15 @@ pub(crate) unsafe fn row<const RESET: bool, const STORE: bool, const CHECK_DENOM
 }
 
 /// What a row's blocks share: its class's rest length and compliance (`alpha = α / h²`), the
-/// particles and their inverse masses.
-struct Kernel<'a> {
+/// particles and their inverse masses; `CHECK_DENOM` as in [`project8`].
+struct Kernel<'a, const CHECK_DENOM: bool> {
     rest: F32s,
     alpha: F32s,
     p: &'a SharedVec3,
     w: &'a [f32],
 }
 
-impl Kernel<'_> {
+impl<const CHECK_DENOM: bool> Kernel<'_, CHECK_DENOM> {
     /// The block of eight constraints joining the runs at `i` and `i + off`, whose multipliers
     /// are `lam[j..j + 8]`. With `fresh`, only its true lanes are solved; the others keep their
     /// particles and multipliers.
@@ -114,14 +114,7 @@ impl Kernel<'_> {
     /// Both runs lie inside the particle arrays, apart, and no other task touches them or
     /// `lam[j..j + 8]`.
     #[inline(always)]
-    unsafe fn run<const RESET: bool, const STORE: bool, const CHECK_DENOM: bool>(
-        &self,
-        first: usize,
-        off: usize,
-        lam: &mut [f32],
-        j: usize,
-        fresh: Option<F32s>,
-    ) {
+    unsafe fn run<const RESET: bool, const STORE: bool>(&self, first: usize, off: usize, lam: &mut [f32], j: usize, fresh: Option<F32s>) {
         let (i, p) = (first + j, self.p);
         let (pa, pb) = unsafe { (p.load_run(i), p.load_run(i + off)) };
         let l0 = if RESET { F32s::ZERO } else { load(lam, j) };
@@ -150,14 +143,7 @@ impl Kernel<'_> {
     /// The window lies inside the particle arrays, and no other task touches it or its
     /// multipliers.
     #[inline(always)]
-    unsafe fn window<const RESET: bool, const STORE: bool, const CHECK_DENOM: bool>(
-        &self,
-        i: usize,
-        split: Split,
-        lam: &mut [f32],
-        j: usize,
-        fresh: Option<F32s>,
-    ) {
+    unsafe fn window<const RESET: bool, const STORE: bool>(&self, i: usize, split: Split, lam: &mut [f32], j: usize, fresh: Option<F32s>) {
         let p = self.p;
         let (lo, hi) = unsafe { (p.load_run(i), p.load_run(i + LANES)) };
         let (pa, pb) = split16_vec(lo, hi, split);
