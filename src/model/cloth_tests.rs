@@ -55,12 +55,12 @@ fn skewed_directions_start_at_rest() {
 #[test]
 fn bad_descriptions_are_errors() {
     assert!(desc(0, 5).build().unwrap_err().to_string().contains("rows x cols"));
-    // A subnormal mass would make an infinite inverse mass.
+    // A mass whose inverse is infinite is refused; a subnormal one with a finite inverse is not.
     let mut d = desc(3, 3);
     d.fabric.mass = 1e-40;
     assert!(d.build().unwrap_err().to_string().contains("fabric.mass"));
     d.fabric.mass = 1e-38;
-    assert!(d.build().is_ok(), "a small normal mass is a mass");
+    assert!(d.build().is_ok(), "a mass whose inverse (1e38) is finite is a mass");
     let d = ClothDesc {
         spacing: 0.0,
         ..desc(3, 3)
