@@ -250,6 +250,12 @@ impl GridColour {
         !(reset && self.compliance == 0.0)
     }
 
+    /// The class's `α̃ = α / h²` for `inv_h2 = 1 / h²`, one rounding: what its rows project
+    /// with and what picks their kernel.
+    pub(crate) fn alpha(&self, inv_h2: f32) -> f32 {
+        self.compliance * inv_h2
+    }
+
     pub(crate) fn cl(&self) -> &'static Class {
         &CLASSES[self.class as usize]
     }

@@ -30,7 +30,7 @@ pub(crate) unsafe fn row<const RESET: bool, const STORE: bool, const CHECK_DENOM
     let (a_dc, b_dc) = cl.dc();
     let off = (cl.dr() * cols + b_dc) as usize - a_dc as usize;
     // `α / h²`, one rounding: the lanes and the scalar loop below use the same value
-    let alpha = g.compliance * s.inv_h2;
+    let alpha = g.alpha(s.inv_h2);
     let k = Kernel::<CHECK_DENOM> {
         rest: F32s::splat(g.rest),
         alpha: F32s::splat(alpha),

@@ -103,7 +103,7 @@ unsafe fn sweep_group<const RESET: bool, const STORE: bool>(colours: &[Colour], 
         // `α̃ > 0` makes every denominator positive (inverse masses are finite and not
         // negative), so its rows skip that test; a colour without compliance keeps no
         // multipliers under reset ([`GridColour::keeps_multipliers`]).
-        let positive = g.compliance * s.inv_h2 > 0.0;
+        let positive = g.alpha(s.inv_h2) > 0.0;
         let store = STORE && g.keeps_multipliers(RESET);
         for i in g.group(q) {
             // SAFETY: the caller owns the group's rows.

@@ -120,7 +120,7 @@ impl Broadphase for Tree {
     /// `d + 2 max(t) d` if that is more, each pair kept (in its filter) within its own reach and
     /// unless the rest rule drops it.
     fn pairs(&mut self, q: &PairQuery<'_>, out: &mut Neighbours, exec: Exec) -> Result<()> {
-        let t = self.built()?;
+        let tree = self.built()?;
         let (x, d, rest, skip) = (q.x, q.d, q.rest, q.skip);
         let reach = q.travel.map_or(q.reach, |t| {
             let top = t.iter().take(q.n).copied().fold(0.0f32, f32::max);
@@ -131,7 +131,7 @@ impl Broadphase for Tree {
             let within_own = |t: &[f32]| within(x[0][i], x[1][i], x[2][i], x[0][j], x[1][j], x[2][j], pair_reach2(d, t[i], t[j]));
             !rest.skipped(i, j, skip) && q.travel.is_none_or(within_own)
         };
-        t.query_exec(x[0], x[1], x[2], q.n, reach, out, exec, true, &keep)
+        tree.query_exec(x[0], x[1], x[2], q.n, reach, out, exec, true, &keep)
     }
 
     fn partners(&self, x: [&[f32]; 3], n: usize, lim: f32, keep: Keep<'_>, out: &mut Neighbours, exec: Exec) -> Result<()> {

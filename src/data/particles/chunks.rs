@@ -308,21 +308,20 @@ impl Particles {
 /// one by one.
 #[allow(clippy::eq_op)] // `v - v` is the test: 0 for a finite value, NaN otherwise
 pub fn chunk_finite_simd(arrays: &[&[f32]], n: usize) -> bool {
-    use crate::data::lanes::{F32s, LANES};
+    use crate::data::lanes::{load, F32s, LANES};
     const SUMS: usize = 4;
-    let lanes = |c: &[f32]| F32s::from(<[f32; LANES]>::try_from(c).expect("a group of eight"));
     let whole = n - n % LANES;
     let mut acc = [F32s::ZERO; SUMS];
     for a in arrays {
         let mut runs = a[..whole].chunks_exact(SUMS * LANES);
         for run in &mut runs {
             for (s, g) in acc.iter_mut().zip(run.chunks_exact(LANES)) {
-                let v = lanes(g);
+                let v = load(g, 0);
                 *s += v - v;
             }
         }
         for (s, g) in acc.iter_mut().zip(runs.remainder().chunks_exact(LANES)) {
-            let v = lanes(g);
+            let v = load(g, 0);
             *s += v - v;
         }
     }

@@ -13,7 +13,7 @@
 //! writing a block that stays empty. Every write of a block goes with the update of its flag
 //! ([`Slots::write`], the generators through `obstacles::for_blocks`).
 
-use crate::data::lanes::LANES;
+use crate::data::lanes::{load, F32s, LANES};
 use wide::u32x8;
 
 /// Floats per block of eight slots.
@@ -204,8 +204,7 @@ fn or_bits(values: &[f32]) -> u32 {
     let rest = groups.remainder().iter().fold(0u32, |a, &c| a | c.to_bits());
     let mut acc = u32x8::ZERO;
     for g in groups {
-        let g: [f32; LANES] = g.try_into().expect("a group of lane width");
-        acc |= u32x8::from(bytemuck::cast::<[f32; LANES], [u32; LANES]>(g));
+        acc |= bytemuck::cast::<F32s, u32x8>(load(g, 0));
     }
     acc.to_array().iter().fold(rest, |a, &b| a | b)
 }
