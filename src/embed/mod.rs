@@ -19,7 +19,10 @@
 //!   (`threads = 0`, [`crate::world::threads`]), the calling thread (`threads = 1`), an own
 //!   pool (`threads = k > 1`), a pool the caller gives ([`World::set_thread_pool`]) or the
 //!   calling thread only whatever `threads` says ([`World::set_caller_thread_only`]); the
-//!   results are the same bits in every case.
+//!   results are the same bits in every case. A thread outside the global pool hands each
+//!   step to it and sleeps until the step ends; a thread that steps many small worlds can
+//!   join the pool first (`rayon::ThreadPoolBuilder::new().use_current_thread().build_global()`,
+//!   as the `weft` binary does) and run the passes itself.
 //!
 //! After the first step of a scene whose topology does not change, [`World::step`] does not
 //! allocate (tested with a counting global allocator in `tests/no_alloc_step.rs`).
