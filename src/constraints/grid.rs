@@ -242,12 +242,12 @@ pub struct GridColour {
 }
 
 impl GridColour {
-    /// Whether a sweep writes this colour's multipliers when `reset` (the sweep reads them as
-    /// zero): not for a colour without compliance, whose multipliers neither move a particle
-    /// (they enter as `α̃ λ`) nor count in [`World::metrics`](crate::World::metrics)'
-    /// elastic energy (`½ α f²`), and which a later sweep reads only without reset.
-    pub fn keeps_multipliers(&self, reset: bool) -> bool {
-        !(reset && self.compliance == 0.0)
+    /// Whether the sweeps read and write this colour's multipliers: not for a colour without
+    /// compliance, whose multipliers neither move a particle (they enter as `α̃ λ`) nor count
+    /// in [`World::metrics`](crate::World::metrics)' elastic energy (`½ α f²`). Its sweeps read
+    /// them as zero, as a reset does, and store none.
+    pub fn keeps_multipliers(&self) -> bool {
+        self.compliance != 0.0
     }
 
     /// The class's `α̃ = α / h²` for `inv_h2 = 1 / h²`, one rounding: what its rows project

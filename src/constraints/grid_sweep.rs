@@ -102,16 +102,16 @@ unsafe fn sweep_group<const RESET: bool, const STORE: bool>(colours: &[Colour], 
         let Some(g) = &c.grid else { continue };
         // `α̃ > 0` makes every denominator positive (inverse masses are finite and not
         // negative), so its rows skip that test; a colour without compliance keeps no
-        // multipliers under reset ([`GridColour::keeps_multipliers`]).
+        // multipliers ([`GridColour::keeps_multipliers`]): its rows run as after a reset.
         let positive = g.alpha(s.inv_h2) > 0.0;
-        let store = STORE && g.keeps_multipliers(RESET);
+        let keeps = g.keeps_multipliers();
         for i in g.group(q) {
             // SAFETY: the caller owns the group's rows.
             unsafe {
-                match (positive, store) {
+                match (positive, keeps) {
                     (true, _) => row::<RESET, STORE, false>(g, i, lambda, s),
                     (false, true) => row::<RESET, STORE, true>(g, i, lambda, s),
-                    (false, false) => row::<RESET, false, true>(g, i, lambda, s),
+                    (false, false) => row::<true, false, true>(g, i, lambda, s),
                 }
             }
         }

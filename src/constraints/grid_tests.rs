@@ -154,6 +154,24 @@ fn assert_sweep_matches_scalar(rows: u32, cols: u32, seed: u64, runs: &[(bool, u
     let want = run(false, false, 1);
     let start = pos.iter().flat_map(|a| a.iter().map(|f| f.to_bits())).collect::<Vec<_>>();
     assert!(want.0 != start, "the sweeps moved the particles");
+    // The stretch classes (no compliance) keep no multipliers: theirs stay zero, the others'
+    // are written.
+    let mut at = 0;
+    let (mut rigid, mut soft) = (0, 0);
+    for c in &set.colours {
+        let lam = &want.1[at..at + c.lambda.len()];
+        at += c.lambda.len();
+        if c.grid.as_ref().is_some_and(|g| !g.keeps_multipliers()) {
+            assert!(lam.iter().all(|&l| l == 0), "{rows}x{cols}: a rigid colour's multipliers");
+            rigid += 1;
+        } else if lam.iter().any(|&l| l != 0) {
+            soft += 1;
+        }
+    }
+    assert!(
+        rigid > 0 && soft > 0,
+        "{rows}x{cols}: {rigid} rigid colours, {soft} with multipliers"
+    );
     for &(parallel, threads) in runs {
         assert!(
             want == run(true, parallel, threads),

@@ -158,7 +158,8 @@ impl DistanceSet {
     pub fn solve_scalar(&mut self, px: &mut [f32], py: &mut [f32], pz: &mut [f32], w: &[f32], inv_h2: f32) {
         let (reset, keep) = self.take_reset();
         for col in &mut self.colours {
-            let keep = keep && col.grid.as_ref().is_none_or(|g| g.keeps_multipliers(reset));
+            let uses = col.grid.as_ref().is_none_or(GridColour::keeps_multipliers);
+            let (reset, keep) = (reset || !uses, keep && uses);
             for k in 0..col.a.len() {
                 let lam = if reset { 0.0 } else { col.lambda[k] };
                 let (a, b) = (col.a[k] as usize, col.b[k] as usize);
