@@ -1,6 +1,8 @@
 //! The structured sweep of grid colours ([`grid`](super::grid)): one pass over a grid's band
 //! colours or its seam colours, a task per band or seam, row by row.
 
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+
 use rayon::prelude::*;
 
 use crate::constraints::distance::Colour;
@@ -150,8 +152,11 @@ pub(crate) fn bands_on_blocks(cols: u32) -> bool {
 /// The bands are cut into parts of consecutive bands ([`part_bounds`]: a multiple of the
 /// pool's threads, about as many rows in each). A task runs its part band after band: the band's
 /// colours, then the seam above it, then finishes the rows that no later constraint of
-/// the sweep touches (all but the two rows on each side of a seam still to come). After
-/// the tasks, the seams between parts and the rows around them. A particle meets its
+/// the sweep touches (all but the two rows on each side of a seam still to come). The seam
+/// between two parts and the rows around it run at the end of the upper part's task when
+/// the lower part has run its first band by then (the usual case: the parts take about as
+/// long), else after the tasks; either way after both bands beside it and before nothing
+/// else that touches those rows, so the part that runs it changes no bit. A particle meets its
 /// constraints in the order of the two passes [`run_pass`] makes (its band's colours, then
 /// its seam's), so the bits are those of the two passes followed by `finish` over all
 /// particles.
@@ -205,6 +210,17 @@ pub(crate) fn run_wave<const RESET: bool, const STORE: bool>(
     let (first, parts) = part_bounds(nb, b, spec.rows as usize, threads);
     // where part `k`'s own finished range starts
     let start = |k: usize| if k == 0 { 0 } else { up((first[k] * b + 2) * cols) };
+    // Part `k > 0` has run its first band (the seam above it can run); the seam above part
+    // `k` has run.
+    let ready: [AtomicBool; MAX_PARTS] = Default::default();
+    let fixed: [AtomicBool; MAX_PARTS] = Default::default();
+    let fix = |k: usize, from: usize| {
+        group(seams, &seam_l, first[k] - 1);
+        let to = start(k);
+        if to > from {
+            finish(from..to);
+        }
+    };
     let run_part = |k: usize| -> usize {
         let (q0, q1) = (first[k], first[k + 1]);
         let mut done = start(k);
@@ -221,27 +237,29 @@ pub(crate) fn run_wave<const RESET: bool, const STORE: bool>(
                 finish(done..end);
                 done = end;
             }
+            if q == q0 {
+                ready[k].store(true, Ordering::Release);
+            }
+        }
+        // The seam below this part, if the next part is past its first band: it touches the
+        // rows around the boundary only, which neither part touches again.
+        if k + 1 < parts && ready[k + 1].load(Ordering::Acquire) {
+            fix(k + 1, done);
+            fixed[k + 1].store(true, Ordering::Relaxed);
         }
         done
-    };
-    let fix = |k: usize, from: usize| {
-        group(seams, &seam_l, first[k] - 1);
-        let to = start(k);
-        if to > from {
-            finish(from..to);
-        }
     };
     if parts == 1 {
         run_part(0);
         return;
     }
-    let ends: [std::sync::atomic::AtomicUsize; MAX_PARTS] = Default::default();
+    let ends: [AtomicUsize; MAX_PARTS] = Default::default();
     (0..parts)
         .into_par_iter()
-        .for_each(|k| ends[k].store(run_part(k), std::sync::atomic::Ordering::Relaxed));
+        .for_each(|k| ends[k].store(run_part(k), Ordering::Relaxed));
     (1..parts)
-        .into_par_iter()
-        .for_each(|k| fix(k, ends[k - 1].load(std::sync::atomic::Ordering::Relaxed)));
+        .filter(|&k| !fixed[k].load(Ordering::Relaxed))
+        .for_each(|k| fix(k, ends[k - 1].load(Ordering::Relaxed)));
 }
 
 /// The first band of each part of a wave over `nb` bands of `b` rows (the last band holds the
