@@ -18,20 +18,35 @@ pub struct PredictParams<'a> {
 
 /// Predict on one chunk: SIMD when `simd`, else the scalar twin.
 pub fn predict(c: ParticleChunk<'_>, p: &PredictParams<'_>, simd: bool) {
+    predict_saving(c, None, p, simd);
+}
+
+/// [`predict`], also copying the chunk's state before it changes it into `saved` when given
+/// (`x, y, z, vx, vy, vz`, six arrays of the chunk's length: the guard's backup), from the
+/// values the kernel loads anyway: the same bits as
+/// [`save_state`](ParticleChunk::save_state) and then [`predict`].
+pub fn predict_saving(c: ParticleChunk<'_>, saved: Option<[&mut [f32]; 6]>, p: &PredictParams<'_>, simd: bool) {
+    if let Some(s) = &saved {
+        assert!(s.iter().all(|a| a.len() == c.x.len()), "one saved value a particle");
+    }
     match (p.gravity.is_some(), p.drag.is_some(), p.force.is_some(), simd) {
-        (false, false, false, true) => predict_simd::<false, false, false>(c, p),
-        (true, false, false, true) => predict_simd::<true, false, false>(c, p),
-        (false, true, false, true) => predict_simd::<false, true, false>(c, p),
-        (true, true, false, true) => predict_simd::<true, true, false>(c, p),
-        (false, false, true, true) => predict_simd::<false, false, true>(c, p),
-        (true, false, true, true) => predict_simd::<true, false, true>(c, p),
-        (false, true, true, true) => predict_simd::<false, true, true>(c, p),
-        (true, true, true, true) => predict_simd::<true, true, true>(c, p),
-        (g, d, f, false) => predict_scalar(c, p, g, d, f),
+        (false, false, false, true) => predict_simd::<false, false, false>(c, saved, p),
+        (true, false, false, true) => predict_simd::<true, false, false>(c, saved, p),
+        (false, true, false, true) => predict_simd::<false, true, false>(c, saved, p),
+        (true, true, false, true) => predict_simd::<true, true, false>(c, saved, p),
+        (false, false, true, true) => predict_simd::<false, false, true>(c, saved, p),
+        (true, false, true, true) => predict_simd::<true, false, true>(c, saved, p),
+        (false, true, true, true) => predict_simd::<false, true, true>(c, saved, p),
+        (true, true, true, true) => predict_simd::<true, true, true>(c, saved, p),
+        (g, d, f, false) => predict_scalar(c, saved, p, g, d, f),
     }
 }
 
-fn predict_simd<const G: bool, const D: bool, const F: bool>(c: ParticleChunk<'_>, p: &PredictParams<'_>) {
+fn predict_simd<const G: bool, const D: bool, const F: bool>(
+    c: ParticleChunk<'_>,
+    mut saved: Option<[&mut [f32]; 6]>,
+    p: &PredictParams<'_>,
+) {
     let h = F32s::splat(p.h);
     let zero = F32s::ZERO;
     let one = F32s::ONE;
@@ -48,6 +63,11 @@ fn predict_simd<const G: bool, const D: bool, const F: bool>(c: ParticleChunk<'_
     for i in (0..c.x.len()).step_by(LANES) {
         let w = load(c.w, i);
         let mut v = Vec3x8::load(c.vx, c.vy, c.vz, i);
+        let x = Vec3x8::load(c.x, c.y, c.z, i);
+        if let Some([sx, sy, sz, svx, svy, svz]) = &mut saved {
+            x.store(sx, sy, sz, i);
+            v.store(svx, svy, svz, i);
+        }
         if G {
             let free = w.simd_gt(zero);
             let gm = Vec3x8::select(free, g, Vec3x8::splat([0.0; 3]));
@@ -61,7 +81,6 @@ fn predict_simd<const G: bool, const D: bool, const F: bool>(c: ParticleChunk<'_
         if D {
             v = v.scale(one / (one + hc * w));
         }
-        let x = Vec3x8::load(c.x, c.y, c.z, i);
         let pp = x + v.scale(h);
         v.store(c.vx, c.vy, c.vz, i);
         pp.store(c.px, c.py, c.pz, i);
@@ -69,7 +88,10 @@ fn predict_simd<const G: bool, const D: bool, const F: bool>(c: ParticleChunk<'_
 }
 
 /// Scalar twin of the predict kernel.
-fn predict_scalar(c: ParticleChunk<'_>, p: &PredictParams<'_>, has_g: bool, has_d: bool, has_f: bool) {
+fn predict_scalar(c: ParticleChunk<'_>, saved: Option<[&mut [f32]; 6]>, p: &PredictParams<'_>, has_g: bool, has_d: bool, has_f: bool) {
+    if let Some(saved) = saved {
+        c.save_state(saved);
+    }
     let h = p.h;
     let g = p.gravity.unwrap_or([0.0; 3]);
     let hc = p.h * p.drag.unwrap_or(0.0);
@@ -209,6 +231,35 @@ mod tests {
             prop_assert_eq!(&s, &run(true, false));
             prop_assert_eq!(&s, &run(true, true));
             prop_assert_eq!(&s, &run(false, true));
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(32))]
+        /// Predict with the guard's copy, SIMD and scalar, serial and in parallel chunks: the
+        /// copy holds the state before the step and the particles the bits of predict alone.
+        #[test]
+        fn predict_saving_copies_the_state_before_and_predicts_alike(n in prop_oneof![0usize..40, 4090usize..4110], seed in any::<u64>(),
+                h in 1e-4f32..0.1, g in any::<bool>(), d in any::<bool>()) {
+            let base = cloud(n, seed);
+            let params = PredictParams { h, gravity: g.then_some([0.1, -9.81, 0.3]), drag: d.then_some(0.7), force: None };
+            let want = {
+                let mut p = base.clone();
+                p.for_chunks(false, |c| predict(c, &params, false));
+                bits(&p)
+            };
+            let before: Vec<Vec<u32>> = [&base.x, &base.y, &base.z, &base.vx, &base.vy, &base.vz]
+                .iter()
+                .map(|a| a.iter().map(|f| f.to_bits()).collect())
+                .collect();
+            for (simd, par) in [(false, false), (true, false), (true, true), (false, true)] {
+                let mut p = base.clone();
+                let mut saved: [Vec<f32>; 6] = Default::default();
+                p.for_chunks_saving(par, &mut saved, |c, s| predict_saving(c, Some(s), &params, simd));
+                prop_assert_eq!(&bits(&p), &want);
+                let got: Vec<Vec<u32>> = saved.iter().map(|a| a.iter().map(|f| f.to_bits()).collect()).collect();
+                prop_assert_eq!(&got, &before);
+            }
         }
     }
 

@@ -15,7 +15,7 @@
 
 pub mod kernels;
 
-pub use kernels::{predict, update, PredictParams};
+pub use kernels::{predict, predict_saving, update, PredictParams};
 pub mod implicit;
 pub mod mass_spring;
 pub mod springs;

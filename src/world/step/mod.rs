@@ -45,7 +45,7 @@ use std::sync::atomic::AtomicU64;
 
 use crate::data::particles::ParticleChunk;
 use crate::error::{positive, Result, WeftError};
-use crate::integrate::{predict, update};
+use crate::integrate::{predict, predict_saving, update};
 use crate::model::params::Method;
 use crate::self_collision::mean::MeanParts;
 use crate::world::step::fusion::Fusion;
@@ -239,8 +239,7 @@ impl World {
                     // done by the previous substep's update pass, or by the wave below
                 } else if fused_guard && s == 0 {
                     self.particles.for_chunks_saving(parallel, &mut self.backup, |mut c, saved| {
-                        c.save_state(saved);
-                        predict(c.reborrow(), &pp, simd);
+                        predict_saving(c.reborrow(), Some(saved), &pp, simd);
                         add_mean(mean_sink, &c, n, simd);
                         contacts(&mut c);
                     });

@@ -8,7 +8,7 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 use crate::data::particles::{chunk_finite_simd, ParticleChunk, RawParticles, RawSaved};
 use crate::integrate::wind::WindState;
-use crate::integrate::{predict, update, PredictParams};
+use crate::integrate::{predict, predict_saving, update, PredictParams};
 use crate::obstacles::chunkwise::ChunkObstacles;
 use crate::obstacles::ObstacleSet;
 use crate::self_collision::mean::MeanParts;
@@ -105,10 +105,8 @@ impl World {
                 // other task touches them.
                 let predict_band = |r: std::ops::Range<usize>| {
                     let mut c = unsafe { raw.chunk(r.clone()) };
-                    if let Some(saved) = &saved {
-                        c.save_state(unsafe { saved.range(r) });
-                    }
-                    predict(c.reborrow(), &pp, simd);
+                    let keep = saved.as_ref().map(|s| unsafe { s.range(r) });
+                    predict_saving(c.reborrow(), keep, &pp, simd);
                     if let Some(co) = &co_now {
                         timed(obstacle_ns, || co.contacts(&mut c, simd));
                     }
