@@ -45,7 +45,7 @@ use std::sync::atomic::AtomicU64;
 
 use crate::data::particles::ParticleChunk;
 use crate::error::{positive, Result, WeftError};
-use crate::integrate::{predict, predict_saving, update};
+use crate::integrate::{predict_saving, update};
 use crate::model::params::Method;
 use crate::self_collision::mean::MeanParts;
 use crate::world::step::fusion::Fusion;
@@ -230,25 +230,21 @@ impl World {
                 let pp = substep_predict(h, &self.effects, self.wind.as_ref());
                 let t_end = self.time + ((s + 1) as f64) * (h as f64);
                 let co = (chunk_obstacles && !predicted_ahead && !wave_predicts).then(|| self.obstacles.chunkwise(t_end, h, n));
-                let contacts = |c: &mut ParticleChunk<'_>| {
+                // A chunk's predict (with the guard's copy when given), mean sums and contacts.
+                let chunk = |mut c: ParticleChunk<'_>, saved: Option<[&mut [f32]; 6]>| {
+                    predict_saving(c.reborrow(), saved, &pp, simd);
+                    add_mean(mean_sink, &c, n, simd);
                     if let Some(co) = &co {
-                        timed(&obstacle_ns, || co.contacts(c, simd));
+                        timed(&obstacle_ns, || co.contacts(&mut c, simd));
                     }
                 };
                 if predicted_ahead || wave_predicts {
                     // done by the previous substep's update pass, or by the wave below
                 } else if fused_guard && s == 0 {
-                    self.particles.for_chunks_saving(parallel, &mut self.backup, |mut c, saved| {
-                        predict_saving(c.reborrow(), Some(saved), &pp, simd);
-                        add_mean(mean_sink, &c, n, simd);
-                        contacts(&mut c);
-                    });
+                    self.particles
+                        .for_chunks_saving(parallel, &mut self.backup, |c, saved| chunk(c, Some(saved)));
                 } else {
-                    self.particles.for_chunks(parallel, |mut c| {
-                        predict(c.reborrow(), &pp, simd);
-                        add_mean(mean_sink, &c, n, simd);
-                        contacts(&mut c);
-                    });
+                    self.particles.for_chunks(parallel, |c| chunk(c, None));
                 }
             }
             {
