@@ -159,16 +159,22 @@ pub fn headline_cases() -> Result<(f64, Vec<RooflineCase>)> {
 }
 
 /// Steps a `threads = 0` world through its first two thread trials
-/// ([`crate::world::threads`]), so that the timed steps all run where the world chose (a
-/// world of another thread setting takes the same steps: its timed state is as late).
+/// ([`crate::world::threads`]), and on through later ones while the last reversed the one
+/// before it (at most [`EXTRA_TRIALS`] more), so that the timed steps all run where the world
+/// settled (a world of another thread setting takes the first two trials' steps).
 pub fn past_thread_trials(w: &mut World) -> Result<()> {
     use crate::world::threads::{CONFIRM_AFTER, TRIAL_STEPS};
     let dt = w.params().dt;
-    while w.steps() < 2 * u64::from(TRIAL_STEPS) + CONFIRM_AFTER {
+    let first = 2 * u64::from(TRIAL_STEPS) + CONFIRM_AFTER;
+    let most = first + EXTRA_TRIALS * (u64::from(TRIAL_STEPS) + CONFIRM_AFTER);
+    while w.steps() < first || (w.steps() < most && !w.thread_choice_settled()) {
         w.step(dt)?;
     }
     Ok(())
 }
+
+/// Most trials [`past_thread_trials`] waits for after the first two.
+pub const EXTRA_TRIALS: u64 = 4;
 
 /// One case of the roofline.
 #[derive(Clone, Debug, serde::Serialize)]

@@ -88,8 +88,8 @@ enum Command {
 fn main() -> ExitCode {
     // This thread steps the worlds. As a thread of the global pool it runs a step's parallel
     // passes itself; outside the pool every step would be handed to a pool thread while this
-    // one sleeps, and waking it at the end costs a few microseconds a step, a tenth of a
-    // 100 x 100 cloth's (`docs/performance.md`). The call fails only when the global pool
+    // one sleeps, and waking it at the end cost about 7% of a 100 x 100 cloth's 1 x 1 step
+    // (`docs/performance.md` describes the hand-off). The call fails only when the global pool
     // exists already, which nothing before this line makes; the steps then take the hand-off.
     let _ = rayon::ThreadPoolBuilder::new().use_current_thread().build_global();
     let cli = Cli::parse();

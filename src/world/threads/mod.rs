@@ -13,10 +13,11 @@
 //!   [`TRIAL_WARM_UP`] of each block not counted (after a turn on the caller's thread the
 //!   pool's second worker can take milliseconds to join in: on a 2-core virtual machine an
 //!   idle CPU is slow to come back), and the side with the shortest counted step runs until
-//!   the next trial: [`CONFIRM_AFTER`] steps after the first trial of a shape and after a
-//!   close call (a trial can catch the machine busy, an idle pool slow to wake), else
-//!   [`RETRY_AFTER`] steps, and at once when the world's shape changes (particles, substeps,
-//!   iterations, method, self-collision, obstacles).
+//!   the next trial: [`CONFIRM_AFTER`] steps after the first trial of a shape, after a close
+//!   call and after a trial that reversed the one before it (a trial can catch the machine
+//!   busy, an idle pool slow to wake: a choice lasts long only once two trials in a row made
+//!   it), else [`RETRY_AFTER`] steps, and at once when the world's shape changes (particles,
+//!   substeps, iterations, method, self-collision, obstacles).
 //!
 //! A fixed pool needs its cores: when one of them is busy with other work, a worker can be
 //! preempted in the middle of a pass and the step waits for it, so `threads = k > 1` can step
@@ -47,7 +48,8 @@ pub const TRIAL_STEPS: u32 = 4 * TRIAL_BLOCK;
 /// Steps after the first trial of a shape before the second.
 pub const CONFIRM_AFTER: u64 = 50;
 
-/// Steps after any later trial before the next, when it chose by at least [`CLEAR_MARGIN`].
+/// Steps after any later trial before the next, when it chose by at least [`CLEAR_MARGIN`]
+/// and as the trial before it did.
 pub const RETRY_AFTER: u64 = 500;
 
 /// How much slower the other side's shortest trial step must be for a choice to last
@@ -77,10 +79,10 @@ pub(crate) struct ThreadChoice {
     best: [f64; 2],
     /// The world's step count when the choice was made.
     chosen_at: u64,
-    /// Trials finished for this shape.
-    trials: u32,
     /// The outcome of the last finished trial of this shape: the choice.
     last: Option<ThreadChoiceReport>,
+    /// Whether the last trial chose as the one before it (false after the first).
+    agreed: bool,
     /// Start of the step being timed.
     start: Option<Instant>,
 }
@@ -92,8 +94,8 @@ impl Default for ThreadChoice {
             trial: 0,
             best: [f64::INFINITY; 2],
             chosen_at: 0,
-            trials: 0,
             last: None,
+            agreed: false,
             start: None,
         }
     }
@@ -132,7 +134,7 @@ impl ThreadChoice {
         } else if self.trial >= TRIAL_STEPS {
             let (fast, slow) = (self.best[0].min(self.best[1]), self.best[0].max(self.best[1]));
             let close = slow < CLEAR_MARGIN * fast;
-            let life = if self.trials <= 1 || close { CONFIRM_AFTER } else { RETRY_AFTER };
+            let life = if close || !self.agreed { CONFIRM_AFTER } else { RETRY_AFTER };
             if steps.saturating_sub(self.chosen_at) >= life {
                 (self.trial, self.best) = (0, [f64::INFINITY; 2]);
             }
@@ -152,9 +154,10 @@ impl ThreadChoice {
         self.trial += 1;
         if self.trial == TRIAL_STEPS {
             self.chosen_at = steps;
-            self.trials += 1;
+            let caller_thread = self.best[1] < self.best[0];
+            self.agreed = self.last.is_some_and(|l| l.caller_thread == caller_thread);
             self.last = Some(ThreadChoiceReport {
-                caller_thread: self.best[1] < self.best[0],
+                caller_thread,
                 pool_ms: self.best[0] * 1e3,
                 caller_ms: self.best[1] * 1e3,
             });
@@ -166,6 +169,11 @@ impl ThreadChoice {
         if let Some(t0) = self.start.take() {
             self.record(t0.elapsed().as_secs_f64(), steps);
         }
+    }
+
+    /// Whether no trial runs and the last one chose as the one before it.
+    fn settled(&self) -> bool {
+        self.trial >= TRIAL_STEPS && self.agreed
     }
 
     /// The last finished trial's outcome (kept while a later trial runs).
@@ -205,6 +213,12 @@ impl World {
         } else {
             None
         }
+    }
+
+    /// Whether the `threads = 0` choice is settled: its last trial finished and made the
+    /// choice of the one before it (always for other settings).
+    pub(crate) fn thread_choice_settled(&self) -> bool {
+        !self.measures_threads() || self.thread_choice.settled()
     }
 
     /// Starts timing a step for the `threads = 0` choice (nothing for other settings).

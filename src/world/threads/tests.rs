@@ -110,6 +110,37 @@ fn the_choice_holds_until_it_is_stale_or_the_shape_changes() {
     assert_eq!(c.report(), None);
 }
 
+/// A trial that reverses the one before it is confirmed after [`CONFIRM_AFTER`] steps, like a
+/// first trial: one trial that caught the machine busy does not decide [`RETRY_AFTER`] steps.
+#[test]
+fn a_reversed_choice_is_confirmed_soon() {
+    let mut c = ThreadChoice::default();
+    let s = shape(100);
+    let mut steps = 0;
+    // (pool, caller) step times of each trial, and how long its clear choice lasts.
+    for (life, pool, caller) in [
+        (CONFIRM_AFTER, 2e-3, 1e-3),
+        (RETRY_AFTER, 2e-3, 1e-3),
+        (CONFIRM_AFTER, 1e-3, 2e-3),
+        (RETRY_AFTER, 1e-3, 2e-3),
+        (CONFIRM_AFTER, 2e-3, 1e-3),
+    ] {
+        trial(&mut c, s, &mut steps, pool, caller);
+        assert_eq!(c.settled(), life == RETRY_AFTER, "step {steps}");
+        let chosen = steps;
+        let caller_side = caller < pool;
+        while steps < chosen + life {
+            c.begin(s, steps);
+            assert_eq!(c.caller_next(), caller_side, "step {steps}");
+            steps += 1;
+            c.record(1.0, steps);
+        }
+        // Stale: the next trial starts with a block in the pool.
+        c.begin(s, steps);
+        assert!(!c.caller_next() && c.trial == 0 && !c.settled(), "step {steps}");
+    }
+}
+
 /// A 40 x 40 cloth held by its middle row, its halves falling and folding, self-collision on.
 fn world(threads: usize) -> World {
     let params = SolverParams {
