@@ -1,7 +1,7 @@
 //! The structured sweep of grid colours ([`grid`](super::grid)): one pass over a grid's band
 //! colours or its seam colours, a task per band or seam, row by row.
 
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicU8, AtomicUsize, Ordering};
 
 use rayon::prelude::*;
 
@@ -153,10 +153,10 @@ pub(crate) fn bands_on_blocks(cols: u32) -> bool {
 /// pool's threads, about as many rows in each). A task runs its part band after band: the band's
 /// colours, then the seam above it, then finishes the rows that no later constraint of
 /// the sweep touches (all but the two rows on each side of a seam still to come). The seam
-/// between two parts and the rows around it run at the end of the upper part's task when
-/// the lower part has run its first band by then (the usual case: the parts take about as
-/// long), else after the tasks; either way after both bands beside it and before nothing
-/// else that touches those rows, so the part that runs it changes no bit. A particle meets its
+/// between two parts and the rows around it run as soon as the upper part has finished and
+/// the lower part has run its first band, in the task that does the later of the two: after
+/// both bands beside it and before nothing else that touches those rows, so the task that
+/// runs it changes no bit. A particle meets its
 /// constraints in the order of the two passes [`run_pass`] makes (its band's colours, then
 /// its seam's), so the bits are those of the two passes followed by `finish` over all
 /// particles.
@@ -210,18 +210,25 @@ pub(crate) fn run_wave<const RESET: bool, const STORE: bool>(
     let (first, parts) = part_bounds(nb, b, spec.rows as usize, threads);
     // where part `k`'s own finished range starts
     let start = |k: usize| if k == 0 { 0 } else { up((first[k] * b + 2) * cols) };
-    // Part `k > 0` has run its first band (the seam above it can run); the seam above part
-    // `k` has run.
-    let ready: [AtomicBool; MAX_PARTS] = Default::default();
-    let fixed: [AtomicBool; MAX_PARTS] = Default::default();
-    let fix = |k: usize, from: usize| {
+    // Boundary `k` (above part `k > 0`) is ready when part `k - 1` has finished (its end in
+    // `ends`) and part `k` has run its first band; whichever of the two comes second runs its
+    // seam and the rows around it, at once, whether the two parts run side by side or one
+    // after the other on one thread.
+    let arrived: [AtomicU8; MAX_PARTS] = Default::default();
+    let ends: [AtomicUsize; MAX_PARTS] = Default::default();
+    let fix = |k: usize| {
         group(seams, &seam_l, first[k] - 1);
-        let to = start(k);
+        let (from, to) = (ends[k - 1].load(Ordering::Acquire), start(k));
         if to > from {
             finish(from..to);
         }
     };
-    let run_part = |k: usize| -> usize {
+    let arrive = |k: usize| {
+        if arrived[k].fetch_add(1, Ordering::AcqRel) == 1 {
+            fix(k);
+        }
+    };
+    let run_part = |k: usize| {
         let (q0, q1) = (first[k], first[k + 1]);
         let mut done = start(k);
         for q in q0..q1 {
@@ -237,29 +244,20 @@ pub(crate) fn run_wave<const RESET: bool, const STORE: bool>(
                 finish(done..end);
                 done = end;
             }
-            if q == q0 {
-                ready[k].store(true, Ordering::Release);
+            if q == q0 && k > 0 {
+                arrive(k);
             }
         }
-        // The seam below this part, if the next part is past its first band: it touches the
-        // rows around the boundary only, which neither part touches again.
-        if k + 1 < parts && ready[k + 1].load(Ordering::Acquire) {
-            fix(k + 1, done);
-            fixed[k + 1].store(true, Ordering::Relaxed);
+        if k + 1 < parts {
+            ends[k].store(done, Ordering::Release);
+            arrive(k + 1);
         }
-        done
     };
     if parts == 1 {
         run_part(0);
         return;
     }
-    let ends: [AtomicUsize; MAX_PARTS] = Default::default();
-    (0..parts)
-        .into_par_iter()
-        .for_each(|k| ends[k].store(run_part(k), Ordering::Relaxed));
-    (1..parts)
-        .filter(|&k| !fixed[k].load(Ordering::Relaxed))
-        .for_each(|k| fix(k, ends[k - 1].load(Ordering::Relaxed)));
+    (0..parts).into_par_iter().for_each(run_part);
 }
 
 /// The first band of each part of a wave over `nb` bands of `b` rows (the last band holds the

@@ -96,11 +96,23 @@ fn only_whole_uniform_classes_are_structured() {
 
 /// SIMD (serial, parallel on 1, 2 and 3 threads) equals the scalar twin over the explicit
 /// arrays, bit for bit, in positions and multipliers, through kept and unkept resets. The
-/// last grid has bands of four rows that end inside blocks of eight particles, seven of
-/// them: on three threads a wave part lies between two others.
+/// grid of 4100 columns has bands of four rows that end inside blocks of eight particles,
+/// seven of them: on three threads a wave part lies between two others. The grid of 200 rows
+/// has 13 bands: six parts on two and three threads, so a thread runs neighbouring parts one
+/// after the other.
 #[test]
 fn structured_sweep_matches_scalar_bitwise() {
-    for (rows, cols) in [(2, 3), (5, 17), (7, 23), (9, 35), (40, 37), (64, 64), (70, 100), (26, 4100)] {
+    for (rows, cols) in [
+        (2, 3),
+        (5, 17),
+        (7, 23),
+        (9, 35),
+        (40, 37),
+        (64, 64),
+        (70, 100),
+        (26, 4100),
+        (200, 40),
+    ] {
         assert_sweep_matches_scalar(rows, cols, 3 + rows as u64, &[(false, 1), (true, 1), (true, 2), (true, 3)]);
     }
 }
