@@ -3,10 +3,17 @@
 //! Each free particle has at most one tether, to a pinned (inverse mass 0) anchor, so a single
 //! pass is race-free: tethered particles are all distinct and anchors are only read. The
 //! projection is `p <- anchor + (p - anchor) * L / |p - anchor|` when `|p - anchor| > L`.
+//!
+//! A sweep first copies the anchors' predictions (few: the pins) and reads them from the copy.
+//! Then it can also run a particle range at a time, inside the update pass, while other
+//! ranges are already updated and predicted for the next substep
+//! ([`TetherSet::solve_range`]): a tether depends on its particle and the anchors' copy only.
+
+use std::ops::Range;
 
 use rayon::prelude::*;
 
-use crate::data::lanes::{idx8, load, load_idx, round_up, F32s, SharedVec3, Vec3x8, LANES};
+use crate::data::lanes::{gather1, idx8, load, load_idx, round_up, F32s, SharedVec3, Vec3x8, LANES};
 use crate::model::cloth::Tether;
 
 /// Tethers in SoA, padded with dummies on the particle sink.
@@ -16,9 +23,17 @@ pub struct TetherSet {
     pub particle: Vec<u32>,
     /// Pinned anchor.
     pub anchor: Vec<u32>,
-    /// Largest allowed distance, m.
+    /// Largest allowed distance, m (infinite for the padding: never projected).
     pub max_len: Vec<f32>,
     real: usize,
+    /// The distinct anchors, and each tether's place among them.
+    anchors: Vec<u32>,
+    slot: Vec<u32>,
+    /// The anchors' predictions as the last [`take_anchors`](Self::take_anchors) found them.
+    at: [Vec<f32>; 3],
+    /// Whether the tethered particles ascend, so that a particle range's tethers are
+    /// consecutive.
+    ascending: bool,
 }
 
 /// Tethers per parallel task.
@@ -35,9 +50,17 @@ impl TetherSet {
         s.particle = tethers.iter().map(|t| t.particle).collect();
         s.anchor = tethers.iter().map(|t| t.anchor).collect();
         s.max_len = tethers.iter().map(|t| t.max_len).collect();
+        s.ascending = s.particle.windows(2).all(|w| w[0] < w[1]);
+        let mut anchors = s.anchor.clone();
+        anchors.sort_unstable();
+        anchors.dedup();
+        s.slot = s.anchor.iter().map(|a| anchors.binary_search(a).map_or(0, |k| k as u32)).collect();
+        s.at = std::array::from_fn(|_| vec![0.0; anchors.len().max(1)]);
+        s.anchors = anchors;
         s.particle.resize(len, sink);
         s.anchor.resize(len, sink);
-        s.max_len.resize(len, 0.0);
+        s.max_len.resize(len, f32::INFINITY);
+        s.slot.resize(len, 0);
         s
     }
 
@@ -51,66 +74,112 @@ impl TetherSet {
         self.real == 0
     }
 
-    /// Projects every tether, SIMD, in parallel chunks when `parallel`.
-    pub fn solve_simd(&self, px: &mut [f32], py: &mut [f32], pz: &mut [f32], parallel: bool) {
-        let p = SharedVec3::new(px, py, pz);
-        if parallel && self.particle.len() > CHUNK {
-            self.particle
-                .par_chunks(CHUNK)
-                .zip(self.anchor.par_chunks(CHUNK))
-                .zip(self.max_len.par_chunks(CHUNK))
-                .for_each(|((i, a), l)| block_simd(i, a, l, &p));
-        } else {
-            block_simd(&self.particle, &self.anchor, &self.max_len, &p);
-        }
+    /// Whether [`solve_range`](Self::solve_range) can run: the tethered particles ascend.
+    pub fn by_range(&self) -> bool {
+        self.ascending
     }
 
-    /// Scalar twin of [`solve_simd`](Self::solve_simd).
-    pub fn solve_scalar(&self, px: &mut [f32], py: &mut [f32], pz: &mut [f32]) {
-        for k in 0..self.particle.len() {
-            let (i, a) = (self.particle[k] as usize, self.anchor[k] as usize);
-            let (dx, dy, dz) = (px[i] - px[a], py[i] - py[a], pz[i] - pz[a]);
-            let len = (dx * dx + dy * dy + dz * dz).sqrt();
-            let l = self.max_len[k];
-            if len > l {
-                let s = l / len;
-                px[i] = px[a] + dx * s;
-                py[i] = py[a] + dy * s;
-                pz[i] = pz[a] + dz * s;
+    /// Copies the anchors' predictions, which the sweeps read until the next call.
+    pub fn take_anchors(&mut self, px: &[f32], py: &[f32], pz: &[f32]) {
+        for (at, p) in self.at.iter_mut().zip([px, py, pz]) {
+            for (v, &a) in at.iter_mut().zip(&self.anchors) {
+                *v = p[a as usize];
             }
         }
     }
-}
 
-/// Projects the tethers of one chunk, eight at a time. A block whose tethered particles are
-/// consecutive (the usual layout: tethers listed in particle order) loads and stores them as
-/// runs, and a block with one anchor reads it once; other blocks gather and scatter. A block
-/// with no tether over its length writes nothing. Each lane's arithmetic is the scalar twin's,
-/// so the choice of path changes no bit.
-fn block_simd(particle: &[u32], anchor: &[u32], max_len: &[f32], p: &SharedVec3) {
-    for k in (0..particle.len()).step_by(LANES) {
-        let ii = load_idx(particle, k);
-        let ia = load_idx(anchor, k);
+    /// Projects every tether, SIMD, in parallel chunks when `parallel`.
+    pub fn solve_simd(&mut self, px: &mut [f32], py: &mut [f32], pz: &mut [f32], parallel: bool) {
+        self.take_anchors(px, py, pz);
+        let p = SharedVec3::new(px, py, pz);
+        let this = &*self;
+        let block = |k: usize| this.block(k, &p, 0);
+        if parallel && self.particle.len() > CHUNK {
+            (0..self.particle.len())
+                .into_par_iter()
+                .step_by(CHUNK)
+                .for_each(|k0| (k0..(k0 + CHUNK).min(this.particle.len())).step_by(LANES).for_each(block));
+        } else {
+            (0..self.particle.len()).step_by(LANES).for_each(block);
+        }
+    }
+
+    /// Projects the tethers of the particles `range` (global indices) with the anchors of the
+    /// last [`take_anchors`](Self::take_anchors); `px, py, pz` hold those particles only (the
+    /// first is particle `range.start`). Needs [`by_range`](Self::by_range). The same bits as
+    /// the tethers' part of a whole sweep: the lanes and the scalar tail compute each tether
+    /// as the scalar twin does.
+    pub fn solve_range(&self, range: Range<usize>, px: &mut [f32], py: &mut [f32], pz: &mut [f32]) {
+        debug_assert!(self.ascending);
+        let real = &self.particle[..self.real];
+        let lo = real.partition_point(|&i| (i as usize) < range.start);
+        let hi = real.partition_point(|&i| (i as usize) < range.end);
+        let p = SharedVec3::new(px, py, pz);
+        let mut k = lo;
+        while k + LANES <= hi {
+            self.block(k, &p, range.start);
+            k += LANES;
+        }
+        for k in k..hi {
+            let i = self.particle[k] as usize - range.start;
+            let s = self.slot[k] as usize;
+            let a = [self.at[0][s], self.at[1][s], self.at[2][s]];
+            // SAFETY: `i` is a particle of the range, below the arrays' length.
+            let pi = unsafe { p.get(i) };
+            if let Some(q) = project1(pi, a, self.max_len[k]) {
+                // SAFETY: as above; the caller owns the range.
+                unsafe { p.set(i, q) };
+            }
+        }
+    }
+
+    /// Scalar twin of [`solve_simd`](Self::solve_simd): reads the anchors from the arrays.
+    pub fn solve_scalar(&self, px: &mut [f32], py: &mut [f32], pz: &mut [f32]) {
+        for k in 0..self.real {
+            let (i, a) = (self.particle[k] as usize, self.anchor[k] as usize);
+            if let Some(q) = project1([px[i], py[i], pz[i]], [px[a], py[a], pz[a]], self.max_len[k]) {
+                [px[i], py[i], pz[i]] = q;
+            }
+        }
+    }
+
+    /// Projects the eight tethers from `k`, whose particles are the elements `particle - offset`
+    /// of `p`. A block whose tethered particles are consecutive (the usual layout: tethers
+    /// listed in particle order) loads and stores them as runs, and a block with one anchor
+    /// reads it once; other blocks gather and scatter. A block with no tether over its length
+    /// writes nothing. Each lane's arithmetic is the scalar twin's, so the choice of path
+    /// changes no bit.
+    #[inline(always)]
+    fn block(&self, k: usize, p: &SharedVec3, offset: usize) {
+        let ii = load_idx(&self.particle, k).map(|i| i.wrapping_sub(offset as u32));
+        let slots = load_idx(&self.slot, k);
         let i0 = ii[0];
         let run = ii == idx8(|l| i0.wrapping_add(l as u32));
-        // SAFETY: indices are below the padded particle count (a run's last index is one of
-        // them); tethered particles are distinct and never anchors, anchors are only read, so
-        // no element is written by two tasks.
-        let (pi, pa) = unsafe {
-            let pi = if run { p.load_run(i0 as usize) } else { p.gather(&ii) };
-            let pa = if ia == [ia[0]; LANES] {
-                Vec3x8::splat(p.get(ia[0] as usize))
+        let pa = if slots == [slots[0]; LANES] {
+            let s = slots[0] as usize;
+            Vec3x8::splat([self.at[0][s], self.at[1][s], self.at[2][s]])
+        } else {
+            Vec3x8 {
+                x: gather1(&self.at[0], &slots),
+                y: gather1(&self.at[1], &slots),
+                z: gather1(&self.at[2], &slots),
+            }
+        };
+        // SAFETY: indices are below the arrays' length (a run's last index is one of them);
+        // tethered particles are distinct and the caller's task owns them.
+        let pi = unsafe {
+            if run {
+                p.load_run(i0 as usize)
             } else {
-                p.gather(&ia)
-            };
-            (pi, pa)
+                p.gather(&ii)
+            }
         };
         let d = pi - pa;
         let len = d.length_sq().sqrt();
-        let l = load(max_len, k);
+        let l = load(&self.max_len, k);
         let over = len.simd_gt(l);
         if !over.any() {
-            continue;
+            return;
         }
         let s = over.select(l / len, F32s::ONE);
         let out = Vec3x8::select(over, pa + d.scale(s), pi);
@@ -122,6 +191,20 @@ fn block_simd(particle: &[u32], anchor: &[u32], max_len: &[f32], p: &SharedVec3)
                 p.scatter(&ii, out);
             }
         }
+    }
+}
+
+/// One tether: the particle at `pi` pulled back to `max_len` from the anchor at `pa`, when
+/// farther (`None` when not).
+#[inline(always)]
+fn project1(pi: [f32; 3], pa: [f32; 3], max_len: f32) -> Option<[f32; 3]> {
+    let (dx, dy, dz) = (pi[0] - pa[0], pi[1] - pa[1], pi[2] - pa[2]);
+    let len = (dx * dx + dy * dy + dz * dz).sqrt();
+    if len > max_len {
+        let s = max_len / len;
+        Some([pa[0] + dx * s, pa[1] + dy * s, pa[2] + dz * s])
+    } else {
+        None
     }
 }
 
@@ -143,7 +226,7 @@ mod tests {
                 max_len: 1.0 + (i % 3) as f32,
             })
             .collect();
-        let set = TetherSet::new(&tethers, (len - 1) as u32);
+        let mut set = TetherSet::new(&tethers, (len - 1) as u32);
         let (mut x2, mut y2, mut z2) = (x.clone(), y.clone(), z.clone());
         set.solve_scalar(&mut x, &mut y, &mut z);
         set.solve_simd(&mut x2, &mut y2, &mut z2, true);
@@ -189,7 +272,7 @@ mod tests {
                 max_len: 0.8,
             });
         }
-        let set = TetherSet::new(&tethers, (len - 1) as u32);
+        let mut set = TetherSet::new(&tethers, (len - 1) as u32);
         let start: [Vec<f32>; 3] = std::array::from_fn(|a| (0..len).map(|i| ((i * (a + 3)) as f32 * 0.29).sin() * 4.0).collect());
         let mut want = start.clone();
         let [wx, wy, wz] = &mut want;
@@ -202,6 +285,42 @@ mod tests {
             let [gx, gy, gz] = &mut got;
             set.solve_simd(gx, gy, gz, parallel);
             assert_eq!(got, want, "parallel {parallel}");
+        }
+    }
+
+    /// Particle ranges of any length, cut anywhere (inside a block of eight tethers, around
+    /// particles with no tether), each solved with `solve_range` on its own slice of the
+    /// arrays, give the bits of the whole sweep.
+    #[test]
+    fn ranges_equal_the_whole_sweep() {
+        let n = 300usize;
+        let len = round_up(n + 1);
+        // particles 3..250 tethered in order, except every seventh, to anchors 0 and 1
+        let tethers: Vec<Tether> = (3..250u32)
+            .filter(|i| i % 7 != 0)
+            .map(|i| Tether {
+                particle: i,
+                anchor: u32::from(i % 3 == 0),
+                max_len: 0.4 + (i % 4) as f32 * 0.2,
+            })
+            .collect();
+        let mut set = TetherSet::new(&tethers, (len - 1) as u32);
+        assert!(set.by_range());
+        let start: [Vec<f32>; 3] = std::array::from_fn(|a| (0..len).map(|i| ((i * (a + 2)) as f32 * 0.41).cos() * 3.0).collect());
+        let mut want = start.clone();
+        let [wx, wy, wz] = &mut want;
+        set.solve_simd(wx, wy, wz, false);
+        let moved = (0..n).filter(|&i| (0..3).any(|a| want[a][i] != start[a][i])).count();
+        assert!(moved > 100, "{moved} particles moved");
+        for cuts in [vec![0, len], vec![0, 5, 17, 18, 130, len], vec![0, 100, 101, 102, 240, 241, len]] {
+            let mut got = start.clone();
+            let [gx, gy, gz] = &mut got;
+            set.take_anchors(gx, gy, gz);
+            for r in cuts.windows(2) {
+                let (a, b) = (r[0], r[1]);
+                set.solve_range(a..b, &mut gx[a..b], &mut gy[a..b], &mut gz[a..b]);
+            }
+            assert_eq!(got, want, "cuts {cuts:?}");
         }
     }
 }

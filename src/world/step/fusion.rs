@@ -26,39 +26,52 @@ pub(super) struct Fusion {
     /// And the last iteration's projection before its update, when nothing runs between the
     /// two (no scalp, no self-collision).
     pub fuse_project: bool,
-    /// One grid cloth swept once a substep with nothing else in the iteration: the sweep
+    /// With one sweep a substep and nothing between the tethers and the update but the
+    /// all-shape obstacles' projection, the tethers run chunk by chunk in the update pass,
+    /// just before it (`TetherSet::solve_range`, the anchors copied before the pass), when
+    /// the step runs on the pool and the world is small enough to gain from it.
+    pub tethers_in_update: bool,
+    /// One grid cloth swept once a substep with nothing else in the iteration but the
+    /// tethers run in the update pass: the sweep
     /// hands each band of rows to the update pass as soon as it is done with it
     /// (`DistanceSet::solve_wave`), so a substep reads the particles from memory once.
     pub wave: bool,
     /// The wave predicts each band (and runs its obstacle contacts) just before it sweeps it,
-    /// when bands start on whole blocks: element-wise, so the same bits as a pass before the
-    /// sweep.
+    /// when bands start on whole blocks and there are no tethers (whose anchors must be
+    /// predicted before the wave): element-wise, so the same bits as a pass before the sweep.
     pub wave_can_predict: bool,
 }
 
+/// Most particles for which the tethers run in the update pass ([`Fusion::tethers_in_update`]).
+/// The bench cloth of `examples/step_times.rs` on two threads, against the tether pass: 0.82
+/// of the time at 10 000 particles, 0.99 at 100 000, 1.03 at 1 000 000.
+pub(crate) const TETHERS_IN_UPDATE_MAX: usize = 1 << 18;
+
 impl World {
     /// The fused forms of this step for `n` particles: none with `check`; `self_collision`
-    /// when the step runs self-collision, `simd` when it runs the lanes.
-    pub(super) fn fusion(&self, check: bool, self_collision: bool, simd: bool, n: usize) -> Fusion {
+    /// when the step runs self-collision, `simd` when it runs the lanes, `parallel` when it
+    /// runs on the pool.
+    pub(super) fn fusion(&self, check: bool, self_collision: bool, simd: bool, parallel: bool, n: usize) -> Fusion {
         let fuse = self.fuse_predict && !check;
         let has_obstacles = !self.obstacles.is_empty();
         let chunk_obstacles = has_obstacles && fuse && self.obstacles.runs_chunkwise();
-        let wave = simd
-            && fuse
-            && self.params.iterations == 1
-            && self.tethers.is_empty()
-            && self.scalps.is_empty()
-            && !self_collision
-            && (!has_obstacles || chunk_obstacles)
-            && self.distance.wave_ready(n);
+        let alone =
+            simd && fuse && self.params.iterations == 1 && self.scalps.is_empty() && !self_collision && (!has_obstacles || chunk_obstacles);
+        // What the tethers in the update pass save is a fork and join or two a substep: on
+        // one thread nothing, and past `TETHERS_IN_UPDATE_MAX` particles less than they cost
+        // (a tethered cloth's wave cannot predict its bands).
+        let tethers_in_update = alone && parallel && n <= TETHERS_IN_UPDATE_MAX && !self.tethers.is_empty() && self.tethers.by_range();
+        let wave = alone && (self.tethers.is_empty() || tethers_in_update) && self.distance.wave_ready(n);
         Fusion {
             fused_guard: self.params.guard && !check,
             fuse_next: fuse && self.effects.wind.is_none() && self.wind.is_none(),
             fused_mean: self_collision && fuse && !has_obstacles,
             chunk_obstacles,
             fuse_project: chunk_obstacles && self.scalps.is_empty() && !self_collision,
+            tethers_in_update,
             wave,
-            wave_can_predict: wave && self.distance.bands_on_blocks(),
+            // the tethers read the anchors' predictions before the wave
+            wave_can_predict: wave && self.distance.bands_on_blocks() && self.tethers.is_empty(),
         }
     }
 }

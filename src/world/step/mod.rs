@@ -23,7 +23,8 @@
 //!   its update and their velocity pass after it (`obstacles::chunkwise`); a world that is
 //!   one grid cloth swept once a substep runs the sweep and the update pass as one wave
 //!   (`DistanceSet::solve_wave`), which also predicts each band (and runs its obstacle
-//!   contacts) just before sweeping it when the bands start on whole blocks.
+//!   contacts) just before sweeping it when the bands start on whole blocks; on the pool,
+//!   the tethers of a small world run range by range just before its update.
 //!   (solver.method = symplectic-euler | leapfrog | implicit-euler: the force-based step of
 //!    integrate::mass_spring / integrate::implicit replaces the substep loop above; its drift
 //!    feeds the obstacle and self-collision stages as the prediction p, world::contacts)
@@ -189,7 +190,7 @@ impl World {
             self.selfcol.record_start_state([&p.x, &p.y, &p.z], n, steps, parallel);
             self.clock.lap("self-collision measure");
         }
-        let fusion = self.fusion(check, sc.is_some(), simd, n);
+        let fusion = self.fusion(check, sc.is_some(), simd, parallel, n);
         let Fusion {
             fused_guard,
             fused_mean,
@@ -282,7 +283,7 @@ impl World {
                     checkpoint!("constraints", p.px, p.py, p.pz);
                     self.clock.lap("distance constraints");
                 }
-                if !self.tethers.is_empty() {
+                if !self.tethers.is_empty() && !fusion.tethers_in_update {
                     self.tether_stage(exec);
                     let p = &self.particles;
                     checkpoint!("tethers", p.px, p.py, p.pz);
@@ -325,10 +326,11 @@ impl World {
                     all_finite: &all_finite,
                 };
                 predicted_ahead = self.fused_update_pass(&pass);
-                self.clock.lap(if wave {
-                    "distance constraints, update, obstacles, next predict (one wave)"
-                } else {
-                    "update, obstacle velocity, next predict"
+                self.clock.lap(match (wave, fusion.tethers_in_update) {
+                    (true, false) => "distance constraints, update, obstacles, next predict (one wave)",
+                    (true, true) => "distance constraints, tethers, update, obstacles, next predict (one wave)",
+                    (false, false) => "update, obstacle velocity, next predict",
+                    (false, true) => "tethers, update, obstacle velocity, next predict",
                 });
                 continue;
             }

@@ -1,4 +1,4 @@
-//! The update pass of a substep with its fused forms ([`Fusion`]): the update, the obstacle
+//! The update pass of a substep with its fused forms ([`Fusion`]): the tethers, the update, the obstacle
 //! stages of all-shape obstacles, the guard's finite check (last substep), the next
 //! substep's predict (and its obstacle contacts and clamp mean), chunk by chunk; as the
 //! sweep's wave when the step runs one. Element-wise, so the same bits as separate passes
@@ -67,12 +67,22 @@ impl World {
         } else {
             Obstacles::None
         };
+        let tethers_in_update = u.fusion.tethers_in_update;
+        if tethers_in_update {
+            let p = &self.particles;
+            self.tethers.take_anchors(&p.px, &p.py, &p.pz);
+        }
         let (particles, distance, backup) = (&mut self.particles, &mut self.distance, &mut self.backup);
+        let tethers = &self.tethers;
         // this substep's predict when the wave runs it (see `wave_predicts`), and the
         // next substep's when this pass runs it (only without wind: the same settings)
         let pp = substep_predict(h, &self.effects, self.wind.as_ref());
         let mut run = |motion: &[([f32; 3], f32)]| {
             let body = |mut c: ParticleChunk<'_>| {
+                if tethers_in_update {
+                    let r = c.start..c.start + c.px.len();
+                    tethers.solve_range(r, c.px, c.py, c.pz);
+                }
                 if let (Obstacles::Chunkwise(co), true) = (&stages, u.fusion.fuse_project) {
                     timed(obstacle_ns, || co.project(&mut c, simd));
                 }
