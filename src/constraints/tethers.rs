@@ -14,6 +14,7 @@ use std::ops::Range;
 use rayon::prelude::*;
 
 use crate::data::lanes::{gather1, idx8, load, load_idx, round_up, F32s, SharedVec3, Vec3x8, LANES};
+use crate::data::particles::ParticleChunk;
 use crate::model::cloth::Tether;
 
 /// Tethers in SoA, padded with dummies on the particle sink.
@@ -34,6 +35,9 @@ pub struct TetherSet {
     /// Whether the tethered particles ascend, so that a particle range's tethers are
     /// consecutive.
     ascending: bool,
+    /// Copies of the anchors' state for [`predict_anchors`](Self::predict_anchors): ten
+    /// arrays of the anchors' count rounded up to the lanes.
+    copies: Vec<f32>,
 }
 
 /// Tethers per parallel task.
@@ -85,6 +89,43 @@ impl TetherSet {
             for (v, &a) in at.iter_mut().zip(&self.anchors) {
                 *v = p[a as usize];
             }
+        }
+    }
+
+    /// Sets the anchors' predictions to what `predict` makes of their positions `x`,
+    /// velocities `v` and inverse masses `w`, before the pass that predicts them has run:
+    /// `predict` gets a chunk of copies of the anchors (padded with copies of the first) and
+    /// computes each lane as it would in place, so the copy holds the bits the particles will
+    /// hold. `predict` must not read per-particle inputs other than the chunk's (no wind).
+    pub fn predict_anchors(&mut self, x: [&[f32]; 3], v: [&[f32]; 3], w: &[f32], predict: impl FnOnce(ParticleChunk<'_>)) {
+        let Some(&first) = self.anchors.first() else {
+            return;
+        };
+        let m = round_up(self.anchors.len());
+        self.copies.resize(10 * m, 0.0);
+        let [cx, cy, cz, cpx, cpy, cpz, cvx, cvy, cvz, cw] = split10(&mut self.copies, m);
+        for (l, slot) in (0..m).zip(self.anchors.iter().chain(std::iter::repeat(&first))) {
+            let a = *slot as usize;
+            (cx[l], cy[l], cz[l]) = (x[0][a], x[1][a], x[2][a]);
+            (cvx[l], cvy[l], cvz[l]) = (v[0][a], v[1][a], v[2][a]);
+            cw[l] = w[a];
+        }
+        predict(ParticleChunk {
+            start: 0,
+            x: cx,
+            y: cy,
+            z: cz,
+            px: &mut *cpx,
+            py: &mut *cpy,
+            pz: &mut *cpz,
+            vx: cvx,
+            vy: cvy,
+            vz: cvz,
+            w: cw,
+        });
+        let k = self.anchors.len();
+        for (at, p) in self.at.iter_mut().zip([&*cpx, &*cpy, &*cpz]) {
+            at[..k].copy_from_slice(&p[..k]);
         }
     }
 
@@ -192,6 +233,12 @@ impl TetherSet {
             }
         }
     }
+}
+
+/// Ten consecutive arrays of `m` values.
+fn split10(s: &mut [f32], m: usize) -> [&mut [f32]; 10] {
+    let mut it = s.chunks_exact_mut(m);
+    std::array::from_fn(|_| it.next().expect("ten arrays"))
 }
 
 /// One tether: the particle at `pi` pulled back to `max_len` from the anchor at `pa`, when

@@ -37,8 +37,9 @@ pub(super) struct Fusion {
     /// (`DistanceSet::solve_wave`), so a substep reads the particles from memory once.
     pub wave: bool,
     /// The wave predicts each band (and runs its obstacle contacts) just before it sweeps it,
-    /// when bands start on whole blocks and there are no tethers (whose anchors must be
-    /// predicted before the wave): element-wise, so the same bits as a pass before the sweep.
+    /// when bands start on whole blocks (and, with tethers, without wind or obstacles: their
+    /// anchors are predicted ahead of the wave): element-wise, so the same bits as a pass
+    /// before the sweep.
     pub wave_can_predict: bool,
 }
 
@@ -55,23 +56,25 @@ impl World {
         let fuse = self.fuse_predict && !check;
         let has_obstacles = !self.obstacles.is_empty();
         let chunk_obstacles = has_obstacles && fuse && self.obstacles.runs_chunkwise();
+        let no_wind = self.effects.wind.is_none() && self.wind.is_none();
         let alone =
             simd && fuse && self.params.iterations == 1 && self.scalps.is_empty() && !self_collision && (!has_obstacles || chunk_obstacles);
         // What the tethers in the update pass save is a fork and join or two a substep: on
-        // one thread nothing, and past `TETHERS_IN_UPDATE_MAX` particles less than they cost
-        // (a tethered cloth's wave cannot predict its bands).
+        // one thread nothing, and past `TETHERS_IN_UPDATE_MAX` particles less than they cost.
         let tethers_in_update = alone && parallel && n <= TETHERS_IN_UPDATE_MAX && !self.tethers.is_empty() && self.tethers.by_range();
         let wave = alone && (self.tethers.is_empty() || tethers_in_update) && self.distance.wave_ready(n);
         Fusion {
             fused_guard: self.params.guard && !check,
-            fuse_next: fuse && self.effects.wind.is_none() && self.wind.is_none(),
+            fuse_next: fuse && no_wind,
             fused_mean: self_collision && fuse && !has_obstacles,
             chunk_obstacles,
             fuse_project: chunk_obstacles && self.scalps.is_empty() && !self_collision,
             tethers_in_update,
             wave,
-            // the tethers read the anchors' predictions before the wave
-            wave_can_predict: wave && self.distance.bands_on_blocks() && self.tethers.is_empty(),
+            // the tethers read the anchors' predictions before the wave: made ahead of it
+            // from the anchors alone (`TetherSet::predict_anchors`), so without wind (whose
+            // forces the predict reads by particle) or obstacles (whose contacts follow it)
+            wave_can_predict: wave && self.distance.bands_on_blocks() && (self.tethers.is_empty() || (!has_obstacles && no_wind)),
         }
     }
 }

@@ -68,15 +68,21 @@ impl World {
             Obstacles::None
         };
         let tethers_in_update = u.fusion.tethers_in_update;
+        let pp = substep_predict(h, &self.effects, self.wind.as_ref());
         if tethers_in_update {
             let p = &self.particles;
-            self.tethers.take_anchors(&p.px, &p.py, &p.pz);
+            if u.wave_predicts {
+                // the wave predicts the anchors' bands later: their predictions ahead of it
+                let (x, v) = ([&p.x[..], &p.y, &p.z], [&p.vx[..], &p.vy, &p.vz]);
+                self.tethers.predict_anchors(x, v, &p.w, |c| predict(c, &pp, simd));
+            } else {
+                self.tethers.take_anchors(&p.px, &p.py, &p.pz);
+            }
         }
         let (particles, distance, backup) = (&mut self.particles, &mut self.distance, &mut self.backup);
         let tethers = &self.tethers;
-        // this substep's predict when the wave runs it (see `wave_predicts`), and the
+        // `pp`: this substep's predict when the wave runs it (see `wave_predicts`), and the
         // next substep's when this pass runs it (only without wind: the same settings)
-        let pp = substep_predict(h, &self.effects, self.wind.as_ref());
         let mut run = |motion: &[([f32; 3], f32)]| {
             let body = |mut c: ParticleChunk<'_>| {
                 if tethers_in_update {
