@@ -150,8 +150,12 @@ impl TetherSet {
     /// first is particle `range.start`). Needs [`by_range`](Self::by_range). The same bits as
     /// the tethers' part of a whole sweep: the lanes and the scalar tail compute each tether
     /// as the scalar twin does.
+    ///
+    /// # Panics
+    /// If the arrays are shorter than the range (the kernel's raw accesses rely on it).
     pub fn solve_range(&self, range: Range<usize>, px: &mut [f32], py: &mut [f32], pz: &mut [f32]) {
         debug_assert!(self.ascending);
+        assert!(px.len() >= range.len(), "{} values for the particles {range:?}", px.len());
         let real = &self.particle[..self.real];
         let lo = real.partition_point(|&i| (i as usize) < range.start);
         let hi = real.partition_point(|&i| (i as usize) < range.end);

@@ -1,6 +1,6 @@
-//! The update pass of a substep with its fused forms ([`Fusion`]): the tethers, the update, the obstacle
-//! stages of all-shape obstacles, the guard's finite check (last substep), the next
-//! substep's predict (and its obstacle contacts and clamp mean), chunk by chunk; as the
+//! The update pass of a substep with its fused forms ([`Fusion`]): the tethers, the update,
+//! the obstacle stages of all-shape obstacles, the guard's finite check (last substep), the
+//! next substep's predict (and its obstacle contacts and clamp mean), chunk by chunk; as the
 //! sweep's wave when the step runs one. Element-wise, so the same bits as separate passes
 //! (`fusion_tests.rs`).
 
