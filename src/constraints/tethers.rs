@@ -83,6 +83,14 @@ impl TetherSet {
         self.ascending
     }
 
+    /// Whether every anchor is pinned in `w` (inverse masses). A pinned anchor keeps its
+    /// prediction through the distance sweep, so tethers that read it before the sweep (as in
+    /// the update pass) read what a pass after the sweep reads; an anchor made free later
+    /// ([`World::set_inverse_masses`](crate::World::set_inverse_masses)) moves in the sweep.
+    pub fn anchors_pinned(&self, w: &[f32]) -> bool {
+        self.anchors.iter().all(|&a| w.get(a as usize) == Some(&0.0))
+    }
+
     /// Copies the anchors' predictions, which the sweeps read until the next call.
     pub fn take_anchors(&mut self, px: &[f32], py: &[f32], pz: &[f32]) {
         for (at, p) in self.at.iter_mut().zip([px, py, pz]) {

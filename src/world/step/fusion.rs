@@ -61,7 +61,13 @@ impl World {
             simd && fuse && self.params.iterations == 1 && self.scalps.is_empty() && !self_collision && (!has_obstacles || chunk_obstacles);
         // What the tethers in the update pass save is a fork and join or two a substep: on
         // one thread nothing, and past `TETHERS_IN_UPDATE_MAX` particles less than they cost.
-        let tethers_in_update = alone && parallel && n <= TETHERS_IN_UPDATE_MAX && !self.tethers.is_empty() && self.tethers.by_range();
+        // The anchors must be pinned: the update pass's tethers read them before the sweep.
+        let tethers_in_update = alone
+            && parallel
+            && n <= TETHERS_IN_UPDATE_MAX
+            && !self.tethers.is_empty()
+            && self.tethers.by_range()
+            && self.tethers.anchors_pinned(&self.particles.w);
         let wave = alone && (self.tethers.is_empty() || tethers_in_update) && self.distance.wave_ready(n);
         Fusion {
             fused_guard: self.params.guard && !check,

@@ -273,3 +273,30 @@ fn tethers_in_the_wave_equal_a_tether_pass_bitwise() {
         assert!(pulled > 100, "{pulled} particles held by their tethers");
     }
 }
+
+/// An anchor made free after the cloth was built moves in the sweep, so its tethers keep the
+/// pass after the sweep: 1, 2 and 3 threads give the bits of the pass.
+#[test]
+fn a_freed_anchor_keeps_the_tether_pass() {
+    let make = |threads: usize| {
+        let mut w = tethered_grid_world(160, 50, threads, &Effects::gravity(), Some(0.0));
+        let mut inv = w.particles.w[..w.particle_count()].to_vec();
+        inv[49] = inv[100];
+        w.set_inverse_masses(&inv).unwrap();
+        w
+    };
+    let mut worlds: Vec<World> = [1, 2, 3].into_iter().map(make).collect();
+    assert!(!worlds[1].fusion(false, false, true, true, 8000).tethers_in_update);
+    let y0 = worlds[0].positions()[1][49];
+    for step in 0..6 {
+        for w in &mut worlds {
+            w.step(1.0 / 60.0).unwrap();
+        }
+        for w in &worlds[1..] {
+            let t = w.params().threads;
+            assert_eq!(w.state_bits(), worlds[0].state_bits(), "{t} threads, step {step}");
+        }
+    }
+    let y = worlds[0].positions()[1][49];
+    assert!(y < y0 - 0.01, "the freed corner fell: y = {y} from {y0}");
+}
