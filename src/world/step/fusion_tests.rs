@@ -224,53 +224,78 @@ fn wave_predicting_its_bands_keeps_the_guard_copy() {
 /// Tethers run in the wave's update ranges (`Fusion::tethers_in_update`), against the tether
 /// sweep as a pass of its own, on 1, 2 and 3 threads, while one pinned corner moves each step
 /// (a kinematic anchor: predicted ahead of the wave in the first substep, and in the others
-/// replaced by the next substep's prediction in ranges already done while the wave runs),
-/// with gravity and with drag: bit for bit over six steps. 160 rows of 50: ten bands in four
-/// parts on two threads and three on three, so boundaries between parts run both beside and
-/// after one another.
+/// replaced by the next substep's prediction in ranges already done while the wave runs):
+/// bit for bit over six steps. 160 rows of 50: ten bands in four parts on two threads and
+/// three on three, so boundaries between parts run both beside and after one another.
 #[test]
 fn tethers_in_the_wave_equal_a_tether_pass_bitwise() {
     for drag in [None, Some(0.3)] {
-        let effects = Effects {
-            drag,
-            ..Effects::gravity()
-        };
-        let make = |threads: usize, fuse: bool| {
-            let mut w = tethered_grid_world(160, 50, threads, &effects, Some(0.0));
-            w.fuse_predict = fuse;
-            w
-        };
-        let mut split = make(1, false);
-        let mut fused: Vec<World> = [1, 2, 3].into_iter().map(|t| make(t, true)).collect();
-        let f = fused[1].fusion(false, false, true, true, 8000);
-        assert!(f.tethers_in_update && f.wave && f.wave_can_predict);
-        let corner = |step: usize| mint::Point3 {
-            x: 0.25 + 0.02 * step as f32,
-            y: 0.01 * step as f32,
-            z: 0.0,
-        };
-        let mut pulled = 0;
-        for step in 0..6 {
-            split.set_pin_position(49, corner(step)).unwrap();
-            split.step(1.0 / 60.0).unwrap();
-            for w in &mut fused {
-                w.set_pin_position(49, corner(step)).unwrap();
-                w.step(1.0 / 60.0).unwrap();
-                let t = w.params().threads;
-                assert_eq!(w.state_bits(), split.state_bits(), "{t} thread(s), drag {drag:?}, step {step}");
-            }
-            // tethers without slack bind once the cloth falls: count the particles at their limit
-            let p = split.positions();
-            let tethers = &split.tethers;
-            pulled = (0..tethers.len())
-                .filter(|&k| {
-                    let (i, a) = (tethers.particle[k] as usize, tethers.anchor[k] as usize);
-                    let d: f32 = (0..3).map(|c| (p[c][i] - p[c][a]).powi(2)).sum::<f32>().sqrt();
-                    d >= tethers.max_len[k] * (1.0 - 1e-5)
-                })
-                .count();
+        assert_tethers_in_the_wave_equal_a_pass(drag, false);
+    }
+}
+
+/// The same with a ball the cloth hangs against: the wave does not predict (the ball's
+/// contacts follow the predict), and the ball's projection runs after the tethers.
+#[test]
+fn tethers_in_the_wave_beside_a_ball_equal_a_tether_pass_bitwise() {
+    assert_tethers_in_the_wave_equal_a_pass(None, true);
+}
+
+fn assert_tethers_in_the_wave_equal_a_pass(drag: Option<f32>, ball: bool) {
+    let effects = Effects {
+        drag,
+        ..Effects::gravity()
+    };
+    let make = |threads: usize, fuse: bool| {
+        let mut w = tethered_grid_world(160, 50, threads, &effects, Some(0.0));
+        if ball {
+            // the cloth hangs in the plane z = 0, 5 cm from the centre of a ball of 6 cm
+            let s = Shape::Sphere {
+                center: [0.125, 0.5, 0.05],
+                radius: 0.06,
+            };
+            w.add_obstacle(Obstacle::shape(s).unwrap()).unwrap();
         }
-        assert!(pulled > 100, "{pulled} particles held by their tethers");
+        w.fuse_predict = fuse;
+        w
+    };
+    let mut split = make(1, false);
+    let mut fused: Vec<World> = [1, 2, 3].into_iter().map(|t| make(t, true)).collect();
+    let f = fused[1].fusion(false, false, true, true, 8000);
+    assert!(f.tethers_in_update && f.wave && f.wave_can_predict != ball);
+    let corner = |step: usize| mint::Point3 {
+        x: 0.25 + 0.02 * step as f32,
+        y: 0.01 * step as f32,
+        z: 0.0,
+    };
+    let mut pulled = 0;
+    for step in 0..6 {
+        split.set_pin_position(49, corner(step)).unwrap();
+        split.step(1.0 / 60.0).unwrap();
+        for w in &mut fused {
+            w.set_pin_position(49, corner(step)).unwrap();
+            w.step(1.0 / 60.0).unwrap();
+            let t = w.params().threads;
+            assert_eq!(
+                w.state_bits(),
+                split.state_bits(),
+                "{t} thread(s), drag {drag:?}, ball {ball}, step {step}"
+            );
+        }
+        // tethers without slack bind once the cloth falls: count the particles at their limit
+        let p = split.positions();
+        let tethers = &split.tethers;
+        pulled = (0..tethers.len())
+            .filter(|&k| {
+                let (i, a) = (tethers.particle[k] as usize, tethers.anchor[k] as usize);
+                let d: f32 = (0..3).map(|c| (p[c][i] - p[c][a]).powi(2)).sum::<f32>().sqrt();
+                d >= tethers.max_len[k] * (1.0 - 1e-5)
+            })
+            .count();
+    }
+    assert!(pulled > 100, "{pulled} particles held by their tethers");
+    if ball {
+        assert!(split.obstacle_contacts() > 10, "the ball touched the cloth");
     }
 }
 
