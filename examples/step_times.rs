@@ -1,7 +1,7 @@
 //! Times the steps of the bench worlds of `weft::perf`, for A/B runs of two builds:
 //! `step_times [cloth|drape] [particles] [threads] [steps]` prints the median, mean and p95 ms
-//! per step after 20 steps of warm-up. `cloth` is `perf::cloth_world` at 5 substeps x 1
-//! iteration (the `step_100k_5x1` case of `weft bench`, with its tethers), `drape` is
+//! per step after 20 steps of warm-up. `cloth` is `perf::roofline::cloth_world_5x1` (the
+//! `step_100k_5x1` case of `weft bench`, with its tethers), `drape` is
 //! `perf::sphere_drape_world` (the `drape_1m_5x1` case).
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     // As the `weft` binary does: this thread runs the steps' parallel passes as a thread of the
@@ -13,13 +13,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         |i: usize, d: usize| -> Result<usize, Box<dyn std::error::Error>> { Ok(args.get(i).map(|s| s.parse()).transpose()?.unwrap_or(d)) };
     let (n, threads, steps) = (num(1, 100_000)?, num(2, 2)?, num(3, 200)?.max(1));
     let mut w = match kind {
-        "cloth" => {
-            let mut w = weft::perf::cloth_world(n, threads)?;
-            let mut p = w.params().clone();
-            (p.substeps, p.iterations) = (5, 1);
-            w.set_params(p)?;
-            w
-        }
+        "cloth" => weft::perf::roofline::cloth_world_5x1(n, threads)?,
         "drape" => weft::perf::sphere_drape_world(n, threads)?,
         other => return Err(format!("unknown world {other:?}: cloth or drape").into()),
     };

@@ -127,6 +127,16 @@ pub fn hanging_world(substeps: u32, iterations: u32, threads: usize) -> Result<W
     Ok(w)
 }
 
+/// The bench cloth of [`cloth_world`](super::cloth_world) at 5 substeps x 1 iteration: the
+/// `step_100k_5x1` case of [`headline_cases`] at any size.
+pub fn cloth_world_5x1(n: usize, threads: usize) -> Result<World> {
+    let mut w = super::cloth_world(n, threads)?;
+    let mut p = w.params().clone();
+    (p.substeps, p.iterations) = (5, 1);
+    w.set_params(p)?;
+    Ok(w)
+}
+
 /// The headline cases of `weft bench` (JSON `roofline`): the 100 x 100 hanging cloth at 1 x 1,
 /// 5 x 1 and 10 x 10 (`threads = 0`, timed after the world's first two thread trials), a
 /// 100k-particle cloth at 5 x 1 and the 1M-particle drape
@@ -148,10 +158,7 @@ pub fn headline_cases() -> Result<(f64, Vec<RooflineCase>)> {
         past_thread_trials(&mut w)?;
         out.push(roofline_case(name, &mut w, steps, threads, gflops)?);
     }
-    let mut w = super::cloth_world(100_000, 2)?;
-    let mut p = w.params().clone();
-    (p.substeps, p.iterations) = (5, 1);
-    w.set_params(p)?;
+    let mut w = cloth_world_5x1(100_000, 2)?;
     out.push(roofline_case("step_100k_5x1", &mut w, 21, 2, gflops)?);
     let mut w = super::sphere_drape_world(1_000_000, 2)?;
     out.push(roofline_case("drape_1m_5x1", &mut w, 7, 2, gflops)?);
