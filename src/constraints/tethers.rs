@@ -30,13 +30,14 @@ pub struct TetherSet {
     /// The distinct anchors, and each tether's place among them.
     anchors: Vec<u32>,
     slot: Vec<u32>,
-    /// The anchors' predictions as the last [`take_anchors`](Self::take_anchors) found them.
+    /// The anchors' predictions as the last [`take_anchors`](Self::take_anchors) (or
+    /// [`predict_anchors`](Self::predict_anchors)) found them, padded to whole lanes.
     at: [Vec<f32>; 3],
     /// Whether the tethered particles ascend, so that a particle range's tethers are
     /// consecutive.
     ascending: bool,
-    /// Copies of the anchors' state for [`predict_anchors`](Self::predict_anchors): ten
-    /// arrays of the anchors' count rounded up to the lanes.
+    /// Copies of the anchors' state for [`predict_anchors`](Self::predict_anchors): seven
+    /// arrays (positions, velocities, inverse masses) as long as `at`'s.
     copies: Vec<f32>,
 }
 
@@ -59,7 +60,7 @@ impl TetherSet {
         anchors.sort_unstable();
         anchors.dedup();
         s.slot = s.anchor.iter().map(|a| anchors.binary_search(a).map_or(0, |k| k as u32)).collect();
-        s.at = std::array::from_fn(|_| vec![0.0; anchors.len().max(1)]);
+        s.at = std::array::from_fn(|_| vec![0.0; round_up(anchors.len().max(1))]);
         s.anchors = anchors;
         s.particle.resize(len, sink);
         s.anchor.resize(len, sink);
@@ -109,32 +110,30 @@ impl TetherSet {
         let Some(&first) = self.anchors.first() else {
             return;
         };
-        let m = round_up(self.anchors.len());
-        self.copies.resize(10 * m, 0.0);
-        let [cx, cy, cz, cpx, cpy, cpz, cvx, cvy, cvz, cw] = split10(&mut self.copies, m);
+        let m = self.at[0].len();
+        self.copies.resize(7 * m, 0.0);
+        let [cx, cy, cz, cvx, cvy, cvz, cw] = split7(&mut self.copies, m);
         for (l, slot) in (0..m).zip(self.anchors.iter().chain(std::iter::repeat(&first))) {
             let a = *slot as usize;
             (cx[l], cy[l], cz[l]) = (x[0][a], x[1][a], x[2][a]);
             (cvx[l], cvy[l], cvz[l]) = (v[0][a], v[1][a], v[2][a]);
             cw[l] = w[a];
         }
+        // the predictions land in `at` itself
+        let [px, py, pz] = &mut self.at;
         predict(ParticleChunk {
             start: 0,
             x: cx,
             y: cy,
             z: cz,
-            px: &mut *cpx,
-            py: &mut *cpy,
-            pz: &mut *cpz,
+            px,
+            py,
+            pz,
             vx: cvx,
             vy: cvy,
             vz: cvz,
             w: cw,
         });
-        let k = self.anchors.len();
-        for (at, p) in self.at.iter_mut().zip([&*cpx, &*cpy, &*cpz]) {
-            at[..k].copy_from_slice(&p[..k]);
-        }
     }
 
     /// Projects every tether, SIMD, in parallel chunks when `parallel`.
@@ -160,9 +159,10 @@ impl TetherSet {
     /// as the scalar twin does.
     ///
     /// # Panics
-    /// If the arrays are shorter than the range (the kernel's raw accesses rely on it).
+    /// If the tethered particles do not ascend ([`by_range`](Self::by_range)) or the arrays
+    /// are shorter than the range: the kernel's raw accesses rely on both.
     pub fn solve_range(&self, range: Range<usize>, px: &mut [f32], py: &mut [f32], pz: &mut [f32]) {
-        debug_assert!(self.ascending);
+        assert!(self.ascending, "solve_range needs tethered particles in ascending order");
         assert!(px.len() >= range.len(), "{} values for the particles {range:?}", px.len());
         let real = &self.particle[..self.real];
         let lo = real.partition_point(|&i| (i as usize) < range.start);
@@ -247,10 +247,10 @@ impl TetherSet {
     }
 }
 
-/// Ten consecutive arrays of `m` values.
-fn split10(s: &mut [f32], m: usize) -> [&mut [f32]; 10] {
+/// Seven consecutive arrays of `m` values.
+fn split7(s: &mut [f32], m: usize) -> [&mut [f32]; 7] {
     let mut it = s.chunks_exact_mut(m);
-    std::array::from_fn(|_| it.next().expect("ten arrays"))
+    std::array::from_fn(|_| it.next().expect("seven arrays"))
 }
 
 /// One tether: the particle at `pi` pulled back to `max_len` from the anchor at `pa`, when
