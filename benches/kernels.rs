@@ -1,6 +1,7 @@
 //! Kernel benches: integrate (predict + update) and constraint solve, each as the scalar f32
 //! twin, SIMD on one thread, and SIMD on two threads, for N = 1k, 10k, 100k, 1M particles.
-//! Ratios are always against the scalar f32 twin (never the f64 reference).
+//! Ratios are always against the scalar f32 twin (never the f64 reference). The two-thread
+//! runs go through `weft::perf::awake`, as a step runs its passes.
 //!
 //! `integrate/stream_ref*` is the memory ceiling of the integrate kernels' access pattern
 //! (`weft::perf::stream_reference`: the same arrays read and written, in place, in the
@@ -71,13 +72,13 @@ fn integrate(c: &mut Criterion) {
             one.install(|| b.iter(|| run(&mut p, true, false)))
         });
         g.bench_with_input(BenchmarkId::new("simd_2threads", n), &n, |b, _| {
-            two.install(|| b.iter(|| run(&mut p, true, true)))
+            two.install(|| weft::perf::awake(|| b.iter(|| run(&mut p, true, true))))
         });
         g.bench_with_input(BenchmarkId::new("stream_ref", n), &n, |b, _| {
             one.install(|| b.iter(|| weft::perf::stream_reference(&mut p, false)))
         });
         g.bench_with_input(BenchmarkId::new("stream_ref_2threads", n), &n, |b, _| {
-            two.install(|| b.iter(|| weft::perf::stream_reference(&mut p, true)))
+            two.install(|| weft::perf::awake(|| b.iter(|| weft::perf::stream_reference(&mut p, true))))
         });
     }
     g.finish();
@@ -99,7 +100,7 @@ fn solve(c: &mut Criterion) {
             one.install(|| b.iter(|| set.solve_simd(&mut p.px, &mut p.py, &mut p.pz, &p.w, inv_h2, false)))
         });
         g.bench_with_input(BenchmarkId::new("simd_2threads", n), &n, |b, _| {
-            two.install(|| b.iter(|| set.solve_simd(&mut p.px, &mut p.py, &mut p.pz, &p.w, inv_h2, true)))
+            two.install(|| weft::perf::awake(|| b.iter(|| set.solve_simd(&mut p.px, &mut p.py, &mut p.pz, &p.w, inv_h2, true))))
         });
     }
     g.finish();

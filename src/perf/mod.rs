@@ -63,6 +63,13 @@ pub fn kernel_median_secs(reps: usize, mut f: impl FnMut()) -> f64 {
     median_secs(reps, f)
 }
 
+/// Runs `f` as [`World::step`] runs its passes: the other workers of the pool the caller runs
+/// in poll for work between the passes instead of falling asleep after each (the wake-up
+/// would be timed with the next pass). The kernel figures' parallel runs go through it.
+pub fn awake<R: Send>(f: impl FnOnce() -> R + Send) -> R {
+    crate::world::threads::keep_awake::run(f)
+}
+
 /// A rayon pool of `threads` threads.
 pub fn pool(threads: usize) -> Result<rayon::ThreadPool> {
     rayon::ThreadPoolBuilder::new()
@@ -284,11 +291,11 @@ pub fn kernel_figures(n: usize, reps: usize) -> Result<(KernelFigures, KernelFig
     let per = |s: f64| s * 1e9 / count;
     let is = one.install(|| time_integrate(&mut p, Exec::Scalar, reps));
     let iv = one.install(|| time_integrate(&mut p, Exec::Simd, reps));
-    let i2 = two.install(|| time_integrate(&mut p, Exec::Parallel, reps));
+    let i2 = two.install(|| awake(|| time_integrate(&mut p, Exec::Parallel, reps)));
     let mut set = world.distance_set().clone();
     let ss = one.install(|| time_solve(&mut set, &mut p, Exec::Scalar, reps));
     let sv = one.install(|| time_solve(&mut set, &mut p, Exec::Simd, reps));
-    let s2 = two.install(|| time_solve(&mut set, &mut p, Exec::Parallel, reps));
+    let s2 = two.install(|| awake(|| time_solve(&mut set, &mut p, Exec::Parallel, reps)));
     let fig = |kernel, s: f64, v: f64, t2: f64| KernelFigures {
         kernel,
         particles: count as usize,

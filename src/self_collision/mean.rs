@@ -9,8 +9,11 @@ use rayon::prelude::*;
 use crate::data::exec::Exec;
 use crate::data::lanes::{load, F32s, LANES};
 
-/// Particles a partial sum of the mean velocity covers (the sums are added in this order).
-pub(crate) const MEAN_CHUNK: usize = 4096;
+/// Particles a partial sum of the mean velocity covers (the sums are added in this order): the
+/// element-wise passes' chunks start on its multiples, so they fill whole partial sums.
+pub(crate) const MEAN_CHUNK: usize = 256;
+
+const _: () = assert!(crate::data::particles::CHUNK_ALIGN.is_multiple_of(MEAN_CHUNK));
 
 /// Mean velocity of the free particles (`w > 0`) among the first `n`: f64 sums over fixed
 /// chunks of [`MEAN_CHUNK`] particles, added in chunk order, so parallel and serial give the

@@ -7,7 +7,7 @@
 //! last one, [`Particles::sink`], is where padded (dummy) constraints point so that SIMD loops
 //! never need a tail.
 //!
-//! Element-wise kernels run over [`CHUNK`]-particle chunks ([`Particles::for_chunks`]). The
+//! Element-wise kernels run over chunks of about [`CHUNK`] particles, as many for each of two threads ([`Particles::for_chunks`]). The
 //! step's divergence guard rides on two such passes instead of passes of its own
 //! ([`Particles::for_chunks_saving`] copies the state at the start of the step chunk by chunk
 //! inside the first predict, [`chunk_finite_simd`] checks the end state chunk by chunk inside

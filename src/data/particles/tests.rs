@@ -72,3 +72,48 @@ fn saving_pass_keeps_the_state_before_the_kernel() {
         assert_eq!(q.vz[CHUNK + 3], -before.vz[CHUNK + 3]);
     }
 }
+
+/// The element-wise chunks cut any particle count into chunks of whole [`CHUNK_ALIGN`] runs
+/// (the last one shorter) that two threads share about evenly: the first half of the chunks
+/// (rounded up) holds at most 57% of the particles, and up to four times [`CHUNK`] makes two
+/// chunks (one join). Up to [`CHUNK`] particles are one chunk.
+#[test]
+fn chunks_are_aligned_and_split_evenly_between_two_threads() {
+    for len in (8..128 * CHUNK).step_by(8) {
+        let c = chunk_len(len);
+        let count = len.div_ceil(c);
+        if len <= CHUNK {
+            assert_eq!(c, len);
+            continue;
+        }
+        assert!(c.is_multiple_of(CHUNK_ALIGN) && c <= 2 * CHUNK, "{len}: chunks of {c}");
+        let larger = (c * count.div_ceil(2)).min(len);
+        assert!(larger * 100 <= 57 * len, "{len}: {count} chunks of {c}");
+        if len <= 4 * CHUNK {
+            assert_eq!(count, 2, "{len}");
+        }
+    }
+}
+
+/// A pass over two chunks (one join) and one over more hand out the same particles as the
+/// serial pass, with the right starts.
+#[test]
+fn parallel_chunks_cover_every_particle_once() {
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+    for n in [CHUNK + 8, 2 * CHUNK, 4 * CHUNK + 24, 9 * CHUNK + 8] {
+        let mut p = Particles::new();
+        for i in 0..n {
+            p.push([i as f32, 0.0, 0.0], [0.0; 3], 1.0);
+        }
+        pool.install(|| {
+            p.for_chunks(true, |c| {
+                // The padding past `n` holds zeros.
+                for (k, x) in c.x.iter_mut().enumerate().filter(|(k, _)| c.start + k < n) {
+                    assert_eq!(*x, (c.start + k) as f32);
+                    *x = -*x - 1.0;
+                }
+            })
+        });
+        assert!(p.x[..n].iter().enumerate().all(|(i, x)| *x == -(i as f32) - 1.0), "{n}");
+    }
+}
