@@ -14,8 +14,10 @@
 //! the last update, while the chunk is still in cache).
 
 mod chunks;
+mod raw;
 
 pub use chunks::*;
+pub use raw::*;
 
 use crate::data::lanes::round_up;
 
