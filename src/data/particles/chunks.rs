@@ -92,100 +92,75 @@ impl Particles {
         )
             .into_par_iter()
             .enumerate()
-            .map(move |(k, (x, y, z, px, py, pz, vx, vy, vz, w))| ParticleChunk {
-                start: k * chunk,
-                x,
-                y,
-                z,
-                px,
-                py,
-                pz,
-                vx,
-                vy,
-                vz,
-                w,
+            .map(move |(k, (x, y, z, px, py, pz, vx, vy, vz, w))| {
+                ParticleChunk::from_arrays(k * chunk, [x, y, z, px, py, pz, vx, vy, vz], w)
             })
     }
 
     /// All particles as one chunk.
     fn whole(&mut self) -> ParticleChunk<'_> {
-        ParticleChunk {
-            start: 0,
-            x: &mut self.x,
-            y: &mut self.y,
-            z: &mut self.z,
-            px: &mut self.px,
-            py: &mut self.py,
-            pz: &mut self.pz,
-            vx: &mut self.vx,
-            vy: &mut self.vy,
-            vz: &mut self.vz,
-            w: &self.w,
-        }
+        let a = [
+            &mut self.x,
+            &mut self.y,
+            &mut self.z,
+            &mut self.px,
+            &mut self.py,
+            &mut self.pz,
+            &mut self.vx,
+            &mut self.vy,
+            &mut self.vz,
+        ];
+        ParticleChunk::from_arrays(0, a.map(|v| &mut v[..]), &self.w)
     }
 }
 
 impl<'a> ParticleChunk<'a> {
+    /// The chunk of particles from `start` with the arrays `a` (`x, y, z, px, py, pz, vx, vy,
+    /// vz`) and inverse masses `w`.
+    pub(crate) fn from_arrays(start: usize, a: [&'a mut [f32]; 9], w: &'a [f32]) -> Self {
+        let [x, y, z, px, py, pz, vx, vy, vz] = a;
+        ParticleChunk {
+            start,
+            x,
+            y,
+            z,
+            px,
+            py,
+            pz,
+            vx,
+            vy,
+            vz,
+            w,
+        }
+    }
+
     /// The chunk's first `at` particles and the rest (`at` at most the chunk's length).
     pub fn split_at(self, at: usize) -> (ParticleChunk<'a>, ParticleChunk<'a>) {
-        let (x, x1) = self.x.split_at_mut(at);
-        let (y, y1) = self.y.split_at_mut(at);
-        let (z, z1) = self.z.split_at_mut(at);
-        let (px, px1) = self.px.split_at_mut(at);
-        let (py, py1) = self.py.split_at_mut(at);
-        let (pz, pz1) = self.pz.split_at_mut(at);
-        let (vx, vx1) = self.vx.split_at_mut(at);
-        let (vy, vy1) = self.vy.split_at_mut(at);
-        let (vz, vz1) = self.vz.split_at_mut(at);
-        let (w, w1) = self.w.split_at(at);
-        let start = self.start;
-        (
-            ParticleChunk {
-                start,
-                x,
-                y,
-                z,
-                px,
-                py,
-                pz,
-                vx,
-                vy,
-                vz,
-                w,
-            },
-            ParticleChunk {
-                start: start + at,
-                x: x1,
-                y: y1,
-                z: z1,
-                px: px1,
-                py: py1,
-                pz: pz1,
-                vx: vx1,
-                vy: vy1,
-                vz: vz1,
-                w: w1,
-            },
-        )
+        let a = [self.x, self.y, self.z, self.px, self.py, self.pz, self.vx, self.vy, self.vz];
+        let (mut lo, mut hi): ([&mut [f32]; 9], [&mut [f32]; 9]) = Default::default();
+        for ((l, h), v) in lo.iter_mut().zip(&mut hi).zip(a) {
+            (*l, *h) = v.split_at_mut(at);
+        }
+        let (w0, w1) = self.w.split_at(at);
+        (Self::from_arrays(self.start, lo, w0), Self::from_arrays(self.start + at, hi, w1))
     }
 }
 
 impl ParticleChunk<'_> {
     /// The same chunk, borrowed again (to hand it to one kernel and keep it for the next).
     pub fn reborrow(&mut self) -> ParticleChunk<'_> {
-        ParticleChunk {
-            start: self.start,
-            x: self.x,
-            y: self.y,
-            z: self.z,
-            px: self.px,
-            py: self.py,
-            pz: self.pz,
-            vx: self.vx,
-            vy: self.vy,
-            vz: self.vz,
-            w: self.w,
-        }
+        let a = [
+            &mut *self.x,
+            &mut *self.y,
+            &mut *self.z,
+            &mut *self.px,
+            &mut *self.py,
+            &mut *self.pz,
+            &mut *self.vx,
+            &mut *self.vy,
+            &mut *self.vz,
+        ];
+        ParticleChunk::from_arrays(self.start, a, self.w)
     }
 
     /// The chunk's positions and velocities, `x, y, z, vx, vy, vz`.

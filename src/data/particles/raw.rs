@@ -78,20 +78,9 @@ impl<'a> RawParticles<'a> {
         let n = range.end - range.start;
         // SAFETY: in bounds (checked above) and exclusive by the caller's guarantee.
         let a = |k: usize| unsafe { std::slice::from_raw_parts_mut(self.arrays[k].add(range.start), n) };
-        ParticleChunk {
-            start: range.start,
-            x: a(0),
-            y: a(1),
-            z: a(2),
-            px: a(3),
-            py: a(4),
-            pz: a(5),
-            vx: a(6),
-            vy: a(7),
-            vz: a(8),
-            // SAFETY: in bounds; only read.
-            w: unsafe { std::slice::from_raw_parts(self.w.add(range.start), n) },
-        }
+        // SAFETY: in bounds; only read.
+        let w = unsafe { std::slice::from_raw_parts(self.w.add(range.start), n) };
+        ParticleChunk::from_arrays(range.start, std::array::from_fn(a), w)
     }
 }
 
