@@ -272,14 +272,25 @@ pub struct KernelFigures {
     pub particles: usize,
     /// Scalar twin, ns per particle.
     pub scalar_ns: f64,
-    /// SIMD on one thread, ns per particle.
+    /// SIMD on one thread, ns per particle (the median of [`THREAD_ROUNDS`]).
     pub simd_ns: f64,
-    /// SIMD on two threads, ns per particle.
+    /// SIMD on two threads, ns per particle (the median of [`THREAD_ROUNDS`]).
     pub simd_2t_ns: f64,
     /// scalar / SIMD.
     pub simd_speedup: f64,
-    /// SIMD 1 thread / SIMD 2 threads.
+    /// SIMD 1 thread / SIMD 2 threads: the median of the rounds' ratios.
     pub thread_speedup: f64,
+}
+
+/// Rounds of one thread against two in [`kernel_figures`]: the threads' ratio is the median of
+/// the rounds' ratios, each from one timing on one thread and one on two taken back to back,
+/// so that a drift of the machine's speed between two timings moves one round, not the figure.
+pub const THREAD_ROUNDS: usize = 5;
+
+/// The median of `v` (not empty).
+fn median_of(mut v: Vec<f64>) -> f64 {
+    v.sort_by(|a, b| a.total_cmp(b));
+    v[v.len() / 2]
 }
 
 /// Measures integrate and solve at `n` particles.
@@ -288,24 +299,32 @@ pub fn kernel_figures(n: usize, reps: usize) -> Result<(KernelFigures, KernelFig
     let (one, two) = (pool(1)?, pool(2)?);
     let count = world.particle_count() as f64;
     let mut p = world.particles().clone();
+    let mut set = world.distance_set().clone();
     let per = |s: f64| s * 1e9 / count;
     let is = one.install(|| time_integrate(&mut p, Exec::Scalar, reps));
-    let iv = one.install(|| time_integrate(&mut p, Exec::Simd, reps));
-    let i2 = two.install(|| awake(|| time_integrate(&mut p, Exec::Parallel, reps)));
-    let mut set = world.distance_set().clone();
     let ss = one.install(|| time_solve(&mut set, &mut p, Exec::Scalar, reps));
-    let sv = one.install(|| time_solve(&mut set, &mut p, Exec::Simd, reps));
-    let s2 = two.install(|| awake(|| time_solve(&mut set, &mut p, Exec::Parallel, reps)));
-    let fig = |kernel, s: f64, v: f64, t2: f64| KernelFigures {
-        kernel,
-        particles: count as usize,
-        scalar_ns: per(s),
-        simd_ns: per(v),
-        simd_2t_ns: per(t2),
-        simd_speedup: s / v,
-        thread_speedup: v / t2,
+    let mut rounds = [(); 2].map(|_| Vec::new());
+    for _ in 0..THREAD_ROUNDS {
+        let iv = one.install(|| time_integrate(&mut p, Exec::Simd, reps));
+        let i2 = two.install(|| awake(|| time_integrate(&mut p, Exec::Parallel, reps)));
+        let sv = one.install(|| time_solve(&mut set, &mut p, Exec::Simd, reps));
+        let s2 = two.install(|| awake(|| time_solve(&mut set, &mut p, Exec::Parallel, reps)));
+        rounds[0].push((iv, i2));
+        rounds[1].push((sv, s2));
+    }
+    let fig = |kernel, s: f64, r: &[(f64, f64)]| {
+        let v = median_of(r.iter().map(|t| t.0).collect());
+        KernelFigures {
+            kernel,
+            particles: count as usize,
+            scalar_ns: per(s),
+            simd_ns: per(v),
+            simd_2t_ns: per(median_of(r.iter().map(|t| t.1).collect())),
+            simd_speedup: s / v,
+            thread_speedup: median_of(r.iter().map(|t| t.0 / t.1).collect()),
+        }
     };
-    Ok((fig("integrate", is, iv, i2), fig("solve", ss, sv, s2)))
+    Ok((fig("integrate", is, &rounds[0]), fig("solve", ss, &rounds[1])))
 }
 
 /// Median ms per step of `world` over `steps` steps.
