@@ -121,19 +121,7 @@ impl TetherSet {
         }
         // the predictions land in `at` itself
         let [px, py, pz] = &mut self.at;
-        predict(ParticleChunk {
-            start: 0,
-            x: cx,
-            y: cy,
-            z: cz,
-            px,
-            py,
-            pz,
-            vx: cvx,
-            vy: cvy,
-            vz: cvz,
-            w: cw,
-        });
+        predict(ParticleChunk::from_arrays(0, [cx, cy, cz, px, py, pz, cvx, cvy, cvz], cw));
     }
 
     /// Projects every tether, SIMD, in parallel chunks when `parallel`.

@@ -41,9 +41,13 @@ pub fn timings(reps: usize, mut f: impl FnMut()) -> Vec<f64> {
 
 /// Median of `reps` timings of `f`, in seconds.
 pub fn median_secs(reps: usize, f: impl FnMut()) -> f64 {
-    let mut t = timings(reps, f);
-    t.sort_by(|a, b| a.total_cmp(b));
-    t[t.len() / 2]
+    median_of(timings(reps, f))
+}
+
+/// The median of `v` (not empty).
+fn median_of(mut v: Vec<f64>) -> f64 {
+    v.sort_by(|a, b| a.total_cmp(b));
+    v[v.len() / 2]
 }
 
 /// How long a kernel runs untimed before [`kernel_median_secs`] times it: long enough for a
@@ -211,11 +215,7 @@ pub fn stream_figures(n: usize, threads: usize, reps: usize) -> Result<Bandwidth
         kern.push(pool.install(|| time_integrate(&mut p, Exec::new(true, par), reps)));
         ceil.push(pool.install(|| time_stream_reference(&mut p, par, reps)));
     }
-    let med = |v: &mut Vec<f64>| {
-        v.sort_by(|a, b| a.total_cmp(b));
-        v[v.len() / 2]
-    };
-    let (kern, ceil) = (med(&mut kern), med(&mut ceil));
+    let (kern, ceil) = (median_of(kern), median_of(ceil));
     let per = |t: f64| t * 1e9 / n as f64;
     Ok(BandwidthFigures {
         particles: n,
@@ -286,12 +286,6 @@ pub struct KernelFigures {
 /// the rounds' ratios, each from one timing on one thread and one on two taken back to back,
 /// so that a drift of the machine's speed between two timings moves one round, not the figure.
 pub const THREAD_ROUNDS: usize = 5;
-
-/// The median of `v` (not empty).
-fn median_of(mut v: Vec<f64>) -> f64 {
-    v.sort_by(|a, b| a.total_cmp(b));
-    v[v.len() / 2]
-}
 
 /// Measures integrate and solve at `n` particles.
 pub fn kernel_figures(n: usize, reps: usize) -> Result<(KernelFigures, KernelFigures)> {
