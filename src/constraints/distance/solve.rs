@@ -160,20 +160,32 @@ impl DistanceSet {
         for col in &mut self.colours {
             let uses = col.grid.as_ref().is_none_or(GridColour::keeps_multipliers);
             let (reset, keep) = (reset || !uses, keep && uses);
-            for k in 0..col.a.len() {
-                let lam = if reset { 0.0 } else { col.lambda[k] };
-                let (a, b) = (col.a[k] as usize, col.b[k] as usize);
-                let pa = [px[a], py[a], pz[a]];
-                let pb = [px[b], py[b], pz[b]];
-                let alpha = col.compliance[k] * inv_h2;
-                let project = if col.grid.is_some() { project1::<true> } else { project1::<false> };
-                let (pa, pb, lam) = project(pa, pb, w[a], w[b], col.rest[k], alpha, lam);
-                [px[a], py[a], pz[a]] = pa;
-                [px[b], py[b], pz[b]] = pb;
-                if keep {
-                    col.lambda[k] = lam;
-                }
+            // The form chosen once a colour, so that `project1` inlines into the loop.
+            if col.grid.is_some() {
+                colour_scalar::<true>(col, [px, py, pz], w, inv_h2, reset, keep);
+            } else {
+                colour_scalar::<false>(col, [px, py, pz], w, inv_h2, reset, keep);
             }
+        }
+    }
+}
+
+/// One colour of [`DistanceSet::solve_scalar`], constraint by constraint: [`project1`] with one
+/// division (`ONE_DIV`, grid colours) or two; multipliers read as zero with `reset`, written
+/// with `keep`.
+fn colour_scalar<const ONE_DIV: bool>(col: &mut Colour, p: [&mut [f32]; 3], w: &[f32], inv_h2: f32, reset: bool, keep: bool) {
+    let [px, py, pz] = p;
+    for k in 0..col.a.len() {
+        let lam = if reset { 0.0 } else { col.lambda[k] };
+        let (a, b) = (col.a[k] as usize, col.b[k] as usize);
+        let pa = [px[a], py[a], pz[a]];
+        let pb = [px[b], py[b], pz[b]];
+        let alpha = col.compliance[k] * inv_h2;
+        let (pa, pb, lam) = project1::<ONE_DIV>(pa, pb, w[a], w[b], col.rest[k], alpha, lam);
+        [px[a], py[a], pz[a]] = pa;
+        [px[b], py[b], pz[b]] = pb;
+        if keep {
+            col.lambda[k] = lam;
         }
     }
 }
