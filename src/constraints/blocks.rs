@@ -168,7 +168,7 @@ pub(crate) fn solve_block_simd<const RESET: bool, const STORE: bool>(
         };
         let alpha = load(cons.comp, i) * inv_h2;
         let lam = if RESET { F32s::ZERO } else { load(lambda, i) };
-        let (pa, pb, lam) = project8::<false, true>(pa, pb, wa, wb, load(cons.rest, i), alpha, lam);
+        let (pa, pb, lam) = project8::<false, true, RESET>(pa, pb, wa, wb, load(cons.rest, i), alpha, lam);
         if STORE {
             store(lambda, i, lam);
         }

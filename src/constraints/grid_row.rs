@@ -85,7 +85,7 @@ pub(crate) unsafe fn row<const RESET: bool, const STORE: bool, const CHECK_DENOM
         let l0 = if RESET { 0.0 } else { *l };
         // SAFETY: as above.
         let (pa, pb) = unsafe { (p.get(a), p.get(b)) };
-        let (pa, pb, l1) = project1::<true>(pa, pb, w[a], w[b], g.rest, alpha, l0);
+        let (pa, pb, l1) = project1::<true, RESET>(pa, pb, w[a], w[b], g.rest, alpha, l0);
         unsafe {
             p.set(a, pa);
             p.set(b, pb);
@@ -119,7 +119,7 @@ impl<const CHECK_DENOM: bool> Kernel<'_, CHECK_DENOM> {
         let (pa, pb) = unsafe { (p.load_run(i), p.load_run(i + off)) };
         let l0 = if RESET { F32s::ZERO } else { load(lam, j) };
         let (mut na, mut nb, mut l1) =
-            project8::<true, CHECK_DENOM>(pa, pb, load(self.w, i), load(self.w, i + off), self.rest, self.alpha, l0);
+            project8::<true, CHECK_DENOM, RESET>(pa, pb, load(self.w, i), load(self.w, i + off), self.rest, self.alpha, l0);
         if let Some(m) = fresh {
             (na, nb) = (Vec3x8::select(m, na, pa), Vec3x8::select(m, nb, pb));
             if STORE {
@@ -150,7 +150,7 @@ impl<const CHECK_DENOM: bool> Kernel<'_, CHECK_DENOM> {
         let (wa, wb) = split16(load(self.w, i), load(self.w, i + LANES), split);
         let Some(m) = fresh else {
             let l0 = if RESET { F32s::ZERO } else { load(lam, j) };
-            let (pa, pb, l1) = project8::<true, CHECK_DENOM>(pa, pb, wa, wb, self.rest, self.alpha, l0);
+            let (pa, pb, l1) = project8::<true, CHECK_DENOM, RESET>(pa, pb, wa, wb, self.rest, self.alpha, l0);
             let (lo, hi) = merge16_vec(pa, pb, split);
             unsafe {
                 p.store_run(i, lo);
@@ -164,7 +164,7 @@ impl<const CHECK_DENOM: bool> Kernel<'_, CHECK_DENOM> {
         let live = m.to_array().map(|v| v.to_bits() != 0);
         let slot = |l: usize| j + WINDOW_LANES[l] as usize;
         let l0: [f32; LANES] = std::array::from_fn(|l| if RESET || !live[l] { 0.0 } else { lam[slot(l)] });
-        let (na, nb, l1) = project8::<true, CHECK_DENOM>(pa, pb, wa, wb, self.rest, self.alpha, F32s::from(l0));
+        let (na, nb, l1) = project8::<true, CHECK_DENOM, RESET>(pa, pb, wa, wb, self.rest, self.alpha, F32s::from(l0));
         let (lo, hi) = merge16_vec(Vec3x8::select(m, na, pa), Vec3x8::select(m, nb, pb), split);
         unsafe {
             p.store_run(i, lo);

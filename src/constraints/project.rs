@@ -9,6 +9,11 @@
 //! products and sums (the squared length, `-C - α̃ λ`, the position updates and `λ + Δλ`: ten
 //! of its thirty operations), with one rounding on every target ([`mul_add`]): the grid sweep
 //! is bound by its floating-point operations (`docs/performance.md`), so fewer make it faster.
+//!
+//! `FRESH` says the multiplier is zero (the first sweep of a substep, or a class that keeps
+//! none): `-C - α̃ λ` is then `-C` exactly, for `(-α̃) · (+0)` is `-0` and `α̃ · (+0)` is `+0`
+//! for every finite `α̃ ≥ 0`, and adding `-0` or subtracting `+0` changes no value. The lanes
+//! skip that multiply-add and give the same bits.
 
 use crate::data::lanes::{mul_add, F32s, Vec3x8};
 use crate::model::params::MIN_LENGTH;
@@ -16,7 +21,7 @@ use crate::model::params::MIN_LENGTH;
 /// One XPBD distance constraint, scalar: new `p_a`, `p_b` and multiplier, from `alpha = α / h²`.
 /// The SIMD kernels' lanes ([`project8`]) do the same operations in the same order.
 #[inline(always)]
-pub(crate) fn project1<const ONE_DIV: bool>(
+pub(crate) fn project1<const ONE_DIV: bool, const FRESH: bool>(
     pa: [f32; 3],
     pb: [f32; 3],
     wa: f32,
@@ -36,7 +41,8 @@ pub(crate) fn project1<const ONE_DIV: bool>(
     let denom = wa + wb + alpha;
     let valid = len > MIN_LENGTH && denom > 0.0;
     if ONE_DIV {
-        let s = if valid { (-alpha).mul_add(lam, -c) / (denom * len) } else { 0.0 };
+        let num = if FRESH { -c } else { (-alpha).mul_add(lam, -c) };
+        let s = if valid { num / (denom * len) } else { 0.0 };
         let (sa, sb) = (wa * s, wb * s);
         let pa = [(-dx).mul_add(sa, pa[0]), (-dy).mul_add(sa, pa[1]), (-dz).mul_add(sa, pa[2])];
         let pb = [dx.mul_add(sb, pb[0]), dy.mul_add(sb, pb[1]), dz.mul_add(sb, pb[2])];
@@ -45,7 +51,7 @@ pub(crate) fn project1<const ONE_DIV: bool>(
     let (s, dl) = if !valid {
         (0.0, 0.0)
     } else {
-        let dl = (-c - alpha * lam) / denom;
+        let dl = if FRESH { -c } else { -c - alpha * lam } / denom;
         (dl / len, dl)
     };
     let (sa, sb) = (wa * s, wb * s);
@@ -58,7 +64,7 @@ pub(crate) fn project1<const ONE_DIV: bool>(
 /// the test `w_a + w_b + α̃ > 0`, which the caller knows to hold (`α̃ > 0`, inverse masses
 /// finite and not negative): the same results with two operations fewer.
 #[inline(always)]
-pub(crate) fn project8<const ONE_DIV: bool, const CHECK_DENOM: bool>(
+pub(crate) fn project8<const ONE_DIV: bool, const CHECK_DENOM: bool, const FRESH: bool>(
     pa: Vec3x8,
     pb: Vec3x8,
     wa: F32s,
@@ -82,7 +88,8 @@ pub(crate) fn project8<const ONE_DIV: bool, const CHECK_DENOM: bool>(
     if ONE_DIV {
         // The mask zeroes the other lanes (`+0.0`, as a select would), and the multiplier
         // needs no mask of its own: `s len + λ` is `λ` where `s` is zero and `len` finite.
-        let sc = valid & (mul_add(-alpha, lam, -c) / (denom * len));
+        let num = if FRESH { -c } else { mul_add(-alpha, lam, -c) };
+        let sc = valid & (num / (denom * len));
         let (sa, sb) = (wa * sc, wb * sc);
         let pa = Vec3x8 {
             x: mul_add(-d.x, sa, pa.x),
@@ -96,7 +103,108 @@ pub(crate) fn project8<const ONE_DIV: bool, const CHECK_DENOM: bool>(
         };
         return (pa, pb, mul_add(sc, len, lam));
     }
-    let dl = valid.select((-c - alpha * lam) / denom, zero);
+    let num = if FRESH { -c } else { -c - alpha * lam };
+    let dl = valid.select(num / denom, zero);
     let sc = valid.select(dl / len, zero);
     (pa - d.scale(wa * sc), pb + d.scale(wb * sc), lam + dl)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{project1, project8};
+    use crate::data::lanes::{F32s, Vec3x8};
+    use proptest::prelude::*;
+
+    /// The bits of a projection's results.
+    fn bits(r: ([f32; 3], [f32; 3], f32)) -> [u32; 7] {
+        let (a, b, l) = r;
+        [a[0], a[1], a[2], b[0], b[1], b[2], l].map(f32::to_bits)
+    }
+
+    /// One constraint with a zero multiplier, through all four forms: the `FRESH` form and the
+    /// general one, scalar and in every lane, must agree bit for bit.
+    fn check(pa: [f32; 3], pb: [f32; 3], wa: f32, wb: f32, rest: f32, alpha: f32) {
+        fn lanes(p: [f32; 3]) -> Vec3x8 {
+            Vec3x8 {
+                x: F32s::splat(p[0]),
+                y: F32s::splat(p[1]),
+                z: F32s::splat(p[2]),
+            }
+        }
+        fn lane0(r: (Vec3x8, Vec3x8, F32s)) -> ([f32; 3], [f32; 3], f32) {
+            let (a, b, l) = r;
+            let g = |v: F32s| v.to_array()[0];
+            ([g(a.x), g(a.y), g(a.z)], [g(b.x), g(b.y), g(b.z)], g(l))
+        }
+        let (w8, rest8, alpha8) = (|w: f32| F32s::splat(w), F32s::splat(rest), F32s::splat(alpha));
+        let zero = F32s::ZERO;
+        let one_div = [
+            bits(project1::<true, false>(pa, pb, wa, wb, rest, alpha, 0.0)),
+            bits(project1::<true, true>(pa, pb, wa, wb, rest, alpha, 0.0)),
+            bits(lane0(project8::<true, true, false>(
+                lanes(pa),
+                lanes(pb),
+                w8(wa),
+                w8(wb),
+                rest8,
+                alpha8,
+                zero,
+            ))),
+            bits(lane0(project8::<true, true, true>(
+                lanes(pa),
+                lanes(pb),
+                w8(wa),
+                w8(wb),
+                rest8,
+                alpha8,
+                zero,
+            ))),
+        ];
+        let two_div = [
+            bits(project1::<false, false>(pa, pb, wa, wb, rest, alpha, 0.0)),
+            bits(project1::<false, true>(pa, pb, wa, wb, rest, alpha, 0.0)),
+            bits(lane0(project8::<false, true, false>(
+                lanes(pa),
+                lanes(pb),
+                w8(wa),
+                w8(wb),
+                rest8,
+                alpha8,
+                zero,
+            ))),
+            bits(lane0(project8::<false, true, true>(
+                lanes(pa),
+                lanes(pb),
+                w8(wa),
+                w8(wb),
+                rest8,
+                alpha8,
+                zero,
+            ))),
+        ];
+        for forms in [one_div, two_div] {
+            assert!(forms.iter().all(|f| *f == forms[0]), "{forms:?}");
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(256))]
+        /// A fresh multiplier changes no bit, with or without compliance, at any length, and at
+        /// exactly the rest length (`C = +0`), where the sign of a zero could show.
+        #[test]
+        fn fresh_multipliers_change_no_bit(
+            pa in prop::array::uniform3(-2.0f32..2.0),
+            d in prop::array::uniform3(-1.0f32..1.0),
+            wa in prop_oneof![Just(0.0f32), 0.01f32..10.0],
+            wb in prop_oneof![Just(0.0f32), 0.01f32..10.0],
+            alpha in prop_oneof![Just(0.0f32), 1e-9f32..1e3],
+            rest in 0.0f32..1.5,
+        ) {
+            let pb = [pa[0] + d[0], pa[1] + d[1], pa[2] + d[2]];
+            check(pa, pb, wa, wb, rest, alpha);
+            // a constraint exactly at its rest length along x, and one of zero length
+            check([0.0, 0.5, -0.0], [rest, 0.5, -0.0], wa, wb, rest, alpha);
+            check([-0.0, 0.0, 0.0], [-0.0, 0.0, 0.0], wa, wb, 0.0, alpha);
+        }
+    }
 }

@@ -161,27 +161,29 @@ impl DistanceSet {
             let uses = col.grid.as_ref().is_none_or(GridColour::keeps_multipliers);
             let (reset, keep) = (reset || !uses, keep && uses);
             // The form chosen once a colour, so that `project1` inlines into the loop.
-            if col.grid.is_some() {
-                colour_scalar::<true>(col, [px, py, pz], w, inv_h2, reset, keep);
-            } else {
-                colour_scalar::<false>(col, [px, py, pz], w, inv_h2, reset, keep);
+            let p = [&mut *px, &mut *py, &mut *pz];
+            match (col.grid.is_some(), reset) {
+                (true, true) => colour_scalar::<true, true>(col, p, w, inv_h2, keep),
+                (true, false) => colour_scalar::<true, false>(col, p, w, inv_h2, keep),
+                (false, true) => colour_scalar::<false, true>(col, p, w, inv_h2, keep),
+                (false, false) => colour_scalar::<false, false>(col, p, w, inv_h2, keep),
             }
         }
     }
 }
 
 /// One colour of [`DistanceSet::solve_scalar`], constraint by constraint: [`project1`] with one
-/// division (`ONE_DIV`, grid colours) or two; multipliers read as zero with `reset`, written
+/// division (`ONE_DIV`, grid colours) or two; multipliers read as zero with `RESET`, written
 /// with `keep`.
-fn colour_scalar<const ONE_DIV: bool>(col: &mut Colour, p: [&mut [f32]; 3], w: &[f32], inv_h2: f32, reset: bool, keep: bool) {
+fn colour_scalar<const ONE_DIV: bool, const RESET: bool>(col: &mut Colour, p: [&mut [f32]; 3], w: &[f32], inv_h2: f32, keep: bool) {
     let [px, py, pz] = p;
     for k in 0..col.a.len() {
-        let lam = if reset { 0.0 } else { col.lambda[k] };
+        let lam = if RESET { 0.0 } else { col.lambda[k] };
         let (a, b) = (col.a[k] as usize, col.b[k] as usize);
         let pa = [px[a], py[a], pz[a]];
         let pb = [px[b], py[b], pz[b]];
         let alpha = col.compliance[k] * inv_h2;
-        let (pa, pb, lam) = project1::<ONE_DIV>(pa, pb, w[a], w[b], col.rest[k], alpha, lam);
+        let (pa, pb, lam) = project1::<ONE_DIV, RESET>(pa, pb, w[a], w[b], col.rest[k], alpha, lam);
         [px[a], py[a], pz[a]] = pa;
         [px[b], py[b], pz[b]] = pb;
         if keep {
