@@ -121,69 +121,37 @@ mod tests {
         [a[0], a[1], a[2], b[0], b[1], b[2], l].map(f32::to_bits)
     }
 
-    /// One constraint with a zero multiplier, through all four forms: the `FRESH` form and the
-    /// general one, scalar and in every lane, must agree bit for bit.
-    fn check(pa: [f32; 3], pb: [f32; 3], wa: f32, wb: f32, rest: f32, alpha: f32) {
-        fn lanes(p: [f32; 3]) -> Vec3x8 {
-            Vec3x8 {
-                x: F32s::splat(p[0]),
-                y: F32s::splat(p[1]),
-                z: F32s::splat(p[2]),
-            }
-        }
-        fn lane0(r: (Vec3x8, Vec3x8, F32s)) -> ([f32; 3], [f32; 3], f32) {
-            let (a, b, l) = r;
+    /// One constraint with a zero multiplier in the `FRESH` form and the general one, scalar
+    /// and in the lanes (lane 0 of eight equal lanes): the bits of the four results.
+    fn forms<const ONE_DIV: bool>(pa: [f32; 3], pb: [f32; 3], w: [f32; 2], rest: f32, alpha: f32) -> [[u32; 7]; 4] {
+        let lanes = |p: [f32; 3]| Vec3x8 {
+            x: F32s::splat(p[0]),
+            y: F32s::splat(p[1]),
+            z: F32s::splat(p[2]),
+        };
+        let lane0 = |r: (Vec3x8, Vec3x8, F32s)| {
             let g = |v: F32s| v.to_array()[0];
+            let (a, b, l) = r;
             ([g(a.x), g(a.y), g(a.z)], [g(b.x), g(b.y), g(b.z)], g(l))
-        }
-        let (w8, rest8, alpha8) = (|w: f32| F32s::splat(w), F32s::splat(rest), F32s::splat(alpha));
-        let zero = F32s::ZERO;
-        let one_div = [
-            bits(project1::<true, false>(pa, pb, wa, wb, rest, alpha, 0.0)),
-            bits(project1::<true, true>(pa, pb, wa, wb, rest, alpha, 0.0)),
-            bits(lane0(project8::<true, true, false>(
-                lanes(pa),
-                lanes(pb),
-                w8(wa),
-                w8(wb),
-                rest8,
-                alpha8,
-                zero,
-            ))),
-            bits(lane0(project8::<true, true, true>(
-                lanes(pa),
-                lanes(pb),
-                w8(wa),
-                w8(wb),
-                rest8,
-                alpha8,
-                zero,
-            ))),
-        ];
-        let two_div = [
-            bits(project1::<false, false>(pa, pb, wa, wb, rest, alpha, 0.0)),
-            bits(project1::<false, true>(pa, pb, wa, wb, rest, alpha, 0.0)),
-            bits(lane0(project8::<false, true, false>(
-                lanes(pa),
-                lanes(pb),
-                w8(wa),
-                w8(wb),
-                rest8,
-                alpha8,
-                zero,
-            ))),
-            bits(lane0(project8::<false, true, true>(
-                lanes(pa),
-                lanes(pb),
-                w8(wa),
-                w8(wb),
-                rest8,
-                alpha8,
-                zero,
-            ))),
-        ];
-        for forms in [one_div, two_div] {
-            assert!(forms.iter().all(|f| *f == forms[0]), "{forms:?}");
+        };
+        let s = |v: f32| F32s::splat(v);
+        let (a8, b8) = (lanes(pa), lanes(pb));
+        let (w8, r8, al8) = ([s(w[0]), s(w[1])], s(rest), s(alpha));
+        [
+            bits(project1::<ONE_DIV, false>(pa, pb, w[0], w[1], rest, alpha, 0.0)),
+            bits(project1::<ONE_DIV, true>(pa, pb, w[0], w[1], rest, alpha, 0.0)),
+            bits(lane0(project8::<ONE_DIV, true, false>(a8, b8, w8[0], w8[1], r8, al8, F32s::ZERO))),
+            bits(lane0(project8::<ONE_DIV, true, true>(a8, b8, w8[0], w8[1], r8, al8, F32s::ZERO))),
+        ]
+    }
+
+    /// The four forms agree bit for bit, with one division and with two.
+    fn check(pa: [f32; 3], pb: [f32; 3], wa: f32, wb: f32, rest: f32, alpha: f32) {
+        for f in [
+            forms::<true>(pa, pb, [wa, wb], rest, alpha),
+            forms::<false>(pa, pb, [wa, wb], rest, alpha),
+        ] {
+            assert!(f.iter().all(|r| *r == f[0]), "{f:?}");
         }
     }
 
