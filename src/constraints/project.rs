@@ -51,7 +51,8 @@ pub(crate) fn project1<const ONE_DIV: bool, const FRESH: bool>(
     let (s, dl) = if !valid {
         (0.0, 0.0)
     } else {
-        let dl = if FRESH { -c } else { -c - alpha * lam } / denom;
+        let num = if FRESH { -c } else { -c - alpha * lam };
+        let dl = num / denom;
         (dl / len, dl)
     };
     let (sa, sb) = (wa * s, wb * s);
