@@ -8,7 +8,8 @@
 //! rounding the small worlds and their recorded results keep). The grid form also fuses its
 //! products and sums (the squared length, `-C - α̃ λ`, the position updates and `λ + Δλ`: ten
 //! of its thirty operations), with one rounding on every target ([`mul_add`]): the grid sweep
-//! is bound by its floating-point operations (`docs/performance.md`), so fewer make it faster.
+//! is bound by the dependency chain of its floating-point operations (`docs/performance.md`),
+//! so fewer make it faster.
 //!
 //! `FRESH` says the multiplier is zero (the first sweep of a substep, or a class that keeps
 //! none): `-C - α̃ λ` is then `-C` exactly, for `(-α̃) · (+0)` is `-0` and `α̃ · (+0)` is `+0`
@@ -125,18 +126,13 @@ mod tests {
     /// One constraint with a zero multiplier in the `FRESH` form and the general one, scalar
     /// and in the lanes (lane 0 of eight equal lanes): the bits of the four results.
     fn forms<const ONE_DIV: bool>(pa: [f32; 3], pb: [f32; 3], w: [f32; 2], rest: f32, alpha: f32) -> [[u32; 7]; 4] {
-        let lanes = |p: [f32; 3]| Vec3x8 {
-            x: F32s::splat(p[0]),
-            y: F32s::splat(p[1]),
-            z: F32s::splat(p[2]),
-        };
         let lane0 = |r: (Vec3x8, Vec3x8, F32s)| {
             let g = |v: F32s| v.to_array()[0];
             let (a, b, l) = r;
             ([g(a.x), g(a.y), g(a.z)], [g(b.x), g(b.y), g(b.z)], g(l))
         };
         let s = |v: f32| F32s::splat(v);
-        let (a8, b8) = (lanes(pa), lanes(pb));
+        let (a8, b8) = (Vec3x8::splat(pa), Vec3x8::splat(pb));
         let (w8, r8, al8) = ([s(w[0]), s(w[1])], s(rest), s(alpha));
         [
             bits(project1::<ONE_DIV, false>(pa, pb, w[0], w[1], rest, alpha, 0.0)),
