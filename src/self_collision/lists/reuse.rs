@@ -47,7 +47,7 @@ impl Reuse {
     /// the positions `x` and travels `t` (the first `n`); else forgets them.
     pub(crate) fn holds(&mut self, x: [&[f32]; 3], t: &[f32], n: usize, d: f32, broadphase: SelfBroadphase) -> bool {
         self.age += 1;
-        let slower = || t.len() >= n && self.travel.len() >= n && t[..n].iter().zip(&self.travel).all(|(t, b)| t <= b);
+        let slower = || t.len() >= n && self.travel.len() >= n && at_most(&t[..n], &self.travel[..n]);
         if self.key != Some((n, d.to_bits(), broadphase)) || !slower() {
             self.key = None;
             return false;
@@ -93,18 +93,29 @@ impl Reuse {
     }
 }
 
-/// The largest distance a particle moved from `b` to `a` (NaN if any is non-finite).
+/// Whether each of `t` is at most its match in `b` (false for a NaN). No branch an element,
+/// so the loop runs in lanes.
+fn at_most(t: &[f32], b: &[f32]) -> bool {
+    t.iter().zip(b).fold(true, |ok, (t, b)| ok & (t <= b))
+}
+
+/// The largest distance one of the first `n` particles moved from `b` to `a` (NaN if any is
+/// non-finite). On slices cut to `n` and without a branch a particle, so the loop runs in lanes.
 fn max_move(a: [&[f32]; 3], b: [&[f32]; 3], n: usize) -> f32 {
-    let mut m2 = 0.0f32;
+    let (ax, ay, az) = (&a[0][..n], &a[1][..n], &a[2][..n]);
+    let (bx, by, bz) = (&b[0][..n], &b[1][..n], &b[2][..n]);
+    let (mut m2, mut nan) = (0.0f32, false);
     for i in 0..n {
-        let (dx, dy, dz) = (a[0][i] - b[0][i], a[1][i] - b[1][i], a[2][i] - b[2][i]);
+        let (dx, dy, dz) = (ax[i] - bx[i], ay[i] - by[i], az[i] - bz[i]);
         let d2 = dx * dx + dy * dy + dz * dz;
-        if d2.is_nan() {
-            return f32::NAN;
-        }
-        m2 = m2.max(d2);
+        nan |= d2.is_nan();
+        m2 = if d2 > m2 { d2 } else { m2 };
     }
-    m2.sqrt()
+    if nan {
+        f32::NAN
+    } else {
+        m2.sqrt()
+    }
 }
 
 /// The lists `out`: the candidates `cand` within reach of each other at `x`, by the
@@ -184,6 +195,16 @@ mod tests {
         assert!(!r.holds([&far[0][..], &far[1][..], &far[2][..]], &b, 2, 0.01, hash));
         r.built(xs, 2, 0.01, |i| b[i], hash, 0.01);
         assert!(!r.holds(xs, &b, 2, 0.01, SelfBroadphase::AabbTree), "another broadphase");
+        r.built(xs, 2, 0.01, |i| b[i], hash, 0.01);
+        let lost = [vec![0.0f32, 0.01], vec![f32::NAN, 0.0], vec![0.0; 2]];
+        assert!(
+            !r.holds([&lost[0][..], &lost[1][..], &lost[2][..]], &b, 2, 0.01, hash),
+            "a non-finite particle"
+        );
+        r.built(xs, 2, 0.01, |i| b[i], hash, 0.01);
+        assert!(!r.holds(xs, &[0.25, f32::NAN], 2, 0.01, hash), "a non-finite travel");
+        r.built(xs, 2, 0.01, |i| b[i], hash, 0.01);
+        assert!(r.holds(xs, &b, 2, 0.01, hash), "unmoved, equal travels");
     }
 
     /// The lane filter keeps exactly the scalar loop's candidates: a random cloud whose

@@ -144,7 +144,8 @@ impl ContactPass {
         self.acc.resize(len, [0.0; RECORD]);
         self.hit.resize(len / LANES, false);
         self.damping.clear();
-        self.damping.extend((0..len).map(|i| damping.get(i).copied().unwrap_or(0.0)));
+        self.damping.extend_from_slice(&damping[..damping.len().min(len)]);
+        self.damping.resize(len, 0.0);
     }
 
     /// A sink the speed clamp's chunks copy the box centres into.
