@@ -1,7 +1,7 @@
 //! The substep pass over the step's pair list (the method is described in
 //! [`crate::self_collision`]): the pairs in contact are found eight at a time, in parallel over
-//! fixed chunks of the list, each with its contact computed once for both particles
-//! ([`PairCtx::pair_contact`]); the contacts are then added in list order to both particles'
+//! fixed chunks of the list, and their contacts computed once for both particles, eight pairs
+//! at a time ([`PairCtx::pair_contacts`]); the contacts are then added in list order to both particles'
 //! sums (from [`PARALLEL_CONTACTS`] contacts by one part of the particles per thread, each
 //! part reading the whole contact list), and the velocity-correction kernel
 //! ([`crate::self_collision::response::apply_runs`]) runs on the blocks of [`LANES`] particles
@@ -15,6 +15,7 @@
 //! (a run of each of the eleven arrays), those it touches and, back to zero, those of the
 //! last pass it does not touch, each part its own.
 
+pub(crate) mod contact;
 pub(crate) mod pairs;
 pub(crate) mod sums;
 
@@ -23,7 +24,8 @@ use rayon::prelude::*;
 
 use crate::data::lanes::{SharedVec3, Vec3x8, LANES};
 use crate::model::self_collision::Response;
-use crate::self_collision::pass::pairs::{PairContact, PairCtx, PairList};
+use crate::self_collision::pass::contact::PairContact;
+use crate::self_collision::pass::pairs::{PairCtx, PairList};
 use crate::self_collision::pass::sums::{ContactSums, PartSums, Record, SumRows, RECORD};
 use crate::self_collision::response::{apply_runs, ApplyInput};
 
@@ -198,7 +200,7 @@ impl ContactPass {
             near.clear();
             ctx.touching(list, c * PAIR_CHUNK..((c + 1) * PAIR_CHUNK).min(list.len()), xyzw, simd, near);
             found.clear();
-            found.extend(near.iter().map(|&(i, j)| ctx.pair_contact(xyzw, i as usize, j as usize)));
+            ctx.pair_contacts(xyzw, near, list.top, simd, found);
         };
         let old = std::mem::take(&mut self.touched);
         self.touched_parts.resize_with(self.touched_parts.len().max(1), Vec::new);

@@ -1,10 +1,13 @@
-//! The step's pair list and the per-pair contact of the substep pass (the method is described
-//! in [`crate::self_collision`]).
+//! The step's pair list and the lane test of the substep pass that finds the pairs in contact
+//! range (the method is described in [`crate::self_collision`]); their contacts are computed
+//! in [`contact`](super::contact).
 
 use crate::data::lanes::{gather_xyzw8_unchecked, load_idx_unchecked, F32s, Vec3x8, LANES};
 use crate::model::self_collision::Response;
 #[cfg(test)]
 use crate::self_collision::neighbours::Neighbours;
+#[cfg(test)]
+use crate::self_collision::pass::contact::COINCIDENT;
 
 /// The `i` of every entry of the step's CSR lists, whose `ids` are the `j`: with them the
 /// lists read as a structure-of-arrays pair list ([`PairList`]), filled once a step.
@@ -45,7 +48,7 @@ pub(crate) struct PairList<'a> {
     pub(crate) i: &'a [u32],
     pub(crate) j: &'a [u32],
     /// The largest id in the list (every gather below it is in bounds).
-    top: u32,
+    pub(crate) top: u32,
 }
 
 impl PairList<'_> {
@@ -71,9 +74,6 @@ pub(crate) struct PairCtx<'a> {
 pub(crate) fn rest_record(r: [f32; 3], cloth: u32) -> [f32; 4] {
     [r[0], r[1], r[2], f32::from_bits(cloth)]
 }
-
-/// Unit direction separating coincident particles with no rest direction: `(1, 2, 3)/√14`.
-const COINCIDENT: [f32; 3] = [0.267_261_24, 0.534_522_5, 0.801_783_7];
 
 impl PairCtx<'_> {
     /// Appends to `out` the pairs `(i[k], j[k])` of `range` of `list` that may be in contact:
@@ -239,126 +239,5 @@ impl PairCtx<'_> {
             out[9] += dist - md;
             out[10] += 1.0;
         }
-    }
-
-    /// The contact of the pair `(i, j)`, computed once for both particles, or `None` when the
-    /// pair is not in contact or neither particle is free. Adding its two sides
-    /// ([`PairContact::add_to`]) gives the same bits as [`PairCtx::add_contact`] run from each
-    /// end: the geometry of `(j, i)` is that of `(i, j)` negated (IEEE subtraction and division
-    /// are exact under negation; a zero can only change sign, which no sum sees, see
-    /// [`PairContact`]), the squared distances and the mass sum `w_i + w_j` are the same.
-    ///
-    /// The predicted positions and inverse masses are read from `xyzw` (`[x, y, z, w]`
-    /// records of `p` and `w`), the rest data from [`PairCtx::rest4`]: one record a side
-    /// for each (the start positions `x` are read from their arrays).
-    #[inline]
-    pub(crate) fn pair_contact(&self, xyzw: &[[f32; 4]], i: usize, j: usize) -> Option<PairContact> {
-        let (a, b) = (xyzw[i], xyzw[j]);
-        let (wi, wj) = (a[3], b[3]);
-        if wi <= 0.0 && wj <= 0.0 {
-            return None;
-        }
-        let pi = [a[0], a[1], a[2]];
-        let pj = [b[0], b[1], b[2]];
-        let v = [pi[0] - pj[0], pi[1] - pj[1], pi[2] - pj[2]];
-        let dist2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
-        let d2 = self.d * self.d;
-        // min_dist <= d: most listed pairs end here, before the rest data is read.
-        if dist2.is_nan() || dist2 >= d2 {
-            return None;
-        }
-        let (ra, rb) = (self.rest4[i], self.rest4[j]);
-        let same = ra[3].to_bits() == rb[3].to_bits();
-        let r = [ra[0] - rb[0], ra[1] - rb[1], ra[2] - rb[2]];
-        let rest2 = if same {
-            r[0] * r[0] + r[1] * r[1] + r[2] * r[2]
-        } else {
-            f32::INFINITY
-        };
-        if dist2 > rest2 {
-            return None;
-        }
-        let md = if rest2 < d2 { rest2.sqrt() } else { self.d };
-        if dist2 >= md * md {
-            return None;
-        }
-        let dist = dist2.sqrt();
-        let nrm = if dist2 > 0.0 {
-            v.map(|c| c / dist)
-        } else if same && rest2 > 0.0 {
-            let rl = rest2.sqrt();
-            r.map(|c| c / rl)
-        } else {
-            // `i < j` here (the pair list's order); the reverse side gets the negation.
-            let s = if i < j { 1.0 } else { -1.0 };
-            COINCIDENT.map(|c| c * s)
-        };
-        let wsum = wi + wj;
-        let share = [wi / wsum, wj / wsum];
-        let di = [pi[0] - self.x[0][i], pi[1] - self.x[1][i], pi[2] - self.x[2][i]];
-        let dj = [pj[0] - self.x[0][j], pj[1] - self.x[1][j], pj[2] - self.x[2][j]];
-        let (amount, approaching) = if self.response == Response::MovementSpeed {
-            let vn = (di[0] - dj[0]) * nrm[0] + (di[1] - dj[1]) * nrm[1] + (di[2] - dj[2]) * nrm[2];
-            if vn < 0.0 {
-                ([-vn * share[0], -vn * share[1]], true)
-            } else {
-                ([0.0; 2], false)
-            }
-        } else {
-            ([(md - dist) * share[0], (md - dist) * share[1]], false)
-        };
-        Some(PairContact {
-            nrm,
-            amount,
-            free: [wi > 0.0, wj > 0.0],
-            disp: [di, dj],
-            gap: dist - md,
-            approaching,
-        })
-    }
-}
-
-/// One contact as seen from both of its particles (from [`PairCtx::pair_contact`]).
-///
-/// Side 0 is `i`, side 1 is `j`; side 1's normal is side 0's negated. The sums start at `+0`
-/// and never become `-0`, so adding `-0` or `+0` for a zero component gives the same bits: the
-/// only difference from the one-sided computation (a zero coordinate difference is `+0` from
-/// both ends) is invisible.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct PairContact {
-    nrm: [f32; 3],
-    amount: [f32; 2],
-    free: [bool; 2],
-    disp: [[f32; 3]; 2],
-    gap: f32,
-    approaching: bool,
-}
-
-impl PairContact {
-    /// Adds the contact to side `side`'s sums `[c(3), f(3), n(3), gap, count]` and
-    /// approaching count, if that particle is free (the order of operations of
-    /// [`PairCtx::add_contact`]).
-    /// Returns whether anything was added.
-    #[inline]
-    pub(crate) fn add_to(&self, side: usize, out: &mut [f32; 11], approaching: &mut f32) -> bool {
-        if !self.free[side] {
-            return false;
-        }
-        let sign = if side == 0 { 1.0f32 } else { -1.0 };
-        let amount = self.amount[side];
-        // The partner's displacement.
-        let f = self.disp[1 - side];
-        if self.approaching {
-            *approaching += 1.0;
-        }
-        for a in 0..3 {
-            let n = self.nrm[a] * sign;
-            out[a] += n * amount;
-            out[3 + a] += f[a];
-            out[6 + a] += n;
-        }
-        out[9] += self.gap;
-        out[10] += 1.0;
-        true
     }
 }

@@ -4,7 +4,8 @@
 //! contacts into ([`PartSums`]).
 
 use crate::data::lanes::{store, F32s, LANES};
-use crate::self_collision::pass::pairs::{PairContact, PairCtx};
+use crate::self_collision::pass::contact::PairContact;
+use crate::self_collision::pass::pairs::PairCtx;
 
 /// Values of a particle's [`Record`]: its eleven sums and its approaching count.
 pub(crate) const RECORD: usize = 12;
