@@ -47,9 +47,9 @@ const MAX_PARTS: usize = 8;
 const XYZW_CHUNK: usize = 16 * 1024;
 
 /// Touched blocks from which the correction runs in parallel. The parallel form walks every
-/// block's flag in tasks of [`APPLY_BLOCKS`] and splits the touched ones between threads whose
-/// caches hold the other half of the particles; below about a thousand touched blocks the
-/// serial walk over the touched runs was as fast or faster on every scene of the
+/// block's flag in tasks of [`APPLY_BLOCKS`] and splits the touched ones between threads;
+/// below about a thousand touched blocks the serial walk over the touched runs was as fast or
+/// faster on every scene of the
 /// self-collision suite (the twist and the fold touch about 60 a substep, the pile and the
 /// stacked cloths about 400, the heap 3 500).
 pub(crate) const APPLY_PARALLEL_BLOCKS: usize = 1024;

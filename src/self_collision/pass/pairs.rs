@@ -1,6 +1,7 @@
 //! The step's pair list and the lane test of the substep pass that finds the pairs in contact
 //! range (the method is described in [`crate::self_collision`]); their contacts are computed
-//! in [`contact`](super::contact).
+//! in [`contact`](super::contact), and held in the tests to the one-sided, particle by
+//! particle reference here (`PairCtx::sums`).
 
 use crate::data::lanes::{gather_xyzw8_unchecked, load_idx_unchecked, F32s, Vec3x8, LANES};
 use crate::model::self_collision::Response;
