@@ -7,6 +7,7 @@ use wide::u32x8;
 use crate::data::lanes::{gather1_unchecked, gather_xyzw8_unchecked, idx8, F32s, Idx8, Vec3x8, LANES};
 use crate::model::self_collision::Response;
 use crate::self_collision::pass::pairs::PairCtx;
+use crate::self_collision::pass::sums::Record;
 
 /// Unit direction separating coincident particles with no rest direction: `(1, 2, 3)/√14`.
 pub(crate) const COINCIDENT: [f32; 3] = [0.267_261_24, 0.534_522_5, 0.801_783_7];
@@ -242,12 +243,13 @@ pub(crate) struct PairContact {
 }
 
 impl PairContact {
-    /// Adds the contact to side `side`'s sums `[c(3), f(3), n(3), gap, count]` and
-    /// approaching count, if that particle is free (the order of operations of
-    /// [`PairCtx::add_contact`]).
-    /// Returns whether anything was added.
+    /// Adds the contact to side `side`'s record (`[c(3), f(3), n(3), gap, count]` and the
+    /// approaching count), if that particle is free; returns whether it was. The twelve
+    /// values are added as one array, without a branch: each is one addition, the operations
+    /// of [`PairCtx::add_contact`], and a contact that does not approach adds `+0` to a count
+    /// that is never `-0`, which changes no bit.
     #[inline]
-    pub(crate) fn add_to(&self, side: usize, out: &mut [f32; 11], approaching: &mut f32) -> bool {
+    pub(crate) fn add_to(&self, side: usize, rec: &mut Record) -> bool {
         if !self.free[side] {
             return false;
         }
@@ -255,17 +257,24 @@ impl PairContact {
         let amount = self.amount[side];
         // The partner's displacement.
         let f = self.disp[1 - side];
-        if self.approaching {
-            *approaching += 1.0;
+        let n = self.nrm.map(|c| c * sign);
+        let add: Record = [
+            n[0] * amount,
+            n[1] * amount,
+            n[2] * amount,
+            f[0],
+            f[1],
+            f[2],
+            n[0],
+            n[1],
+            n[2],
+            self.gap,
+            1.0,
+            if self.approaching { 1.0 } else { 0.0 },
+        ];
+        for (r, a) in rec.iter_mut().zip(add) {
+            *r += a;
         }
-        for a in 0..3 {
-            let n = self.nrm[a] * sign;
-            out[a] += n * amount;
-            out[3 + a] += f[a];
-            out[6 + a] += n;
-        }
-        out[9] += self.gap;
-        out[10] += 1.0;
         true
     }
 }

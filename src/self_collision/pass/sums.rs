@@ -190,8 +190,7 @@ impl<'a> PartSums<'a> {
                 };
                 // Each contact counted once, by the part that holds its `i`.
                 self.contacts += usize::from(side == 0);
-                let (out, approaching) = split_record(rec);
-                if c.add_to(side, out, approaching) {
+                if c.add_to(side, rec) {
                     self.hit[(a - first_id) / LANES] = true;
                 }
             }
