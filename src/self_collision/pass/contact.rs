@@ -89,25 +89,33 @@ impl PairCtx<'_> {
         })
     }
 
-    /// The contacts of the pairs `near` (each `(i, j)` with `i < j`, every id at most `top`),
-    /// appended to `out` in order: [`PairCtx::pair_contact`] of each pair. With `simd`, eight
-    /// pairs at a time: every lane computes all of the scalar test's values with the same
-    /// operations and the lanes the scalar test would leave early are dropped, so the
-    /// contacts are the same bits; the last pairs, and every pair without `simd`, one by one.
-    pub(crate) fn pair_contacts(&self, xyzw: &[[f32; 4]], near: &[(u32, u32)], top: u32, simd: bool, out: &mut Vec<Option<PairContact>>) {
-        let t = top as usize;
-        let n = self.x[0].len().min(self.x[1].len()).min(self.x[2].len());
-        let mut done = 0;
-        if simd && t < xyzw.len() && t < self.rest4.len() && t < n {
-            for g in near.chunks_exact(LANES) {
-                let ii = idx8(|l| g[l].0);
-                let jj = idx8(|l| g[l].1);
-                // SAFETY: every id is at most `top`, below each array's length (checked above).
+    /// The contacts of the pairs `near` (each `(i, j)` with `i < j`), appended to `out` in
+    /// order: [`PairCtx::pair_contact`] of each pair. With `simd`, eight pairs at a time: every
+    /// lane computes all of the scalar test's values with the same operations and the lanes
+    /// the scalar test would leave early are dropped, so the contacts are the same bits; the
+    /// last pairs, a group with an id past the arrays (whose checked reads then fail), and
+    /// every pair without `simd`, one by one.
+    pub(crate) fn pair_contacts(&self, xyzw: &[[f32; 4]], near: &[(u32, u32)], simd: bool, out: &mut Vec<Option<PairContact>>) {
+        let n = [xyzw.len(), self.rest4.len(), self.x[0].len(), self.x[1].len(), self.x[2].len()]
+            .into_iter()
+            .min()
+            .unwrap_or(0);
+        let scalar = |out: &mut Vec<Option<PairContact>>, g: &[(u32, u32)]| {
+            out.extend(g.iter().map(|&(i, j)| self.pair_contact(xyzw, i as usize, j as usize)));
+        };
+        let groups = if simd { near.len() / LANES } else { 0 };
+        for g in near[..groups * LANES].chunks_exact(LANES) {
+            let ii = idx8(|l| g[l].0);
+            let jj = idx8(|l| g[l].1);
+            let top = (u32x8::from(ii).max(u32x8::from(jj))).to_array().into_iter().max().unwrap_or(0);
+            if (top as usize) < n {
+                // SAFETY: every id of the group is below each array's length (checked above).
                 unsafe { self.contacts8(xyzw, &ii, &jj, out) };
+            } else {
+                scalar(out, g);
             }
-            done = near.len() / LANES * LANES;
         }
-        out.extend(near[done..].iter().map(|&(i, j)| self.pair_contact(xyzw, i as usize, j as usize)));
+        scalar(out, &near[groups * LANES..]);
     }
 
     /// Eight lanes of [`PairCtx::pair_contact`] (see [`PairCtx::pair_contacts`]).
@@ -329,7 +337,6 @@ mod tests {
             .flat_map(|i| (i + 1..n as u32).map(move |j| (i, j)))
             .filter(|_| r() > 0.3)
             .collect();
-        let top = near.iter().map(|q| q.1).max().unwrap_or(0);
         let mut kinds = [0usize; 3];
         for response in [Response::Pbd, Response::MovementSpeed] {
             let ctx = PairCtx {
@@ -341,8 +348,8 @@ mod tests {
                 response,
             };
             let (mut lanes, mut scalar) = (Vec::new(), Vec::new());
-            ctx.pair_contacts(&xyzw, &near, top, true, &mut lanes);
-            ctx.pair_contacts(&xyzw, &near, top, false, &mut scalar);
+            ctx.pair_contacts(&xyzw, &near, true, &mut lanes);
+            ctx.pair_contacts(&xyzw, &near, false, &mut scalar);
             assert_eq!((lanes.len(), scalar.len()), (near.len(), near.len()));
             for ((a, b), &(i, j)) in lanes.iter().zip(&scalar).zip(&near) {
                 assert_eq!(a.map(|c| c.bits()), b.map(|c| c.bits()), "pair ({i}, {j})");
@@ -356,6 +363,26 @@ mod tests {
             }
         }
         kinds
+    }
+
+    /// A pair naming a particle past the arrays fails the checked scalar read (a panic, not an
+    /// unchecked read), in a full group of eight as in the tail.
+    #[test]
+    #[should_panic]
+    fn an_id_past_the_arrays_is_read_with_checks() {
+        let xyzw = vec![[0.0f32; 4]; 8];
+        let rest4 = vec![[0.0f32; 4]; 8];
+        let (x, w) = (vec![0.0f32; 8], vec![1.0f32; 8]);
+        let ctx = PairCtx {
+            x: [&x, &x, &x],
+            p: [&x, &x, &x],
+            w: &w,
+            rest4: &rest4,
+            d: 0.03,
+            response: Response::Pbd,
+        };
+        let near: Vec<(u32, u32)> = (0..8).map(|k| (k, if k == 5 { 8 } else { k + 1 })).collect();
+        ctx.pair_contacts(&xyzw, &near, true, &mut Vec::new());
     }
 
     proptest::proptest! {

@@ -204,7 +204,7 @@ impl ContactPass {
             near.clear();
             ctx.touching(list, c * PAIR_CHUNK..((c + 1) * PAIR_CHUNK).min(list.len()), xyzw, simd, near);
             found.clear();
-            ctx.pair_contacts(xyzw, near, list.top, simd, found);
+            ctx.pair_contacts(xyzw, near, simd, found);
         };
         let old = std::mem::take(&mut self.touched);
         self.touched_parts.resize_with(self.touched_parts.len().max(1), Vec::new);

@@ -49,7 +49,7 @@ pub(crate) struct PairList<'a> {
     pub(crate) i: &'a [u32],
     pub(crate) j: &'a [u32],
     /// The largest id in the list (every gather below it is in bounds).
-    pub(crate) top: u32,
+    top: u32,
 }
 
 impl PairList<'_> {
