@@ -181,6 +181,19 @@ impl std::ops::Sub for Vec3x8 {
     }
 }
 
+impl std::ops::Div<F32s> for Vec3x8 {
+    type Output = Self;
+    /// Each component divided by its lane of `s`.
+    #[inline(always)]
+    fn div(self, s: F32s) -> Self {
+        Self {
+            x: self.x / s,
+            y: self.y / s,
+            z: self.z / s,
+        }
+    }
+}
+
 /// The lanes of `v` that are finite (`|v| < inf` fails exactly for NaN and ±inf), as a mask.
 #[inline(always)]
 pub fn finite_lanes(v: F32s) -> F32s {

@@ -265,22 +265,8 @@ fn sphere_lanes(center: [f32; 3], r: f32, x: Vec3x8, p: Vec3x8, th: F32s, reach:
     let at_centre = prox & !l2.simd_gt(zero);
     let v = Vec3x8::select(prox, Vec3x8::select(at_centre, dx, dp), e);
     let len = v.length_sq().sqrt();
-    let n = Vec3x8::select(len.simd_gt(zero), v.div(len), up);
+    let n = Vec3x8::select(len.simd_gt(zero), v / len, up);
     (c + n.scale(rv), n, prox | cross)
-}
-
-trait Div {
-    fn div(self, s: F32s) -> Self;
-}
-impl Div for Vec3x8 {
-    #[inline(always)]
-    fn div(self, s: F32s) -> Self {
-        Vec3x8 {
-            x: self.x / s,
-            y: self.y / s,
-            z: self.z / s,
-        }
-    }
 }
 
 /// Scalar twin of [`project_simd`]: `p += max(0, Th - n.(p - c)) n` for every slot set, in

@@ -173,20 +173,10 @@ impl PairCtx<'_> {
         let dist = dist2.sqrt();
         let sign = F32s::from(std::array::from_fn::<f32, LANES, _>(|l| if ii[l] < jj[l] { 1.0 } else { -1.0 }));
         let coincident = Vec3x8::splat(COINCIDENT).scale(sign);
-        let by_rest = Vec3x8 {
-            x: r.x / rl,
-            y: r.y / rl,
-            z: r.z / rl,
-        };
-        let by_dist = Vec3x8 {
-            x: v.x / dist,
-            y: v.y / dist,
-            z: v.z / dist,
-        };
         let nrm = Vec3x8::select(
             dist2.simd_gt(zero),
-            by_dist,
-            Vec3x8::select(same & rest2.simd_gt(zero), by_rest, coincident),
+            v / dist,
+            Vec3x8::select(same & rest2.simd_gt(zero), r / rl, coincident),
         );
         let wsum = wi + wj;
         let share = [wi / wsum, wj / wsum];
