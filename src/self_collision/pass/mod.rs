@@ -1,9 +1,9 @@
 //! The substep pass over the step's pair list (the method is described in
 //! [`crate::self_collision`]): the pairs in contact are found eight at a time, in parallel over
 //! fixed chunks of the list, and their contacts computed once for both particles, eight pairs
-//! at a time ([`PairCtx::pair_contacts`]); the contacts are then added in list order to both particles'
-//! sums (from [`PARALLEL_CONTACTS`] contacts by one part of the particles per thread, each
-//! part reading the whole contact list), and the velocity-correction kernel
+//! at a time ([`PairCtx::pair_contacts`]); the contacts are then added in list order to both
+//! particles' sums (from [`PARALLEL_CONTACTS`] contacts by one part of the particles per
+//! thread, each part reading the whole contact list), and the velocity-correction kernel
 //! ([`crate::self_collision::response::apply_runs`]) runs on the blocks of [`LANES`] particles
 //! that received one. On one thread each chunk's contacts are added as soon as they are found,
 //! while they are still in cache.
@@ -49,9 +49,8 @@ const XYZW_CHUNK: usize = 16 * 1024;
 /// Touched blocks from which the correction runs in parallel. The parallel form walks every
 /// block's flag in tasks of [`APPLY_BLOCKS`] and splits the touched ones between threads;
 /// below about a thousand touched blocks the serial walk over the touched runs was as fast or
-/// faster on every scene of the
-/// self-collision suite (the twist and the fold touch about 60 a substep, the pile and the
-/// stacked cloths about 400, the heap 3 500).
+/// faster on every scene of the self-collision suite (the twist and the fold touch about 60 a
+/// substep, the pile and the stacked cloths about 400, the heap 3 500).
 pub(crate) const APPLY_PARALLEL_BLOCKS: usize = 1024;
 
 /// The correction's settings besides the particle arrays.
