@@ -11,6 +11,13 @@
 //! lane passes also skip, within a block, each obstacle whose flag is down (a cloth on the
 //! floor beside a ball then pays for the floor only).
 //!
+//! **Pre-tests.** A block runs [`shape_may_touch_simd`] before a plane's or a sphere's
+//! contacts; when it says no, the block gets no contact and its slots are not written (zeroed
+//! once if they held one). For a plane the pre-test is the contact test itself, `n.(p - c) <
+//! reach` in some lane (the same expression, so the same decision): a floor far below a cloth
+//! costs one dot product a block instead of the block's seven stores and the checks that read
+//! them back.
+//!
 //! **Sphere pre-test.** Most blocks of a large cloth are far from a sphere. Before the full
 //! sphere test (three square roots, divisions) a block runs [`shape_may_touch_simd`]: the
 //! proximity test itself (the same expression, so the same bits), and a distance bound for
@@ -156,14 +163,20 @@ const PRETEST_REL: f32 = 2e-3;
 /// Absolute margin of the sphere pre-test's distance bound, m.
 const PRETEST_ABS: f32 = 1e-6;
 
-/// May block `b` touch `shape`? Always for shapes other than a sphere; for a sphere the
-/// pre-test of the module doc, eight lanes at once: `false` guarantees that
+/// May block `b` touch `shape`? Always for shapes other than a plane or a sphere; for those
+/// the pre-tests of the module doc, eight lanes at once: `false` guarantees that
 /// [`shape_block_simd`] (and its twin) finds no contact in the block.
 pub fn shape_may_touch_simd(shape: &Shape, g: &GenInput, b: usize) -> bool {
-    let Shape::Sphere { center, radius } = shape else {
-        return true;
-    };
     let i = b * LANES;
+    let (center, radius) = match shape {
+        Shape::Sphere { center, radius } => (center, radius),
+        Shape::Plane { point, normal } => {
+            let p = Vec3x8::load(g.p[0], g.p[1], g.p[2], i);
+            let h = Vec3x8::splat(*normal).dot(p - Vec3x8::splat(*point));
+            return h.simd_lt(crate::data::lanes::load(g.reach, i)).any();
+        }
+        _ => return true,
+    };
     let c = Vec3x8::splat(*center);
     let p = Vec3x8::load(g.p[0], g.p[1], g.p[2], i);
     let x = Vec3x8::load(g.x[0], g.x[1], g.x[2], i) - Vec3x8::splat(g.shift);
@@ -178,8 +191,12 @@ pub fn shape_may_touch_simd(shape: &Shape, g: &GenInput, b: usize) -> bool {
 
 /// Scalar twin of [`shape_may_touch_simd`] (the same operations lane by lane).
 pub fn shape_may_touch_scalar(shape: &Shape, g: &GenInput, b: usize) -> bool {
-    let Shape::Sphere { center, radius } = shape else {
-        return true;
+    let (center, radius) = match shape {
+        Shape::Sphere { center, radius } => (center, radius),
+        Shape::Plane { point, normal } => {
+            return (b * LANES..(b + 1) * LANES).any(|i| dot(*normal, sub(g.path(i).1, *point)) < g.reach[i]);
+        }
+        _ => return true,
     };
     (b * LANES..(b + 1) * LANES).any(|i| {
         let (x, p) = g.path(i);

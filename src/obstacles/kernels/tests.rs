@@ -381,5 +381,5 @@ fn normals_set_equals_any_nonzero_component() {
     }
 }
 
-#[path = "sphere_tests.rs"]
-mod sphere;
+#[path = "shape_tests.rs"]
+mod shape;

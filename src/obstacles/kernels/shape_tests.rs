@@ -1,5 +1,6 @@
-//! The sphere's lane kernels: the pre-test that skips far blocks never rejects a contact and
-//! does reject far blocks; the lane contacts equal the scalar ones in every case.
+//! The plane's and the sphere's lane kernels: the pre-tests that skip far blocks never reject
+//! a contact and do reject far blocks; the sphere's lane contacts equal the scalar ones in
+//! every case.
 
 use super::*;
 
@@ -45,8 +46,58 @@ proptest! {
                 prop_assert!(!block_nonzero(&a) && !block_nonzero(&c), "block {} rejected but {:?}", b, a);
             }
         }
-        prop_assert!(Shape::plane([0.0; 3], [0.0, 1.0, 0.0]).map(|p| shape_may_touch_simd(&p, &g, 0)).unwrap_or(false));
     }
+
+    /// The plane pre-test: SIMD equals scalar, a block it rejects gets no contact from the full
+    /// test (SIMD or scalar), and it keeps exactly the blocks with a lane below the reach, for
+    /// predictions spread on both sides of a tilted plane, some exactly at the reach.
+    #[test]
+    fn plane_pretest_keeps_exactly_the_blocks_in_reach(
+        lanes in proptest::collection::vec((-0.05f32..0.3, -1.0f32..1.0, -1.0f32..1.0, 0.0f32..0.02, any::<bool>()), 32),
+    ) {
+        let (point, normal) = ([0.2f32, -0.1, 0.3], [0.6f32, 0.8, 0.0]);
+        let len = 4 * LANES;
+        let mut v: [Vec<f32>; 9] = std::array::from_fn(|_| vec![0.0; len]);
+        for (i, &(h, a, b, reach, at_reach)) in lanes.iter().enumerate() {
+            // height `h` (or the reach itself) above the plane, moved along it by `a, b`
+            let h = if at_reach { reach } else { h };
+            let p = [point[0] + 0.8 * a + h * normal[0], point[1] - 0.6 * a + h * normal[1], point[2] + b];
+            for k in 0..3 {
+                v[k][i] = p[k];
+                v[3 + k][i] = p[k];
+            }
+            v[6][i] = 1.0;
+            v[7][i] = reach;
+            v[8][i] = reach;
+        }
+        let g = input_reach(&v, 8, lanes.len(), [0.0; 3]);
+        let plane = Shape::plane(point, normal).expect("a unit normal");
+        for b in 0..len / LANES {
+            let may = shape_may_touch_simd(&plane, &g, b);
+            prop_assert_eq!(may, shape_may_touch_scalar(&plane, &g, b));
+            let (mut a, mut c) = (vec![7.0; SLOT_BLOCK], vec![7.0; SLOT_BLOCK]);
+            shape_block_simd(&plane, &g, b, &mut a);
+            shape_block_scalar(&plane, &g, b, &mut c);
+            prop_assert_eq!(may, block_nonzero(&a), "block {}", b);
+            prop_assert_eq!(may, block_nonzero(&c), "block {}", b);
+        }
+    }
+}
+
+/// The plane pre-test rejects a block far above the plane and keeps one within reach.
+#[test]
+fn plane_pretest_rejects_far_blocks_only() {
+    let len = 2 * LANES;
+    let mut v: [Vec<f32>; 9] = std::array::from_fn(|_| vec![0.0; len]);
+    // block 0 rests 1 mm above the floor (reach 5 mm), block 1 is 0.5 m above it
+    let y = |i: usize| if i < LANES { 0.001 } else { 0.5 };
+    for (k, fill) in [(1, None), (4, None), (6, Some(1.0)), (7, Some(0.002)), (8, Some(0.005))] {
+        v[k] = (0..len).map(|i| fill.unwrap_or_else(|| y(i))).collect();
+    }
+    let g = input_reach(&v, 8, len, [0.0; 3]);
+    let floor = Shape::plane([0.0; 3], [0.0, 1.0, 0.0]).expect("a unit normal");
+    assert!(shape_may_touch_simd(&floor, &g, 0) && shape_may_touch_scalar(&floor, &g, 0));
+    assert!(!shape_may_touch_simd(&floor, &g, 1) && !shape_may_touch_scalar(&floor, &g, 1));
 }
 
 /// The pre-test rejects far blocks and keeps near ones (it is not vacuous), and the padding
