@@ -3,6 +3,7 @@
 //! `integrate::implicit`) over the substeps, and hands the drift to the collision stages
 //! (`world::contacts`) when the world has any.
 
+use crate::data::exec::Exec;
 use crate::integrate::implicit::{ImplicitState, ImplicitSubstep};
 use crate::integrate::mass_spring::{kick, kick_params};
 use crate::integrate::springs::{add_spring_forces_scalar, add_spring_forces_simd};
@@ -21,7 +22,7 @@ impl World {
         let p = &self.particles;
         let x = [&p.x[..], &p.y[..], &p.z[..]];
         if let (Some(w), Some(state)) = (&self.effects.wind, &mut self.wind) {
-            state.compute(w, t, &self.triangles, x, [&p.vx, &p.vy, &p.vz], simd);
+            state.compute(w, t, &self.triangles, x, [&p.vx, &p.vy, &p.vz], Exec::new(simd, simd));
             self.ms.f[0].copy_from_slice(&state.fx);
             self.ms.f[1].copy_from_slice(&state.fy);
             self.ms.f[2].copy_from_slice(&state.fz);
@@ -119,9 +120,10 @@ impl World {
     /// the prediction `p` for the collision stages ([`crate::world::contacts`]).
     pub(crate) fn implicit_substep(&mut self, h: f32, t: f64, keep_x: bool) -> crate::Result<()> {
         let p = &self.particles;
+        let exec = Exec::new(self.params.backend == Backend::Simd, false);
         let wind = match (&self.effects.wind, &mut self.wind) {
             (Some(w), Some(state)) => {
-                state.compute(w, t, &self.triangles, [&p.x, &p.y, &p.z], [&p.vx, &p.vy, &p.vz], false);
+                state.compute(w, t, &self.triangles, [&p.x, &p.y, &p.z], [&p.vx, &p.vy, &p.vz], exec);
                 Some([&state.fx[..], &state.fy[..], &state.fz[..]])
             }
             _ => None,

@@ -223,7 +223,7 @@ impl World {
             let t = self.time + (s as f64) * (h as f64);
             if let (Some(w), Some(state)) = (&self.effects.wind, &mut self.wind) {
                 let p = &self.particles;
-                state.compute(w, t, &self.triangles, [&p.x, &p.y, &p.z], [&p.vx, &p.vy, &p.vz], parallel);
+                state.compute(w, t, &self.triangles, [&p.x, &p.y, &p.z], [&p.vx, &p.vy, &p.vz], exec);
                 checkpoint!("wind", state.fx, state.fy, state.fz);
                 self.clock.lap("wind");
             }
