@@ -20,7 +20,7 @@
 use rayon::prelude::*;
 
 use crate::data::exec::Exec;
-use crate::data::lanes::{finite_lanes, gather1, F32s, Idx8, Vec3x8, LANES};
+use crate::data::lanes::{finite_lanes, gather1, gather1_unchecked, F32s, Idx8, Vec3x8, LANES};
 use crate::model::effects::{probe, Wind};
 
 /// Triangles one parallel task computes (a multiple of the lane width).
@@ -163,10 +163,26 @@ fn triangle_forces(tris: &[[u32; 3]], x: [&[f32]; 3], v: [&[f32]; 3], air: [f32;
 fn triangle_forces_lanes(t8: &[[u32; 3]], x: [&[f32]; 3], v: [&[f32]; 3], air: [f32; 3], k: f32, out: &mut [[f32; 3]]) {
     let corner = |c: usize| -> Idx8 { std::array::from_fn(|l| t8[l][c]) };
     let (ia, ib, ic) = (corner(0), corner(1), corner(2));
-    let at = |a: [&[f32]; 3], i: &Idx8| Vec3x8 {
-        x: gather1(a[0], i),
-        y: gather1(a[1], i),
-        z: gather1(a[2], i),
+    // One check of the largest corner against the shortest array for all nine gathers.
+    let top = ia.iter().chain(&ib).chain(&ic).copied().max().unwrap_or(0) as usize;
+    let inside = x.iter().chain(&v).all(|a| top < a.len());
+    let at = |a: [&[f32]; 3], i: &Idx8| {
+        if inside {
+            // SAFETY: every corner is at most `top`, below every array's length (checked).
+            unsafe {
+                Vec3x8 {
+                    x: gather1_unchecked(a[0], i),
+                    y: gather1_unchecked(a[1], i),
+                    z: gather1_unchecked(a[2], i),
+                }
+            }
+        } else {
+            Vec3x8 {
+                x: gather1(a[0], i),
+                y: gather1(a[1], i),
+                z: gather1(a[2], i),
+            }
+        }
     };
     let pa = at(x, &ia);
     let (e1, e2) = (at(x, &ib) - pa, at(x, &ic) - pa);
