@@ -140,9 +140,11 @@ fn strand_drag(area: f32, v: [f32; 3], air: [f32; 3], k: f32) -> [f32; 3] {
     [rel[0] * m, rel[1] * m, rel[2] * m]
 }
 
-/// The forces of the triangles `tris` into `out` (one each): eight at a time with `simd`
-/// ([`triangle_forces_lanes`]), the rest, or all, by [`triangle_force`], the twin.
+/// The forces of the triangles `tris` into `out` (one each, as many as both hold): eight at
+/// a time with `simd` ([`triangle_forces_lanes`]), the rest, or all, by [`triangle_force`],
+/// the twin.
 fn triangle_forces(tris: &[[u32; 3]], x: [&[f32]; 3], v: [&[f32]; 3], air: [f32; 3], k: f32, simd: bool, out: &mut [[f32; 3]]) {
+    let tris = &tris[..tris.len().min(out.len())];
     let mut done = 0;
     if simd {
         let groups = tris.chunks_exact(LANES);
@@ -163,7 +165,7 @@ fn triangle_forces(tris: &[[u32; 3]], x: [&[f32]; 3], v: [&[f32]; 3], air: [f32;
 fn triangle_forces_lanes(t8: &[[u32; 3]], x: [&[f32]; 3], v: [&[f32]; 3], air: [f32; 3], k: f32, out: &mut [[f32; 3]]) {
     let corner = |c: usize| -> Idx8 { std::array::from_fn(|l| t8[l][c]) };
     let (ia, ib, ic) = (corner(0), corner(1), corner(2));
-    // One check of the largest corner against the shortest array for all nine gathers.
+    // One check of the largest corner against every array for all nine gathers.
     let top = ia.iter().chain(&ib).chain(&ic).copied().max().unwrap_or(0) as usize;
     let inside = x.iter().chain(&v).all(|a| top < a.len());
     let at = |a: [&[f32]; 3], i: &Idx8| {
