@@ -172,3 +172,24 @@ fn sphere_lanes_equal_scalar_in_every_case() {
     assert_eq!(normal(4), [0.0; 3], "the miss");
     assert_eq!(normal(7), [0.0; 3], "pinned");
 }
+
+/// A short path grazing the ball: it starts and ends outside the proximity shell (reach equal
+/// to the thickness) and dips just inside the thickness shell between. The full test finds the
+/// crossing, and the pre-test keeps the block: its bound `|p - c| <= R + |p - x|` is nearly
+/// tight here, where a bound a tenth smaller would reject the block.
+#[test]
+fn sphere_pretest_keeps_a_short_grazing_crossing() {
+    let (r, th, y) = (0.5f32, 0.01f32, 0.50995f32);
+    // every lane along +x at height y: |x| = |p| = 0.510048 > r + th, the closest point
+    // 0.50995 < r + th
+    let value = [-0.01, y, 0.0, 0.01, y, 0.0, 1.0, th];
+    let v: [Vec<f32>; 8] = std::array::from_fn(|k| vec![value[k]; LANES]);
+    let g = input_reach(&v, 7, LANES, [0.0; 3]);
+    let sphere = Shape::Sphere {
+        center: [0.0; 3],
+        radius: r,
+    };
+    let (may, touched) = pretest_and_contacts(&sphere, &g, 0);
+    assert_eq!(touched, [true; 2], "the path crosses the thickness shell");
+    assert!(may, "the pre-test keeps a crossing block");
+}
