@@ -20,7 +20,7 @@
 use rayon::prelude::*;
 
 use crate::data::exec::Exec;
-use crate::data::lanes::{finite_lanes, gather1, gather1_unchecked, F32s, Idx8, Vec3x8, LANES};
+use crate::data::lanes::{finite_lanes, gather1, gather1_unchecked, idx8, F32s, Idx8, Vec3x8, LANES};
 use crate::model::effects::{probe, Wind};
 
 /// Triangles one parallel task computes (a multiple of the lane width).
@@ -163,7 +163,7 @@ fn triangle_forces(tris: &[[u32; 3]], x: [&[f32]; 3], v: [&[f32]; 3], air: [f32;
 /// set to zero as the scalar function returns zero.
 #[inline]
 fn triangle_forces_lanes(t8: &[[u32; 3]], x: [&[f32]; 3], v: [&[f32]; 3], air: [f32; 3], k: f32, out: &mut [[f32; 3]]) {
-    let corner = |c: usize| -> Idx8 { std::array::from_fn(|l| t8[l][c]) };
+    let corner = |c: usize| idx8(|l| t8[l][c]);
     let (ia, ib, ic) = (corner(0), corner(1), corner(2));
     // One check of the largest corner against every array for all nine gathers.
     let top = ia.iter().chain(&ib).chain(&ic).copied().max().unwrap_or(0) as usize;

@@ -171,8 +171,7 @@ pub fn shape_may_touch_simd(shape: &Shape, g: &GenInput, b: usize) -> bool {
     let (center, radius) = match shape {
         Shape::Sphere { center, radius } => (center, radius),
         Shape::Plane { point, normal } => {
-            let p = Vec3x8::load(g.p[0], g.p[1], g.p[2], i);
-            let h = Vec3x8::splat(*normal).dot(p - Vec3x8::splat(*point));
+            let h = plane_heights(*point, *normal, Vec3x8::load(g.p[0], g.p[1], g.p[2], i));
             return h.simd_lt(crate::data::lanes::load(g.reach, i)).any();
         }
         _ => return true,
@@ -193,8 +192,8 @@ pub fn shape_may_touch_simd(shape: &Shape, g: &GenInput, b: usize) -> bool {
 pub fn shape_may_touch_scalar(shape: &Shape, g: &GenInput, b: usize) -> bool {
     let (center, radius) = match shape {
         Shape::Sphere { center, radius } => (center, radius),
-        Shape::Plane { point, normal } => {
-            return (b * LANES..(b + 1) * LANES).any(|i| dot(*normal, sub(g.path(i).1, *point)) < g.reach[i]);
+        Shape::Plane { .. } => {
+            return (b * LANES..(b + 1) * LANES).any(|i| shape.signed_distance(g.path(i).1) < g.reach[i]);
         }
         _ => return true,
     };
@@ -227,7 +226,7 @@ pub fn shape_block_simd(shape: &Shape, g: &GenInput, b: usize, out: &mut [f32]) 
     let (point, normal, hit) = match shape {
         Shape::Plane { point, normal } => {
             let n = Vec3x8::splat(*normal);
-            let h = n.dot(p - Vec3x8::splat(*point));
+            let h = plane_heights(*point, *normal, p);
             let q = p + n.scale(-h);
             (q, n, h.simd_lt(reach))
         }
@@ -245,6 +244,13 @@ pub fn shape_block_simd(shape: &Shape, g: &GenInput, b: usize, out: &mut [f32]) 
     {
         crate::data::lanes::store(out, k * LANES, m.select(v, zero));
     }
+}
+
+/// Heights `n.(p - c)` of eight predictions `p` above the plane through `point` with unit
+/// `normal`: the plane's contact test and its pre-test compare them with the reach.
+#[inline(always)]
+fn plane_heights(point: [f32; 3], normal: [f32; 3], p: Vec3x8) -> F32s {
+    Vec3x8::splat(normal).dot(p - Vec3x8::splat(point))
 }
 
 /// The sphere test of `shapes::ball_contact`, lane-wise: `(point, normal, hit)`.
