@@ -84,12 +84,16 @@ impl SpatialHash {
     /// the lists equal the unfiltered ones with the other entries removed. The filter runs on
     /// each particle's candidates before they are sorted, so a filter that drops most pairs
     /// (self-collision drops the cloth's own rest neighbours) also saves most of the sorting.
+    /// The build's positions are checked in parallel, then every particle scanned in lanes.
     #[allow(clippy::too_many_arguments)]
     pub fn query_filtered<K>(&self, x: &[f32], y: &[f32], z: &[f32], n: usize, max_dist: f32, keep: &K, out: &mut Neighbours) -> Result<()>
     where
         K: Fn(usize, u32) -> bool + Sync,
     {
-        self.query_parallel(x, y, z, n, max_dist, keep, out)
+        let same = || (0..n).into_par_iter().all(|i| self.unchanged(x, y, z, i));
+        let md2 = self.check_query(x, y, z, n, max_dist, same)?;
+        let r = search_radius(max_dist);
+        out.fill_parallel(n, |i, buf| self.scan::<true, K>(x, y, z, n, i, md2, r, keep, buf))
     }
 
     /// Serial, scalar twin of [`SpatialHash::query_filtered`]; produces identical lists.
@@ -104,28 +108,6 @@ impl SpatialHash {
         keep: &K,
         out: &mut Neighbours,
     ) -> Result<()>
-    where
-        K: Fn(usize, u32) -> bool,
-    {
-        self.query_serial(x, y, z, n, max_dist, keep, out)
-    }
-
-    /// The parallel query: the build's positions checked in parallel, then the lanes scan of
-    /// every particle.
-    #[allow(clippy::too_many_arguments)]
-    fn query_parallel<K>(&self, x: &[f32], y: &[f32], z: &[f32], n: usize, max_dist: f32, keep: &K, out: &mut Neighbours) -> Result<()>
-    where
-        K: Fn(usize, u32) -> bool + Sync,
-    {
-        let same = || (0..n).into_par_iter().all(|i| self.unchanged(x, y, z, i));
-        let md2 = self.check_query(x, y, z, n, max_dist, same)?;
-        let r = search_radius(max_dist);
-        out.fill_parallel(n, |i, buf| self.scan::<true, K>(x, y, z, n, i, md2, r, keep, buf))
-    }
-
-    /// The serial scalar twins of [`SpatialHash::query_parallel`].
-    #[allow(clippy::too_many_arguments)]
-    fn query_serial<K>(&self, x: &[f32], y: &[f32], z: &[f32], n: usize, max_dist: f32, keep: &K, out: &mut Neighbours) -> Result<()>
     where
         K: Fn(usize, u32) -> bool,
     {
