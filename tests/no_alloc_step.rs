@@ -1,9 +1,10 @@
 //! Contract: after the first step of a scene whose topology does not change, `World::step`
 //! allocates nothing. A counting global allocator counts every allocation (on any thread but
-//! the test harness's own, see `record`) while a flag is up. Cloth with wind and pins is run through every way of driving a step; scenes
-//! with obstacles (analytic and meshes, each mesh broadphase), self-collision (both
-//! broadphases, every response), strands and the force-based methods are run on the caller's
-//! thread, with both backends, and from inside a two-thread pool.
+//! the test harness's own, see `record`) while a flag is up. Cloth with wind and pins is run
+//! through every way of driving a step; scenes with obstacles (analytic and meshes, each mesh
+//! broadphase), self-collision (both broadphases, every response), strands and the
+//! force-based methods are run on the caller's thread, with both backends, and from inside a
+//! two-thread pool.
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
