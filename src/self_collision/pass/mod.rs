@@ -196,17 +196,13 @@ impl ContactPass {
             // Sized once (not cleared): the copy below overwrites every record.
             self.xyzw.resize(n, [0.0; 4]);
             let w = ctx.w;
-            let copy = |(c, out): (usize, &mut [[f32; 4]])| copy_records(p, w, c * XYZW_CHUNK, out);
-            if exec.parallel() && n > XYZW_CHUNK {
-                self.xyzw.par_chunks_mut(XYZW_CHUNK).enumerate().for_each(copy);
-            } else if exec.parallel() && n > CHUNK {
-                // As `Particles::for_chunks` splits two chunks: the caller's thread takes the
-                // first half, the other thread the second (see `XYZW_CHUNK`).
-                let half = chunk_len(n);
-                let (a, b) = self.xyzw.split_at_mut(half);
-                rayon::join(|| copy_records(p, w, 0, a), || copy_records(p, w, half, b));
+            // Up to `XYZW_CHUNK`, the halves of the element-wise passes (see there).
+            let chunk = if n > XYZW_CHUNK { XYZW_CHUNK } else { chunk_len(n) };
+            let copy = |(c, out): (usize, &mut [[f32; 4]])| copy_records(p, w, c * chunk, out);
+            if exec.parallel() && n > CHUNK {
+                self.xyzw.par_chunks_mut(chunk).enumerate().for_each(copy);
             } else {
-                self.xyzw.chunks_mut(XYZW_CHUNK).enumerate().for_each(copy);
+                self.xyzw.chunks_mut(chunk).enumerate().for_each(copy);
             }
         }
         let xyzw = &self.xyzw[..];
