@@ -24,7 +24,7 @@
 //! queries run in parallel over particles; the lists are canonical, so the output is bitwise
 //! the same for any thread count, equal to the scalar serial twin and to the brute force.
 //! The self-collision stage uses a cell-centric form of the query instead (module
-//! `hash_cells`: occupied buckets walked over a half shell, each pair tested once, the same
+//! `hash::cells`: occupied buckets walked over a half shell, each pair tested once, the same
 //! lists).
 //!
 //! # Choices
@@ -40,7 +40,7 @@
 //!   at random places); the choice is made at each build from its positions (module `rows`).
 //! * The build also copies the positions into `cell_entries` order, so candidates are read
 //!   contiguously; the query checks that it is given the positions of the build. The
-//!   self-collision query ([`SpatialHash::query_upper_unskipped_cells`], module `hash_rest`) also
+//!   self-collision query ([`SpatialHash::query_upper_unskipped_cells`], module `hash::rest`) also
 //!   reads rest positions and cloth ids copied into that order after the build.
 //! * Spacing: the paper uses `spacing = max_dist`. On a folded cloth at rest (particles on the
 //!   cell lattice) a spacing of about `1.5 * max_dist` queried ~1.5x faster in our runs (fewer
@@ -84,7 +84,7 @@ pub struct SpatialHash {
     sz: Vec<f32>,
     /// Index of each particle in `cell_entries`, `NO_BUCKET` when non-finite.
     slot_of: Vec<u32>,
-    /// Rest data in cell order for the self-collision query (the `hash_rest` module).
+    /// Rest data in cell order for the self-collision query (the `hash::rest` module).
     rest: rest::RestCopy,
     /// Row strides of the linear row map, or `None` for the mixing hash (module `rows`).
     strides: Option<(u64, u64)>,

@@ -1,4 +1,4 @@
-//! Rest data for the self-collision query of the spatial hash (module `hash_cells`): each pair
+//! Rest data for the self-collision query of the spatial hash (module `hash::cells`): each pair
 //! once, rest neighbours dropped, both decided inside the eight-lane mask.
 //!
 //! # What the query computes

@@ -1,5 +1,5 @@
 //! The self-collision query of the spatial hash, cell by cell over a half shell: each pair
-//! once, rest neighbours dropped (the rule of module `hash_rest`), found with half the
+//! once, rest neighbours dropped (the rule of module `hash::rest`), found with half the
 //! distance tests and a ninth of the row look-ups of a query particle by particle.
 //!
 //! # Method
@@ -18,14 +18,14 @@
 //! ```
 //!
 //! (13 of the 26 neighbours, one of each opposite pair), and each member is tested against
-//! their particles eight at a time with the rule of `hash_rest` (distance, cloth, rest
+//! their particles eight at a time with the rule of `hash::rest` (distance, cloth, rest
 //! distance, computed operation for operation alike; the two sides of a pair only negate the
 //! differences, so the decision is the same whichever side tests). A kept pair is emitted as
 //! `(min, max)`. Every pair within reach is found: if both particles are members, their cells
 //! are adjacent (a member's neighbours lie in its box, inside the 27 cells) and the one whose
 //! half shell holds the other finds it; any other particle (on a cell face, or sharing a bucket
 //! with another cell) scans its own full box like the particle query. Hash collisions and
-//! those particles can emit a pair twice; the assembly (`neighbours_pairs`: count, prefix sum,
+//! those particles can emit a pair twice; the assembly (`neighbours::pairs`: count, prefix sum,
 //! scatter, sort each list, drop repeats) makes the lists canonical, equal to the particle
 //! query's bit for bit on any number of threads.
 //!

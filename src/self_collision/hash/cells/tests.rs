@@ -7,7 +7,7 @@ use crate::test_rng::signed;
 
 use super::super::rest::tests::{lattices, Scene};
 
-/// Brute force over all pairs with the rule of `hash_rest` (upper lists).
+/// Brute force over all pairs with the rule of `hash::rest` (upper lists).
 fn brute(p: &[Vec<f32>; 3], rest: &[Vec<f32>; 3], cloth: &[u32], reach: f32, skip: f32) -> Neighbours {
     let n = cloth.len();
     let mut nb = Neighbours::new();
