@@ -268,4 +268,66 @@ mod tests {
             assert_eq!(got, own, "{exec:?}, own travels");
         }
     }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+        /// On random clouds (pairs placed exactly at their reach and one ulp beyond, a few
+        /// coordinates and travels replaced by non-finite, huge or signed-zero values) with
+        /// random candidate lists of every length around the lane width, the lane filter keeps
+        /// the scalar loop's candidates, in order, serial and parallel, and those are the pairs
+        /// within their own reach.
+        #[test]
+        fn lane_filter_equals_the_scalar_loop_on_random_clouds(
+            n in 2usize..400,
+            seed in proptest::prelude::any::<u64>(),
+            d in 0.002f32..0.03,
+            specials in proptest::collection::vec((proptest::prelude::any::<u16>(), 0usize..4, 0usize..5), 0..6),
+        ) {
+            let mut rng = signed(seed);
+            let mut p: [Vec<f32>; 3] = std::array::from_fn(|_| (0..n).map(|_| 0.05 * rng()).collect());
+            let mut t: Vec<f32> = (0..n).map(|_| 0.25 + 0.75 * rng().abs()).collect();
+            // Every fifth particle has its next exactly at their reach along x, or one ulp
+            // beyond: the boundary, where a reordered sum would decide otherwise.
+            for i in (0..n - 1).step_by(5) {
+                let r = d + (t[i] + t[i + 1]) * d;
+                p[0][i] = 0.0;
+                p[0][i + 1] = if i % 10 == 0 { r } else { f32::from_bits(r.to_bits() + 1) };
+                for a in &mut p[1..] {
+                    a[i + 1] = a[i];
+                }
+            }
+            for (i, a, k) in specials {
+                let v = [f32::NAN, f32::INFINITY, -1e30, -0.0, 0.0][k];
+                let i = i as usize % n;
+                if a == 3 {
+                    t[i] = v;
+                } else {
+                    p[a][i] = v;
+                }
+            }
+            let x = [&p[0][..], &p[1][..], &p[2][..]];
+            let mut cand = Neighbours::new();
+            cand.fill_serial(n, |i, buf| {
+                let k = ((rng() + 1.0) * 12.0) as usize;
+                buf.extend((0..k).map(|_| ((rng() + 1.0) * 0.5 * n as f32) as u32 % n as u32));
+                if i % 5 == 0 && i + 1 < n {
+                    buf.push(i as u32 + 1);
+                }
+            })
+            .unwrap();
+            let mut want = cand.clone();
+            want.retain(|i, j| {
+                let j = j as usize;
+                within(x[0][i], x[1][i], x[2][i], x[0][j], x[1][j], x[2][j], reach2(d, t[i], t[j]))
+            });
+            let mut got = Neighbours::new();
+            within_reach(&cand, x, d, &t, &mut got, Exec::new(false, false)).unwrap();
+            proptest::prop_assert_eq!(&got, &want, "scalar");
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+            for exec in [Exec::new(true, false), Exec::new(true, true), Exec::new(false, true)] {
+                pool.install(|| within_reach(&cand, x, d, &t, &mut got, exec)).unwrap();
+                proptest::prop_assert_eq!(&got, &want, "{:?}", exec);
+            }
+        }
+    }
 }

@@ -326,4 +326,54 @@ mod tests {
         assert_eq!(travel(&mut data, &vy, 0.004), SelfCollision::default().travel);
         assert_eq!(data.step_travels(n)[5], 1.0);
     }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+        /// On random velocities (a share of them scaled up past the bound, set to zero, or
+        /// replaced by non-finite, huge, signed-zero or subnormal values), random mean
+        /// velocities, steps and bounds, the lanes give every particle the scalar twin's travel
+        /// bit for bit and the same tally, for any length; the parallel chunks on two threads
+        /// give the serial result.
+        #[test]
+        fn travel_lanes_and_chunks_equal_the_scalar_twin(
+            n in 1usize..(2 * TRAVEL_CHUNK + 40),
+            seed in proptest::prelude::any::<u64>(),
+            m in proptest::array::uniform3(-3.0f32..3.0),
+            dt in 1e-4f32..0.05,
+            bound in 0.05f32..2.0,
+            fast in 0.0f32..0.3,
+            specials in proptest::collection::vec((proptest::prelude::any::<u16>(), 0usize..3, 0usize..6), 0..6),
+        ) {
+            let mut rng = signed(seed);
+            let mut v: [Vec<f32>; 3] = std::array::from_fn(|_| (0..n).map(|_| rng()).collect());
+            for i in 0..n {
+                let r = rng().abs();
+                for a in &mut v {
+                    if r < fast {
+                        a[i] *= 50.0;
+                    } else if r > 0.9 {
+                        a[i] = 0.0;
+                    }
+                }
+            }
+            for (i, a, k) in specials {
+                v[a][i as usize % n] = [f32::NAN, f32::INFINITY, f32::NEG_INFINITY, 1e30, -0.0, f32::from_bits(3)][k];
+            }
+            let vs = [&v[0][..], &v[1][..], &v[2][..]];
+            let rule = TravelRule { m, dt, d: 0.01, bound };
+            let bits = |t: &[f32]| t.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            let mut want = vec![0.0f32; n];
+            let tally = rule.chunk(vs, &mut want, false);
+            proptest::prop_assert_eq!(tally.bins.iter().sum::<usize>(), n);
+            let mut got = vec![0.0f32; n];
+            proptest::prop_assert_eq!(rule.chunk(vs, &mut got, true), tally);
+            proptest::prop_assert_eq!(bits(&got), bits(&want));
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+            for exec in [Exec::new(true, true), Exec::new(false, true)] {
+                let t = pool.install(|| rule.all(vs, &mut got, exec));
+                proptest::prop_assert_eq!(t, tally, "{:?}", exec);
+                proptest::prop_assert_eq!(bits(&got), bits(&want), "{:?}", exec);
+            }
+        }
+    }
 }
