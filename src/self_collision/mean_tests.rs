@@ -106,3 +106,31 @@ fn mean_parts_filled_by_chunk_ranges_equal_mean_velocity() {
         assert_ne!(moved[0], want[0], "n {n}");
     }
 }
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+    /// On random clouds of any length up to two chunks, with random pinned particles and
+    /// special velocities (NaN, infinities, 1e30, -0.0, a subnormal) at random places, the
+    /// eight-lane sums of a chunk give the scalar twin's bits.
+    #[test]
+    fn chunk_sums_lanes_equal_the_scalar_twin_on_random_clouds(
+        n in 0usize..8200,
+        seed in proptest::prelude::any::<u64>(),
+        specials in proptest::collection::vec((proptest::prelude::any::<u16>(), 0usize..4, 0usize..6), 0..6),
+    ) {
+        let mut p = cloud(n.max(1), seed);
+        for (i, a, k) in specials {
+            let i = i as usize % n.max(1);
+            let v = [f32::NAN, f32::INFINITY, f32::NEG_INFINITY, 1e30, -0.0, f32::from_bits(3)][k];
+            match a {
+                0 => p.vx[i] = v,
+                1 => p.vy[i] = v,
+                2 => p.vz[i] = v,
+                _ => p.w[i] = 0.0,
+            }
+        }
+        let v = [&p.vx[..n], &p.vy[..n], &p.vz[..n]];
+        let (a, b) = (chunk_sums(v, &p.w[..n], true), chunk_sums(v, &p.w[..n], false));
+        proptest::prop_assert_eq!(a.map(f64::to_bits), b.map(f64::to_bits));
+    }
+}
