@@ -19,6 +19,16 @@ pub(crate) fn signed(seed: u64) -> impl FnMut() -> f32 {
     move || u() * 2.0 - 1.0
 }
 
+/// Values the property tests put in place of random ones: non-finite, huge, a signed zero and a
+/// subnormal (the lanes and their scalar twins must treat them alike).
+pub(crate) const SPECIAL_F32: [f32; 6] = [f32::NAN, f32::INFINITY, f32::NEG_INFINITY, 1e30, -0.0, f32::from_bits(3)];
+
+/// Up to five replacements `(index, array, value)`: a raw index (taken modulo the length), one
+/// of `arrays` arrays and an index into [`SPECIAL_F32`].
+pub(crate) fn specials(arrays: usize) -> impl proptest::strategy::Strategy<Value = Vec<(u16, usize, usize)>> {
+    proptest::collection::vec((proptest::prelude::any::<u16>(), 0..arrays, 0..SPECIAL_F32.len()), 0..6)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

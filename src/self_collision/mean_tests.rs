@@ -116,12 +116,12 @@ proptest::proptest! {
     fn chunk_sums_lanes_equal_the_scalar_twin_on_random_clouds(
         n in 0usize..8200,
         seed in proptest::prelude::any::<u64>(),
-        specials in proptest::collection::vec((proptest::prelude::any::<u16>(), 0usize..4, 0usize..6), 0..6),
+        specials in crate::test_rng::specials(4),
     ) {
         let mut p = cloud(n.max(1), seed);
         for (i, a, k) in specials {
             let i = i as usize % n.max(1);
-            let v = [f32::NAN, f32::INFINITY, f32::NEG_INFINITY, 1e30, -0.0, f32::from_bits(3)][k];
+            let v = crate::test_rng::SPECIAL_F32[k];
             match a {
                 0 => p.vx[i] = v,
                 1 => p.vy[i] = v,

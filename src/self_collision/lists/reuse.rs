@@ -272,7 +272,7 @@ mod tests {
     proptest::proptest! {
         #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
         /// On random clouds (pairs placed exactly at their reach and one ulp beyond, a few
-        /// coordinates and travels replaced by non-finite, huge or signed-zero values) with
+        /// coordinates and travels replaced by non-finite, huge, signed-zero or subnormal values) with
         /// random candidate lists of every length around the lane width, the lane filter keeps
         /// the scalar loop's candidates, in order, serial and parallel, and those are the pairs
         /// within their own reach.
@@ -281,7 +281,7 @@ mod tests {
             n in 2usize..400,
             seed in proptest::prelude::any::<u64>(),
             d in 0.002f32..0.03,
-            specials in proptest::collection::vec((proptest::prelude::any::<u16>(), 0usize..4, 0usize..5), 0..6),
+            specials in crate::test_rng::specials(4),
         ) {
             let mut rng = signed(seed);
             let mut p: [Vec<f32>; 3] = std::array::from_fn(|_| (0..n).map(|_| 0.05 * rng()).collect());
@@ -297,7 +297,7 @@ mod tests {
                 }
             }
             for (i, a, k) in specials {
-                let v = [f32::NAN, f32::INFINITY, -1e30, -0.0, 0.0][k];
+                let v = crate::test_rng::SPECIAL_F32[k];
                 let i = i as usize % n;
                 if a == 3 {
                     t[i] = v;

@@ -342,7 +342,7 @@ mod tests {
             dt in 1e-4f32..0.05,
             bound in 0.05f32..2.0,
             fast in 0.0f32..0.3,
-            specials in proptest::collection::vec((proptest::prelude::any::<u16>(), 0usize..3, 0usize..6), 0..6),
+            specials in crate::test_rng::specials(3),
         ) {
             let mut rng = signed(seed);
             let mut v: [Vec<f32>; 3] = std::array::from_fn(|_| (0..n).map(|_| rng()).collect());
@@ -357,7 +357,7 @@ mod tests {
                 }
             }
             for (i, a, k) in specials {
-                v[a][i as usize % n] = [f32::NAN, f32::INFINITY, f32::NEG_INFINITY, 1e30, -0.0, f32::from_bits(3)][k];
+                v[a][i as usize % n] = crate::test_rng::SPECIAL_F32[k];
             }
             let vs = [&v[0][..], &v[1][..], &v[2][..]];
             let rule = TravelRule { m, dt, d: 0.01, bound };
