@@ -234,36 +234,36 @@ mod tests {
     use super::*;
 
     proptest::proptest! {
-    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
-    /// The touched blocks' sums stored with lane transposes equal the value-by-value store, bit
-    /// for bit (signed zeros, NaN payloads and subnormals included, at random places), in every
-    /// block of a part's rows; a block past the rows is ignored by both.
-    #[test]
-    fn block_records_store_the_same_bits_by_lanes_and_one_by_one(seed in proptest::prelude::any::<u64>(), every in 2usize..20) {
-        let mut r = crate::test_rng::signed(seed);
-        let specials = [-0.0f32, f32::from_bits(0x7fc0_1234), f32::from_bits(1), f32::INFINITY];
-        let len = 5 * LANES;
-        let recs: Vec<Record> = (0..len)
-            .map(|i| std::array::from_fn(|c| if (i + c) % every == 0 { specials[(i + c) % 4] } else { r() }))
-            .collect();
-        let store = |simd: bool| {
-            let mut s = ContactSums::new(len);
-            let mut rows = s.rows();
-            for b in 0..=len / LANES {
-                let run = &recs[(b * LANES).min(len - LANES)..][..LANES];
-                rows.set_records(b, run, simd);
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+        /// The touched blocks' sums stored with lane transposes equal the value-by-value store, bit
+        /// for bit (signed zeros, NaN payloads and subnormals included, at random places), in every
+        /// block of a part's rows; a block past the rows is ignored by both.
+        #[test]
+        fn block_records_store_the_same_bits_by_lanes_and_one_by_one(seed in proptest::prelude::any::<u64>(), every in 2usize..20) {
+            let mut r = crate::test_rng::signed(seed);
+            let specials = [-0.0f32, f32::from_bits(0x7fc0_1234), f32::from_bits(1), f32::INFINITY];
+            let len = 5 * LANES;
+            let recs: Vec<Record> = (0..len)
+                .map(|i| std::array::from_fn(|c| if (i + c) % every == 0 { specials[(i + c) % 4] } else { r() }))
+                .collect();
+            let store = |simd: bool| {
+                let mut s = ContactSums::new(len);
+                let mut rows = s.rows();
+                for b in 0..=len / LANES {
+                    let run = &recs[(b * LANES).min(len - LANES)..][..LANES];
+                    rows.set_records(b, run, simd);
+                }
+                let all = [
+                    &s.c[0], &s.c[1], &s.c[2], &s.f[0], &s.f[1], &s.f[2], &s.n[0], &s.n[1], &s.n[2], &s.gap, &s.count,
+                ];
+                all.iter().flat_map(|a| a.iter().map(|v| v.to_bits())).collect::<Vec<u32>>()
+            };
+            let lanes = store(true);
+            proptest::prop_assert_eq!(&lanes, &store(false));
+            // Row `c` of particle `k` holds value `c` of its record.
+            for (c, row) in lanes.chunks(len).enumerate() {
+                proptest::prop_assert!(row.iter().zip(&recs).all(|(got, rec)| *got == rec[c].to_bits()), "row {}", c);
             }
-            let all = [
-                &s.c[0], &s.c[1], &s.c[2], &s.f[0], &s.f[1], &s.f[2], &s.n[0], &s.n[1], &s.n[2], &s.gap, &s.count,
-            ];
-            all.iter().flat_map(|a| a.iter().map(|v| v.to_bits())).collect::<Vec<u32>>()
-        };
-        let lanes = store(true);
-        proptest::prop_assert_eq!(&lanes, &store(false));
-        // Row `c` of particle `k` holds value `c` of its record.
-        for (c, row) in lanes.chunks(len).enumerate() {
-            proptest::prop_assert!(row.iter().zip(&recs).all(|(got, rec)| *got == rec[c].to_bits()), "row {}", c);
         }
-    }
     }
 }

@@ -102,6 +102,30 @@ fn cells_query_needs_the_rest_data_and_checks_its_arguments() {
     assert!(h.query_upper_unskipped_cells_serial(0.03, f32::NAN, &mut got).is_err());
 }
 
+/// Asserts that the lanes' member test answers every slot of `hs` as the scalar test does, for
+/// the search radius `r`, and sets no bit past a bucket; returns the slots checked and whether a
+/// bucket held more than a lane group.
+fn assert_member_lanes(hs: &SpatialHash, r: f32) -> (usize, bool) {
+    let (mut checked, mut big) = (0, false);
+    for b in 0..hs.table_size {
+        let (s, e) = (hs.cell_start[b] as usize, hs.cell_start[b + 1] as usize);
+        if s == e {
+            continue;
+        }
+        big |= e - s > LANES;
+        let home = hs.cell_of_slot(s);
+        for k in (s..e).step_by(LANES) {
+            let bits = hs.member_lanes(k, e, home, r);
+            for slot in k..e.min(k + LANES) {
+                assert_eq!(bits & (1 << (slot - k)) != 0, hs.member(slot, home, r), "slot {slot}");
+                checked += 1;
+            }
+            assert_eq!(bits >> (e.min(k + LANES) - k), 0, "no bits past the bucket");
+        }
+    }
+    (checked, big)
+}
+
 /// The lanes' member test gives every slot the scalar test's answer: a crumpled lattice
 /// (buckets of more than eight particles), particles exactly on cell faces, and saturated or
 /// far coordinates (the lanes' scalar fallback).
@@ -120,24 +144,8 @@ fn member_lanes_equal_the_scalar_member_test() {
         let mut hs = SpatialHash::new(n);
         hs.build(&p[0], &p[1], &p[2], n, 3.0 * h).unwrap();
         hs.attach_rest([&rest[0], &rest[1], &rest[2]], cloth).unwrap();
-        let r = search_radius(3.0 * h);
-        let mut big = false;
-        for b in 0..hs.table_size {
-            let (s, e) = (hs.cell_start[b] as usize, hs.cell_start[b + 1] as usize);
-            if s == e {
-                continue;
-            }
-            big |= e - s > LANES;
-            let home = hs.cell_of_slot(s);
-            for k in (s..e).step_by(LANES) {
-                let bits = hs.member_lanes(k, e, home, r);
-                for slot in k..e.min(k + LANES) {
-                    assert_eq!(bits & (1 << (slot - k)) != 0, hs.member(slot, home, r), "slot {slot}");
-                    checked += 1;
-                }
-                assert_eq!(bits >> (e.min(k + LANES) - k), 0, "no bits past the bucket");
-            }
-        }
+        let (slots, big) = assert_member_lanes(&hs, search_radius(3.0 * h));
+        checked += slots;
         assert!(big || n < 300, "a bucket of more than eight particles");
     }
     assert!(checked > 600, "{checked}");
@@ -276,20 +284,6 @@ proptest::proptest! {
         let mut hs = SpatialHash::new(n);
         hs.build(&p[0], &p[1], &p[2], n, spacing).unwrap();
         hs.attach_rest([&rest[0], &rest[1], &rest[2]], cloth).unwrap();
-        let r = search_radius(reach);
-        for b in 0..hs.table_size {
-            let (s, e) = (hs.cell_start[b] as usize, hs.cell_start[b + 1] as usize);
-            if s == e {
-                continue;
-            }
-            let home = hs.cell_of_slot(s);
-            for k in (s..e).step_by(LANES) {
-                let bits = hs.member_lanes(k, e, home, r);
-                for slot in k..e.min(k + LANES) {
-                    proptest::prop_assert_eq!(bits & (1 << (slot - k)) != 0, hs.member(slot, home, r), "slot {}", slot);
-                }
-                proptest::prop_assert_eq!(bits >> (e.min(k + LANES) - k), 0);
-            }
-        }
+        assert_member_lanes(&hs, search_radius(reach));
     }
 }
