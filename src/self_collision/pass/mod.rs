@@ -1,19 +1,17 @@
 //! The substep pass over the step's pair list (the method is described in
 //! [`crate::self_collision`]): the pairs in contact are found eight at a time, in parallel over
 //! fixed chunks of the list, and their contacts computed once for both particles, eight pairs
-//! at a time ([`PairCtx::pair_contacts`]); the contacts are then added in list order to both
-//! particles' sums (from [`PARALLEL_CONTACTS`] contacts by one part of the particles per
-//! thread, each part reading the whole contact list), and the velocity-correction kernel
+//! at a time ([`PairCtx::pair_contacts`]); the contacts are then added on one thread, in list
+//! order, to both particles' sums, and the velocity-correction kernel
 //! ([`crate::self_collision::response::apply_runs`]) runs on the blocks of [`LANES`] particles
 //! that received one. On one thread each chunk's contacts are added as soon as they are found,
 //! while they are still in cache.
 //!
 //! The list is ordered by `i` then `j`, so every particle receives its contacts in ascending
-//! partner order, as a loop over its own sorted list would, however the particles are split;
-//! the chunks are fixed, so nothing depends on the thread count. The sums live in per-particle
-//! arrays that are zero outside the blocks the last pass touched: a pass writes whole blocks
-//! (a run of each of the eleven arrays), those it touches and, back to zero, those of the
-//! last pass it does not touch, each part its own.
+//! partner order, as a loop over its own sorted list would; the chunks are fixed, so nothing
+//! depends on the thread count. The sums live in per-particle arrays that are zero outside
+//! the blocks the last pass touched: a pass writes whole blocks (a run of each of the eleven
+//! arrays), those it touches and, back to zero, those of the last pass it does not touch.
 
 pub(crate) mod contact;
 pub(crate) mod pairs;
@@ -27,7 +25,7 @@ use crate::data::particles::{chunk_len, CHUNK};
 use crate::model::self_collision::Response;
 use crate::self_collision::pass::contact::PairContact;
 use crate::self_collision::pass::pairs::{PairCtx, PairList};
-use crate::self_collision::pass::sums::{ContactSums, PartSums, Record, SumRows, RECORD};
+use crate::self_collision::pass::sums::{Accumulator, ContactSums, Record, RECORD};
 use crate::self_collision::response::{apply_runs, ApplyInput};
 
 /// Pairs one parallel task tests in the pair pass. Small enough that a list of a few thousand
@@ -37,12 +35,6 @@ pub(crate) const PAIR_CHUNK: usize = 1024;
 
 /// Particle blocks one parallel task handles in the correction pass.
 pub(crate) const APPLY_BLOCKS: usize = 64;
-
-/// Contacts from which the pair pass adds them in parallel (fewer cost more to fork).
-pub(crate) const PARALLEL_CONTACTS: usize = 2048;
-
-/// Most parts the contacts are added in (one a thread).
-const MAX_PARTS: usize = 8;
 
 /// Particles a parallel task copies into the position records. Below it, a parallel step
 /// above [`CHUNK`] particles copies them in the two halves of its element-wise passes
@@ -127,8 +119,8 @@ pub(crate) struct ContactPass {
     found: Vec<Vec<Option<PairContact>>>,
     /// Each particle's sums while its contacts are added (zero between passes).
     acc: Vec<Record>,
-    /// Blocks the last pass added a contact to, by part (see [`ContactPass::pair_pass`]).
-    touched_parts: Vec<Vec<u32>>,
+    /// Blocks the pass adds contacts to (kept for its buffer; becomes `touched`).
+    fresh: Vec<u32>,
     /// All of them, ascending: their sums are the only non-zero ones.
     touched: Vec<u32>,
     /// Whether each block is in `touched`.
@@ -213,72 +205,30 @@ impl ContactPass {
             ctx.pair_contacts(xyzw, near, simd, found);
         };
         let old = std::mem::take(&mut self.touched);
-        self.touched_parts.resize_with(self.touched_parts.len().max(1), Vec::new);
         if !(exec.parallel() && chunks > 1) {
             // One thread: each chunk's contacts are added as soon as they are found, while
             // they are in cache (the same order as below, so the same sums).
             let (near, found) = (&mut self.near[0], &mut self.found[0]);
-            let mut sums = PartSums::begin(0, &mut self.acc, &mut self.hit, &old, simd);
+            let mut sums = Accumulator::begin(&mut self.acc, &mut self.hit, &old, simd);
             for c in 0..chunks {
                 find(c, (&mut *near, &mut *found));
                 sums.add(near, found);
             }
-            self.contacts = sums.finish(self.sums.rows(), &mut self.touched_parts[0]);
-            self.collect_touched(old, 1);
+            self.contacts = sums.finish(self.sums.rows(), &mut self.fresh);
+            self.touched = std::mem::replace(&mut self.fresh, old);
             return;
         }
         let bufs = (&mut self.near[..chunks], &mut self.found[..chunks]);
         bufs.into_par_iter().enumerate().for_each(|(c, b)| find(c, b));
-        // The particles are split into parts of whole blocks, each (on its own thread) adding
-        // the contacts of its own particles in list order (every part reads the whole contact
-        // list), zeroing the blocks of its last pass it did not touch now and storing the sums
-        // of the blocks it touched: the same sums whatever the split, so it follows the threads.
-        let contacts: usize = self.near[..chunks].iter().map(Vec::len).sum();
-        let parts = if contacts >= PARALLEL_CONTACTS {
-            rayon::current_num_threads().clamp(1, MAX_PARTS)
-        } else {
-            1
-        };
-        let blocks = self.hit.len().div_ceil(parts).max(1);
-        let (near, found) = (&self.near[..chunks], &self.found[..chunks]);
-        let part = |part: usize, acc: &mut [Record], hit: &mut [bool], rows: SumRows<'_>, touched: &mut Vec<u32>| {
-            let mut sums = PartSums::begin(part * blocks, acc, hit, &old, simd);
-            for (near, found) in near.iter().zip(found) {
-                sums.add(near, found);
-            }
-            sums.finish(rows, touched)
-        };
-        self.touched_parts.resize_with(parts.max(self.touched_parts.len()), Vec::new);
-        let touched_parts = &mut self.touched_parts[..parts];
-        // A few particles may make fewer chunks of blocks than parts: the others add nothing.
-        touched_parts.iter_mut().for_each(Vec::clear);
-        let mut rows = self.sums.rows();
-        self.contacts = if parts > 1 {
-            let mut split: [Option<SumRows<'_>>; MAX_PARTS] = Default::default();
-            for s in split.iter_mut().take(parts) {
-                let (lo, hi) = rows.split_at(blocks * LANES);
-                *s = Some(lo);
-                rows = hi;
-            }
-            self.acc
-                .par_chunks_mut(blocks * LANES)
-                .zip(self.hit.par_chunks_mut(blocks))
-                .zip(split.par_iter_mut())
-                .zip(touched_parts.par_iter_mut())
-                .enumerate()
-                .map(|(p, (((acc, hit), rows), t))| rows.take().map_or(0, |rows| part(p, acc, hit, rows, t)))
-                .sum()
-        } else {
-            part(0, &mut self.acc, &mut self.hit, rows, &mut touched_parts[0])
-        };
-        self.collect_touched(old, parts);
-    }
-
-    /// The touched blocks of the first `parts` parts, ascending, reusing the buffer `old`.
-    fn collect_touched(&mut self, mut old: Vec<u32>, parts: usize) {
-        old.clear();
-        old.extend(self.touched_parts[..parts].iter().flatten());
-        self.touched = old;
+        // The contacts are added on this thread, chunk by chunk in list order: adding them in
+        // parallel parts of the particles (each part reading the whole contact list, found
+        // on the other core) cost more than it saved on every scene of the self-collision suite.
+        let mut sums = Accumulator::begin(&mut self.acc, &mut self.hit, &old, simd);
+        for (near, found) in self.near[..chunks].iter().zip(&self.found[..chunks]) {
+            sums.add(near, found);
+        }
+        self.contacts = sums.finish(self.sums.rows(), &mut self.fresh);
+        self.touched = std::mem::replace(&mut self.fresh, old);
     }
 
     /// The velocity-correction kernel on the touched blocks of the predicted positions `p`

@@ -1,7 +1,7 @@
 //! The per-particle contact sums the pair pass leaves for the velocity correction
 //! ([`crate::self_collision::response`]): eleven arrays padded to the lane width, written a
-//! block of eight particles at a time from the records one part of the particles adds its
-//! contacts into ([`PartSums`]).
+//! block of eight particles at a time from the records the pass adds its contacts into
+//! ([`Accumulator`]).
 
 use crate::data::lanes::{store, F32s, LANES};
 use crate::self_collision::pass::contact::PairContact;
@@ -37,17 +37,6 @@ pub(crate) struct SumRows<'a> {
 }
 
 impl<'a> SumRows<'a> {
-    /// The rows `..at` and `at..` (`at` clamped to the length), for parts written in parallel.
-    pub(crate) fn split_at(self, at: usize) -> (SumRows<'a>, SumRows<'a>) {
-        let at = at.min(self.len);
-        let mut lo: [&'a mut [f32]; 11] = Default::default();
-        let mut hi: [&'a mut [f32]; 11] = Default::default();
-        for ((a, l), h) in self.a.into_iter().zip(&mut lo).zip(&mut hi) {
-            (*l, *h) = a.split_at_mut(at);
-        }
-        (SumRows { len: at, a: lo }, SumRows { len: self.len - at, a: hi })
-    }
-
     /// Stores block `b`'s sums from its eight records (the first eleven values of each). With
     /// `simd`, two 8 x 8 lane transposes (records' values 0..8 and 4..12) and a vector store a
     /// row; else [`SumRows::set_block`] value by value (the twin: the same values either way). A
@@ -102,7 +91,7 @@ impl ContactSums {
     }
 
     /// The eleven arrays cut to their common length, for the pair pass's block stores
-    /// ([`SumRows::set_block`]), split into parts with [`SumRows::split_at`].
+    /// ([`SumRows::set_block`]).
     pub(crate) fn rows(&mut self) -> SumRows<'_> {
         let len = self
             .c
@@ -145,66 +134,58 @@ impl ContactSums {
     }
 }
 
-/// The sums of one part of the particles (whole blocks from `b0`) while its contacts are
-/// added in list order (see `ContactPass::pair_pass`).
-pub(crate) struct PartSums<'a> {
-    b0: usize,
+/// The particles' sums while the pass adds its contacts in list order (see
+/// `ContactPass::pair_pass`).
+pub(crate) struct Accumulator<'a> {
     acc: &'a mut [Record],
     hit: &'a mut [bool],
-    /// The part's blocks of the last pass.
-    mine: &'a [u32],
+    /// The blocks of the last pass.
+    old: &'a [u32],
     /// Store the touched blocks' sums with lane transposes (else record by record, the twin).
     simd: bool,
-    /// Contacts whose `i` the part holds.
+    /// Contacts added.
     contacts: usize,
 }
 
-impl<'a> PartSums<'a> {
-    /// Starts the part of blocks from `b0` (as many as `hit` holds), `old` the blocks the last
+impl<'a> Accumulator<'a> {
+    /// Starts a pass over the records `acc` and block flags `hit`, `old` the blocks the last
     /// pass touched (ascending).
-    pub(crate) fn begin(b0: usize, acc: &'a mut [Record], hit: &'a mut [bool], old: &'a [u32], simd: bool) -> Self {
-        let mine = old.partition_point(|&b| (b as usize) < b0)..old.partition_point(|&b| (b as usize) < b0 + hit.len());
-        let mine = &old[mine];
-        for &b in mine {
-            hit[b as usize - b0] = false;
+    pub(crate) fn begin(acc: &'a mut [Record], hit: &'a mut [bool], old: &'a [u32], simd: bool) -> Self {
+        for &b in old {
+            if let Some(h) = hit.get_mut(b as usize) {
+                *h = false;
+            }
         }
-        PartSums {
-            b0,
+        Accumulator {
             acc,
             hit,
-            mine,
+            old,
             simd,
             contacts: 0,
         }
     }
 
-    /// Adds the contacts `found` of the pairs `near` to the sides that belong to the part.
+    /// Adds the contacts `found` of the pairs `near` to both particles' records.
     #[inline]
     pub(crate) fn add(&mut self, near: &[(u32, u32)], found: &[Option<PairContact>]) {
-        let first_id = self.b0 * LANES;
         for (&(i, j), contact) in near.iter().zip(found) {
             let Some(c) = contact else { continue };
+            self.contacts += 1;
             for (side, a) in [(0, i as usize), (1, j as usize)] {
-                let Some(rec) = a.checked_sub(first_id).and_then(|k| self.acc.get_mut(k)) else {
-                    continue;
-                };
-                // Each contact counted once, by the part that holds its `i`.
-                self.contacts += usize::from(side == 0);
+                let Some(rec) = self.acc.get_mut(a) else { continue };
                 if c.add_to(side, rec) {
-                    self.hit[(a - first_id) / LANES] = true;
+                    self.hit[a / LANES] = true;
                 }
             }
         }
     }
 
     /// Zeroes the last pass's blocks this one did not touch, stores the sums of the touched
-    /// blocks into `rows` (the part's) and lists them in `touched`; returns the part's
-    /// contacts.
+    /// blocks into `rows` and lists them in `touched`; returns the contacts added.
     pub(crate) fn finish(self, mut rows: SumRows<'_>, touched: &mut Vec<u32>) -> usize {
-        let b0 = self.b0;
-        for &b in self.mine {
-            if !self.hit[b as usize - b0] {
-                rows.set_block(b as usize - b0, |_| [0.0; 11]);
+        for &b in self.old {
+            if !self.hit.get(b as usize).copied().unwrap_or(true) {
+                rows.set_block(b as usize, |_| [0.0; 11]);
             }
         }
         touched.clear();
@@ -216,7 +197,7 @@ impl<'a> PartSums<'a> {
             }
             rows.set_records(b, run, self.simd);
             run.fill([0.0; RECORD]);
-            touched.push((b0 + b) as u32);
+            touched.push(b as u32);
         }
         self.contacts
     }
@@ -237,7 +218,7 @@ mod tests {
         #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
         /// The touched blocks' sums stored with lane transposes equal the value-by-value store, bit
         /// for bit (signed zeros, NaN payloads and subnormals included, at random places), in every
-        /// block of a part's rows; a block past the rows is ignored by both.
+        /// block of the rows; a block past the rows is ignored by both.
         #[test]
         fn block_records_store_the_same_bits_by_lanes_and_one_by_one(seed in proptest::prelude::any::<u64>(), every in 2usize..20) {
             let mut r = crate::test_rng::signed(seed);
