@@ -220,9 +220,9 @@ impl ContactPass {
         }
         let bufs = (&mut self.near[..chunks], &mut self.found[..chunks]);
         bufs.into_par_iter().enumerate().for_each(|(c, b)| find(c, b));
-        // The contacts are added on this thread, chunk by chunk in list order: adding them in
-        // parallel parts of the particles (each part reading the whole contact list, found
-        // on the other core) cost more than it saved on every scene of the self-collision suite.
+        // The contacts are added on this thread, chunk by chunk in list order. Adding them in
+        // parallel parts of the particles, each part reading the whole contact list found on
+        // the other cores, took more time than this on the suite's pile and heap.
         let mut sums = Accumulator::begin(&mut self.acc, &mut self.hit, &old, simd);
         for (near, found) in self.near[..chunks].iter().zip(&self.found[..chunks]) {
             sums.add(near, found);
