@@ -205,27 +205,24 @@ impl ContactPass {
             ctx.pair_contacts(xyzw, near, simd, found);
         };
         let old = std::mem::take(&mut self.touched);
-        if !(exec.parallel() && chunks > 1) {
+        let mut sums = Accumulator::begin(&mut self.acc, &mut self.hit, &old, simd);
+        if exec.parallel() && chunks > 1 {
+            let bufs = (&mut self.near[..chunks], &mut self.found[..chunks]);
+            bufs.into_par_iter().enumerate().for_each(|(c, b)| find(c, b));
+            // The contacts are added on this thread, chunk by chunk in list order. Adding them
+            // in parallel parts of the particles, each part reading the whole contact list found
+            // on the other cores, took more time than this on the suite's pile and heap.
+            for (near, found) in self.near[..chunks].iter().zip(&self.found[..chunks]) {
+                sums.add(near, found);
+            }
+        } else {
             // One thread: each chunk's contacts are added as soon as they are found, while
-            // they are in cache (the same order as below, so the same sums).
+            // they are in cache (the same order as above, so the same sums).
             let (near, found) = (&mut self.near[0], &mut self.found[0]);
-            let mut sums = Accumulator::begin(&mut self.acc, &mut self.hit, &old, simd);
             for c in 0..chunks {
                 find(c, (&mut *near, &mut *found));
                 sums.add(near, found);
             }
-            self.contacts = sums.finish(self.sums.rows(), &mut self.fresh);
-            self.touched = std::mem::replace(&mut self.fresh, old);
-            return;
-        }
-        let bufs = (&mut self.near[..chunks], &mut self.found[..chunks]);
-        bufs.into_par_iter().enumerate().for_each(|(c, b)| find(c, b));
-        // The contacts are added on this thread, chunk by chunk in list order. Adding them in
-        // parallel parts of the particles, each part reading the whole contact list found on
-        // the other cores, took more time than this on the suite's pile and heap.
-        let mut sums = Accumulator::begin(&mut self.acc, &mut self.hit, &old, simd);
-        for (near, found) in self.near[..chunks].iter().zip(&self.found[..chunks]) {
-            sums.add(near, found);
         }
         self.contacts = sums.finish(self.sums.rows(), &mut self.fresh);
         self.touched = std::mem::replace(&mut self.fresh, old);
