@@ -6,7 +6,7 @@
 
 use super::*;
 use crate::data::exec::Exec;
-use crate::self_collision::response::{apply, ApplyInput, ContactSums};
+use crate::self_collision::response::{apply, ApplyInput, Record, RECORD};
 use crate::test_rng::signed;
 
 /// A `rows x cols` cloth of spacing `s` folded in half across a row (second layer `gap` above),
@@ -60,18 +60,23 @@ fn compact(
         sink.keep(0, [&out[0][..], &out[1][..], &out[2][..]]);
     }
     data.pair_pass(xs, [&p[0][..], &p[1][..], &p[2][..]], w, exec);
+    // The sums before the correction reads (and zeroes) them.
+    let mut by_particle = data.state.as_ref().unwrap().pass.sums();
+    by_particle.truncate(n);
     let a = data.active().unwrap();
     let ap = a.apply_params(0.005);
     let [o0, o1, o2] = &mut out;
     data.apply(xs, w, None, [o0, o1, o2], ap, exec);
-    let s = data.state.as_ref().unwrap().pass.sums();
-    let by_particle = (0..n)
-        .map(|g| {
-            [
-                s.c[0][g], s.c[1][g], s.c[2][g], s.f[0][g], s.f[1][g], s.f[2][g], s.n[0][g], s.n[1][g], s.n[2][g], s.gap[g], s.count[g],
-            ]
-        })
-        .collect();
+    assert!(
+        data.state
+            .as_ref()
+            .unwrap()
+            .pass
+            .sums()
+            .iter()
+            .all(|s| s.iter().all(|v| v.to_bits() == 0)),
+        "the correction leaves every record zero"
+    );
     (out, by_particle)
 }
 
@@ -137,10 +142,11 @@ fn reference(data: &SelfCollisionData, x: &[Vec<f32>; 3], p: &[Vec<f32>; 3], w: 
     .unwrap();
     let ctx = reference_ctx(data, x, p, w);
     let sums: Vec<[f32; 11]> = (0..n).map(|i| ctx.sums(&all, i)).collect();
-    let len = p[0].len();
-    let mut full = ContactSums::new(len);
-    for (i, v) in sums.iter().enumerate() {
-        full.set(i, v);
+    // The records of the sums (the corrections already over the approaching contacts: no
+    // approaching count left to rescale by).
+    let mut full: Vec<Record> = vec![[0.0; RECORD]; p[0].len()];
+    for (r, v) in full.iter_mut().zip(&sums) {
+        r[..11].copy_from_slice(v);
     }
     let damping = padded(&vec![0.8f32; n]);
     let mut out = p.clone();
@@ -313,14 +319,18 @@ fn parallel_correction_equals_serial() {
         touched >= crate::self_collision::pass::APPLY_PARALLEL_BLOCKS,
         "{touched} touched blocks"
     );
-    let st = data.state.as_ref().unwrap();
     let ap = data.active().unwrap().apply_params(0.005);
     let xs = [&x[0][..], &x[1][..], &x[2][..]];
+    // The pair pass again (its correction in `compact` zeroed the records): the same sums.
+    data.pair_pass(xs, [&p[0][..], &p[1][..], &p[2][..]], &w, Exec::Simd);
+    let st = data.state.as_ref().unwrap();
     for threads in [1, 2] {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         let mut got = p.clone();
         let [g0, g1, g2] = &mut got;
-        pool.install(|| st.pass.apply(xs, &w, None, [g0, g1, g2], ap, Exec::Parallel));
+        // A copy of the pass: the correction zeroes the records it reads.
+        let mut pass = st.pass.clone();
+        pool.install(|| pass.apply(xs, &w, None, [g0, g1, g2], ap, Exec::Parallel));
         for a in 0..3 {
             assert!(
                 got[a].iter().zip(&want[a]).all(|(u, v)| u.to_bits() == v.to_bits()),

@@ -49,8 +49,8 @@
 //!   `T_max`.
 //! * **After the constraint sweeps** (each substep): the pair pass below over the whole list,
 //!   eight pairs at a time (`pass`), then the velocity-correction kernel
-//!   [`crate::self_collision::response::apply`] on the blocks of eight particles that received
-//!   a contact.
+//!   ([`crate::self_collision::response`]) on the blocks of eight particles that received a
+//!   contact, reading each particle's record of sums.
 //!
 //! # Pair pass
 //! For each particle `i`, over its list (sorted ids, fixed order), with predicted positions `p`:
@@ -329,7 +329,7 @@ impl SelfCollisionData {
     /// [`SelfCollisionData::prediction_sink`]).
     pub(crate) fn apply(&mut self, x: [&[f32]; 3], w: &[f32], v: Option<[&[f32]; 3]>, p: [&mut [f32]; 3], ap: ApplyParams, exec: Exec) {
         let t0 = Instant::now();
-        if let Some(st) = self.state.as_ref().filter(|s| s.ready) {
+        if let Some(st) = self.state.as_mut().filter(|s| s.ready) {
             st.pass.apply(x, w, v, p, ap, exec);
         }
         self.stats.phases.correction_s += t0.elapsed().as_secs_f64();

@@ -5,10 +5,12 @@
 //! same order, no FMA). The speed clamp that runs before it is in [`super::clamp`].
 //!
 //! # Velocity correction (VcCPBD, Algorithm 2; Müller's friction)
-//! The pair pass ([`crate::self_collision`]) leaves, per particle `i`, the sums over its
-//! contacts of: the position correction `c`, the partners' displacements `f = Σ (p_j - x_j)`,
-//! the unit contact normals `n` (pointing away from the partners), the signed gaps `g`
-//! (`dist - min_dist`, negative in contact) and the contact count `k`. This kernel applies them
+//! The pair pass ([`crate::self_collision`]) leaves, per particle `i`, one [`Record`] of the
+//! sums over its contacts of: the position correction `c`, the partners' displacements
+//! `f = Σ (p_j - x_j)`, the unit contact normals `n` (pointing away from the partners), the
+//! signed gaps `g` (`dist - min_dist`, negative in contact), the contact count `k` and the
+//! approaching count (movement speed: `c` is averaged over those, [`corrections`]). This
+//! kernel applies them
 //! to a free particle with `k > 0` (Jacobi, averaged over the contacts and over-relaxed by
 //! `ω =` [`RELAXATION`]):
 //!
@@ -39,7 +41,8 @@
 use crate::data::lanes::{load, load_unchecked, store, store_unchecked, F32s, Vec3x8, LANES};
 use crate::model::self_collision::{Response, RELAXATION};
 use crate::model::shapes::dot;
-pub use crate::self_collision::pass::sums::ContactSums;
+use crate::self_collision::pass::sums::transpose_records;
+pub use crate::self_collision::pass::sums::{corrections, Record, RECORD};
 
 /// Inputs of [`apply`] for one chunk of particles starting at global index `start`.
 pub struct ApplyInput<'a> {
@@ -57,8 +60,8 @@ pub struct ApplyInput<'a> {
     pub v: Option<[&'a [f32]; 3]>,
     /// Damping rates `b`, 1/s, global indexing.
     pub b: &'a [f32],
-    /// Contact sums, global indexing.
-    pub sums: &'a ContactSums,
+    /// Contact sums, one record a particle, global indexing.
+    pub sums: &'a [Record],
     /// Friction `μ` in `[0, 1]`.
     pub friction: f32,
     /// Substep length, s.
@@ -137,16 +140,11 @@ fn particle_len(inp: &ApplyInput<'_>, p: [&[f32]; 3]) -> usize {
 
 /// The shortest of the arrays the kernel indexes by sum (`vc`: the VcCPBD kernel's too).
 fn sums_len(inp: &ApplyInput<'_>, vc: bool) -> usize {
-    let s = inp.sums;
-    let plain = shortest(s.c.each_ref().map(|a| &a[..]))
-        .min(shortest(s.f.each_ref().map(|a| &a[..])))
-        .min(s.count.len());
     if !vc {
-        return plain;
+        return inp.sums.len();
     }
     let q = if inp.v.is_some() { usize::MAX } else { shortest(inp.q) };
-    let n = shortest(s.n.each_ref().map(|a| &a[..]));
-    plain.min(n).min(s.gap.len()).min(inp.b.len()).min(q)
+    inp.sums.len().min(inp.b.len()).min(q)
 }
 
 /// The length of the shortest of three arrays.
@@ -190,7 +188,6 @@ fn apply_simd<const VC: bool>(inp: &ApplyInput<'_>, p: [&mut [f32]; 3]) {
 #[inline(always)]
 unsafe fn lanes<const VC: bool, const CHECKED: bool>(c: &Consts, inp: &ApplyInput<'_>, p: [&mut [f32]; 3], i: usize, g: usize) {
     let [px, py, pz] = p;
-    let s = inp.sums;
     // SAFETY (all unchecked loads and stores): the caller's guarantee above.
     let ld = |a: &[f32], at: usize| if CHECKED { load(a, at) } else { unsafe { load_unchecked(a, at) } };
     let ld3 = |a: [&[f32]; 3], at: usize| Vec3x8 {
@@ -205,21 +202,31 @@ unsafe fn lanes<const VC: bool, const CHECKED: bool>(c: &Consts, inp: &ApplyInpu
             unsafe { store_unchecked(a, i, v) }
         }
     };
+    let recs: &[Record; LANES] = if CHECKED {
+        inp.sums[g..g + LANES].try_into().expect("eight records")
+    } else {
+        // SAFETY: `g + LANES <= inp.sums.len()` (the caller's guarantee); `[Record; LANES]` has
+        // the alignment of `Record`.
+        unsafe { &*inp.sums.as_ptr().add(g).cast::<[Record; LANES]>() }
+    };
+    let s = transpose_records(recs);
     let (zero, one) = (F32s::ZERO, F32s::ONE);
-    let k = ld(&s.count, g);
+    let k = s[10];
     let active = k.simd_gt(zero) & ld(inp.w, i).simd_gt(zero);
     let inv = one / k.max(one);
     let x = ld3(inp.x, i);
     let p0 = ld3([&*px, &*py, &*pz], i);
-    let cs = ld3([&s.c[0], &s.c[1], &s.c[2]], g);
-    let f = ld3([&s.f[0], &s.f[1], &s.f[2]], g);
+    // The corrections over the approaching contacts when there are any ([`corrections`]).
+    let (c0, appr) = (Vec3x8 { x: s[0], y: s[1], z: s[2] }, s[11]);
+    let cs = Vec3x8::select(appr.simd_gt(zero), c0.scale(k / appr), c0);
+    let f = Vec3x8 { x: s[3], y: s[4], z: s[5] };
     let disp = p0 - x;
     let mut t = p0 + cs.scale(inv * F32s::splat(RELAXATION)) + (f.scale(inv) - disp).scale(F32s::splat(0.5)).scale(c.mu);
     if VC {
-        let n = ld3([&s.n[0], &s.n[1], &s.n[2]], g);
+        let n = Vec3x8 { x: s[6], y: s[7], z: s[8] };
         let nl = n.length_sq().sqrt();
         let nh = n.scale(one / nl.max(F32s::splat(f32::MIN_POSITIVE)));
-        let e = ld(&s.gap, g) * inv;
+        let e = s[9] * inv;
         let q = match inp.v {
             Some(v) => x + ld3(v, i).scale(c.h),
             None => ld3(inp.q, g),
@@ -239,11 +246,11 @@ unsafe fn lanes<const VC: bool, const CHECKED: bool>(c: &Consts, inp: &ApplyInpu
 /// Scalar twin of the velocity-correction kernel.
 fn apply_scalar(inp: &ApplyInput<'_>, p: [&mut [f32]; 3], vc: bool) {
     let [px, py, pz] = p;
-    let s = inp.sums;
     let (mu, h, r2) = (inp.friction, inp.h, inp.r * inp.r);
     for i in 0..px.len() {
         let g = inp.start + i;
-        let k = s.count[g];
+        let s = &inp.sums[g];
+        let k = s[10];
         if !(k > 0.0 && inp.w[i] > 0.0) {
             continue;
         }
@@ -251,17 +258,18 @@ fn apply_scalar(inp: &ApplyInput<'_>, p: [&mut [f32]; 3], vc: bool) {
         let relaxed = inv * RELAXATION;
         let x = [inp.x[0][i], inp.x[1][i], inp.x[2][i]];
         let p0 = [px[i], py[i], pz[i]];
+        let c = corrections(s);
         let mut t = [0.0f32; 3];
         for a in 0..3 {
             let disp = p0[a] - x[a];
-            t[a] = p0[a] + s.c[a][g] * relaxed + (s.f[a][g] * inv - disp) * 0.5 * mu;
+            t[a] = p0[a] + c[a] * relaxed + (s[3 + a] * inv - disp) * 0.5 * mu;
         }
         if vc {
-            let n = [s.n[0][g], s.n[1][g], s.n[2][g]];
+            let n = [s[6], s[7], s[8]];
             let nl = dot(n, n).sqrt();
             let il = 1.0 / nl.max(f32::MIN_POSITIVE);
             let nh = n.map(|c| c * il);
-            let e = s.gap[g] * inv;
+            let e = s[9] * inv;
             let q = match inp.v {
                 Some(v) => [x[0] + v[0][i] * h, x[1] + v[1][i] * h, x[2] + v[2][i] * h],
                 None => [inp.q[0][g], inp.q[1][g], inp.q[2][g]],

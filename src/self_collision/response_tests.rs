@@ -23,21 +23,24 @@ pub(crate) fn cloud(n: usize, seed: u64) -> Particles {
     p
 }
 
-fn sums(len: usize, seed: u64) -> ContactSums {
+/// Random records of `len` particles: 0 to 3 contacts (some particles none), some of them
+/// approaching (the movement-speed rescaling), some zero normals.
+fn sums(len: usize, seed: u64) -> Vec<Record> {
     let mut r = rng(seed ^ 0x9e37);
-    let mut s = ContactSums::new(len);
-    for i in 0..len {
+    let mut s = vec![[0.0f32; RECORD]; len];
+    for (i, rec) in s.iter_mut().enumerate() {
         let k = ((r() + 1.0) * 2.0) as u32; // 0..=3 contacts, some zero
         if k == 0 {
             continue;
         }
-        s.count[i] = k as f32;
+        rec[10] = k as f32;
+        rec[11] = (((r() + 1.0) * 0.5 * (k + 1) as f32) as u32).min(k) as f32;
         for a in 0..3 {
-            s.c[a][i] = 0.005 * r();
-            s.f[a][i] = 0.01 * r();
-            s.n[a][i] = if i % 11 == 0 { 0.0 } else { r() };
+            rec[a] = 0.005 * r();
+            rec[3 + a] = 0.01 * r();
+            rec[6 + a] = if i % 11 == 0 { 0.0 } else { r() };
         }
-        s.gap[i] = -0.004 * (r() + 1.0);
+        rec[9] = -0.004 * (r() + 1.0);
     }
     s
 }
@@ -118,7 +121,7 @@ fn derived_box_centres_equal_the_copied_ones() {
     };
     let want = run(false, false, false);
     let back = (0..300)
-        .filter(|&i| base.w[i] > 0.0 && s.count[i] > 0.0 && want.px[i].to_bits() == q[0][i].to_bits())
+        .filter(|&i| base.w[i] > 0.0 && s[i][10] > 0.0 && want.px[i].to_bits() == q[0][i].to_bits())
         .count();
     assert!(back > 10, "{back} particles sent back to their box centre");
     for (derive, simd, runs) in [
@@ -144,7 +147,7 @@ fn centres_input<'a>(
     v: Option<[&'a [f32]; 3]>,
     q: &'a [Vec<f32>; 3],
     b: &'a [f32],
-    sums: &'a ContactSums,
+    sums: &'a [Record],
     start: usize,
     h: f32,
 ) -> ApplyInput<'a> {
@@ -167,7 +170,7 @@ fn apply_leaves_pinned_and_contactless_particles_alone() {
     let base = cloud(20, 5);
     let len = base.padded_len();
     let mut s = sums(len, 5);
-    s.count[3] = 0.0;
+    s[3][10] = 0.0;
     let b = vec![0.8; len];
     let mut p = base.clone();
     p.for_chunks(false, |c| {
@@ -196,11 +199,11 @@ fn vccpbd_puts_a_far_moved_particle_back_to_its_box_centre() {
     p.push([0.0; 3], [0.0; 3], 1.0);
     p.px[0] = 0.0;
     let len = p.padded_len();
-    let mut s = ContactSums::new(len);
-    s.count[0] = 1.0;
-    s.c[0][0] = 0.5; // a correction far larger than the box radius
-    s.n[0][0] = 1.0;
-    s.gap[0] = -0.001;
+    let mut s = vec![[0.0f32; RECORD]; len];
+    s[0][10] = 1.0;
+    s[0][0] = 0.5; // a correction far larger than the box radius
+    s[0][6] = 1.0;
+    s[0][9] = -0.001;
     let q = [vec![0.25; len], vec![0.0; len], vec![0.0; len]];
     let b = vec![0.8; len];
     p.for_chunks(false, |c| {

@@ -2,10 +2,10 @@
 //! [`crate::self_collision`]): the pairs in contact are found eight at a time, in parallel over
 //! fixed chunks of the list, and their contacts computed once for both particles, eight pairs
 //! at a time ([`PairCtx::pair_contacts`]); the contacts are then added on one thread, in list
-//! order, to both particles' sums, and the velocity-correction kernel
+//! order, to both particles' records of sums, and the velocity-correction kernel
 //! ([`crate::self_collision::response::apply_runs`]) runs on the blocks of [`LANES`] particles
-//! that received one. On one thread each chunk's contacts are added as soon as they are found,
-//! while they are still in cache.
+//! that received one, reading their records and zeroing them. On one thread each chunk's
+//! contacts are added as soon as they are found, while they are still in cache.
 //!
 //! The list is ordered by `i` then `j`, so every particle receives its contacts in ascending
 //! partner order, as a loop over its own sorted list would; the chunks are fixed, so nothing
@@ -25,7 +25,7 @@ use crate::data::particles::{chunk_len, CHUNK};
 use crate::model::self_collision::Response;
 use crate::self_collision::pass::contact::PairContact;
 use crate::self_collision::pass::pairs::{PairCtx, PairList};
-use crate::self_collision::pass::sums::{Accumulator, ContactSums, Record, RECORD};
+use crate::self_collision::pass::sums::{Accumulator, Record, RECORD};
 use crate::self_collision::response::{apply_runs, ApplyInput};
 
 /// Pairs one parallel task tests in the pair pass. Small enough that a list of a few thousand
@@ -104,8 +104,6 @@ impl PredictionSink {
 /// The buffers of the substep pass, kept across steps (no allocation once sized).
 #[derive(Clone, Debug, Default)]
 pub(crate) struct ContactPass {
-    /// Contact sums per particle (padded to whole blocks), zero outside `written`.
-    sums: ContactSums,
     /// Box centres: the predictions after the clamp, when the kernel cannot derive them.
     pred: [Vec<f32>; 3],
     /// Damping rates per particle, padded.
@@ -117,11 +115,10 @@ pub(crate) struct ContactPass {
     near: Vec<Vec<(u32, u32)>>,
     /// Their contacts (computed in the parallel part), same layout.
     found: Vec<Vec<Option<PairContact>>>,
-    /// Each particle's sums while its contacts are added (zero between passes).
+    /// Each particle's contact sums (padded to whole blocks), zero outside `touched` between
+    /// a pair pass and its correction, and everywhere after the correction.
     acc: Vec<Record>,
-    /// Blocks the pass adds contacts to (kept for its buffer; becomes `touched`).
-    fresh: Vec<u32>,
-    /// All of them, ascending: their sums are the only non-zero ones.
+    /// The blocks the last pair pass added contacts to, ascending.
     touched: Vec<u32>,
     /// Whether each block is in `touched`.
     hit: Vec<bool>,
@@ -133,12 +130,6 @@ impl ContactPass {
     /// Sizes the buffers for `n` particles and copies their damping rates (at each step start).
     pub(crate) fn prepare(&mut self, n: usize, damping: &[f32]) {
         let len = n.div_ceil(LANES) * LANES;
-        let s = &mut self.sums;
-        for v in s.c.iter_mut().chain(s.f.iter_mut()).chain(s.n.iter_mut()) {
-            v.resize(len, 0.0);
-        }
-        s.gap.resize(len, 0.0);
-        s.count.resize(len, 0.0);
         for v in &mut self.pred {
             v.resize(len, 0.0);
         }
@@ -157,10 +148,15 @@ impl ContactPass {
         }
     }
 
-    /// The contact sums of the last pass.
+    /// The contact sums `[c(3), f(3), n(3), gap, count]` of each particle from the last pair
+    /// pass (before its correction), the corrections over the approaching contacts.
     #[cfg(test)]
-    pub(crate) fn sums(&self) -> &ContactSums {
-        &self.sums
+    pub(crate) fn sums(&self) -> Vec<[f32; 11]> {
+        use crate::self_collision::pass::sums::corrections;
+        self.acc
+            .iter()
+            .map(|r| std::array::from_fn(|c| if c < 3 { corrections(r)[c] } else { r[c] }))
+            .collect()
     }
 
     /// Number of pairs the last pass found in contact.
@@ -204,8 +200,7 @@ impl ContactPass {
             found.clear();
             ctx.pair_contacts(xyzw, near, simd, found);
         };
-        let old = std::mem::take(&mut self.touched);
-        let mut sums = Accumulator::begin(&mut self.acc, &mut self.hit, &old, simd);
+        let mut sums = Accumulator::begin(&mut self.acc, &mut self.hit, &self.touched);
         if exec.parallel() && chunks > 1 {
             let bufs = (&mut self.near[..chunks], &mut self.found[..chunks]);
             bufs.into_par_iter().enumerate().for_each(|(c, b)| find(c, b));
@@ -224,66 +219,108 @@ impl ContactPass {
                 sums.add(near, found);
             }
         }
-        self.contacts = sums.finish(self.sums.rows(), &mut self.fresh);
-        self.touched = std::mem::replace(&mut self.fresh, old);
+        self.contacts = sums.finish(&mut self.touched);
     }
 
     /// The velocity-correction kernel on the touched blocks of the predicted positions `p`
     /// (padded particle arrays), with start positions `x`, inverse masses `w` and, when given,
     /// the substep's velocities `v` (the box centres are then `x + h v`, else the clamp's
-    /// copy). The kernel leaves particles without contacts as they are, so the other blocks
-    /// are skipped. In parallel over fixed groups of [`APPLY_BLOCKS`] blocks when `exec` is
-    /// parallel and enough blocks were touched, else the runs of consecutive touched blocks
-    /// in one call: the same bits either way.
-    pub(crate) fn apply(&self, x: [&[f32]; 3], w: &[f32], v: Option<[&[f32]; 3]>, p: [&mut [f32]; 3], ap: ApplyParams, exec: Exec) {
+    /// copy); zeroes the records it reads. The kernel leaves particles without contacts as they
+    /// are, so the other blocks are skipped. In parallel over fixed groups of [`APPLY_BLOCKS`]
+    /// blocks when `exec` is parallel and enough blocks were touched, else the runs of
+    /// consecutive touched blocks in one call: the same bits either way.
+    pub(crate) fn apply(&mut self, x: [&[f32]; 3], w: &[f32], v: Option<[&[f32]; 3]>, p: [&mut [f32]; 3], ap: ApplyParams, exec: Exec) {
         let simd = exec.simd();
-        let inp = |x, w, v| ApplyInput {
-            start: 0,
-            x,
-            w,
-            v,
-            q: [&self.pred[0][..], &self.pred[1][..], &self.pred[2][..]],
-            b: &self.damping,
-            sums: &self.sums,
-            friction: ap.friction,
-            h: ap.h,
-            r: ap.r,
-        };
         let [px, py, pz] = p;
-        let nb = self.hit.len().min(px.len() / LANES).min(py.len() / LANES).min(pz.len() / LANES);
-        let parallel = exec.parallel() && self.touched.len() >= APPLY_PARALLEL_BLOCKS && rayon::current_num_threads() > 1;
+        let nb = [px.len(), py.len(), pz.len(), self.acc.len(), self.damping.len()]
+            .into_iter()
+            .chain(self.pred.iter().map(Vec::len))
+            .min()
+            .unwrap_or(0)
+            / LANES;
+        let nb = nb.min(self.hit.len());
+        let ContactPass {
+            pred,
+            damping,
+            acc,
+            hit,
+            touched,
+            ..
+        } = self;
+        let (pred, damping, hit, touched) = (&*pred, &damping[..], &hit[..], &touched[..]);
+        // The kernel's input over the particles `g` (sums, box centres and damping rates
+        // indexed from `g.start`).
+        fn input<'a>(
+            x: [&'a [f32]; 3],
+            w: &'a [f32],
+            v: Option<[&'a [f32]; 3]>,
+            (pred, damping, g): (&'a [Vec<f32>; 3], &'a [f32], std::ops::Range<usize>),
+            sums: &'a [Record],
+            ap: ApplyParams,
+        ) -> ApplyInput<'a> {
+            ApplyInput {
+                start: 0,
+                x,
+                w,
+                v,
+                q: [&pred[0][g.clone()], &pred[1][g.clone()], &pred[2][g.clone()]],
+                b: &damping[g],
+                sums,
+                friction: ap.friction,
+                h: ap.h,
+                r: ap.r,
+            }
+        }
+        let parallel = exec.parallel() && touched.len() >= APPLY_PARALLEL_BLOCKS && rayon::current_num_threads() > 1;
         if parallel {
             let len = APPLY_BLOCKS * LANES;
+            let all = ..nb * LANES;
             (
-                px[..nb * LANES].par_chunks_mut(len),
-                py[..nb * LANES].par_chunks_mut(len),
-                pz[..nb * LANES].par_chunks_mut(len),
+                px[all].par_chunks_mut(len),
+                py[all].par_chunks_mut(len),
+                pz[all].par_chunks_mut(len),
+                acc[all].par_chunks_mut(len),
             )
                 .into_par_iter()
                 .enumerate()
-                .for_each(|(c, (a, b, d))| {
+                .for_each(|(c, (a, b, d, recs))| {
                     let g = c * len..c * len + a.len();
-                    let b0 = c * APPLY_BLOCKS;
-                    // Runs of one block: (block of the sums, block of the group's slices).
-                    let runs = (0..a.len() / LANES).filter_map(|l| self.hit[b0 + l].then_some((b0 + l, l, 1)));
+                    let hit = &hit[c * APPLY_BLOCKS..][..a.len() / LANES];
+                    // Runs of one block (local to the group's slices).
+                    let runs = || (0..hit.len()).filter(|&l| hit[l]);
                     let x = [&x[0][g.clone()], &x[1][g.clone()], &x[2][g.clone()]];
                     let v = v.map(|v| [&v[0][g.clone()], &v[1][g.clone()], &v[2][g.clone()]]);
-                    apply_runs(&inp(x, &w[g], v), [a, b, d], runs, ap.response, simd);
+                    let one = input(x, &w[g.clone()], v, (pred, damping, g), recs, ap);
+                    apply_runs(&one, [a, b, d], runs().map(|l| (l, l, 1)), ap.response, simd);
+                    for l in runs() {
+                        recs[l * LANES..(l + 1) * LANES].fill([0.0; RECORD]);
+                    }
                 });
         } else {
-            let mut t = 0;
-            let touched = &self.touched;
-            let runs = std::iter::from_fn(|| {
-                let b = *touched.get(t)? as usize;
-                let mut run = 1;
-                while t + run < touched.len() && touched[t + run] as usize == b + run {
-                    run += 1;
-                }
-                t += run;
-                Some((b, b, run))
-            })
-            .filter(|&(b, _, run)| b + run <= nb);
-            apply_runs(&inp(x, w, v), [px, py, pz], runs, ap.response, simd);
+            let runs = || {
+                let mut t = 0;
+                std::iter::from_fn(move || {
+                    let b = *touched.get(t)? as usize;
+                    let mut run = 1;
+                    while t + run < touched.len() && touched[t + run] as usize == b + run {
+                        run += 1;
+                    }
+                    t += run;
+                    Some((b, b, run))
+                })
+                .filter(move |&(b, _, run)| b + run <= nb)
+            };
+            let all = 0..nb * LANES;
+            apply_runs(
+                &input(x, w, v, (pred, damping, all), acc, ap),
+                [px, py, pz],
+                runs(),
+                ap.response,
+                simd,
+            );
+            for (b, _, run) in runs() {
+                acc[b * LANES..(b + run) * LANES].fill([0.0; RECORD]);
+            }
         }
     }
 }

@@ -151,9 +151,11 @@ impl PairCtx<'_> {
 
     /// Scales the summed movement-speed corrections from the contact count to the approaching
     /// count (the kernel divides by all contacts; the velocity response averages over the
-    /// approaching ones only).
-    #[inline]
-    pub(crate) fn finish(out: &mut [f32; 11], approaching: f32) {
+    /// approaching ones only), as the correction does ([`corrections`]).
+    ///
+    /// [`corrections`]: crate::self_collision::pass::sums::corrections
+    #[cfg(test)]
+    fn finish(out: &mut [f32; 11], approaching: f32) {
         if approaching > 0.0 {
             let scale = out[10] / approaching;
             for c in &mut out[..3] {
