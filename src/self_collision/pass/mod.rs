@@ -152,11 +152,7 @@ impl ContactPass {
     /// pass (before its correction), the corrections over the approaching contacts.
     #[cfg(test)]
     pub(crate) fn sums(&self) -> Vec<[f32; 11]> {
-        use crate::self_collision::pass::sums::corrections;
-        self.acc
-            .iter()
-            .map(|r| std::array::from_fn(|c| if c < 3 { corrections(r)[c] } else { r[c] }))
-            .collect()
+        self.acc.iter().map(crate::self_collision::pass::sums::finished).collect()
     }
 
     /// Number of pairs the last pass found in contact.

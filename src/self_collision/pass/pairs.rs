@@ -9,6 +9,8 @@ use crate::model::self_collision::Response;
 use crate::self_collision::neighbours::Neighbours;
 #[cfg(test)]
 use crate::self_collision::pass::contact::COINCIDENT;
+#[cfg(test)]
+use crate::self_collision::pass::sums::{finished, RECORD};
 
 /// The `i` of every entry of the step's CSR lists, whose `ids` are the `j`: with them the
 /// lists read as a structure-of-arrays pair list ([`PairList`]), filled once a step.
@@ -149,21 +151,6 @@ impl PairCtx<'_> {
         self.contact(i, j, pi, di, self.d * self.d, out, approaching);
     }
 
-    /// Scales the summed movement-speed corrections from the contact count to the approaching
-    /// count (the kernel divides by all contacts; the velocity response averages over the
-    /// approaching ones only), as the correction does ([`corrections`]).
-    ///
-    /// [`corrections`]: crate::self_collision::pass::sums::corrections
-    #[cfg(test)]
-    fn finish(out: &mut [f32; 11], approaching: f32) {
-        if approaching > 0.0 {
-            let scale = out[10] / approaching;
-            for c in &mut out[..3] {
-                *c *= scale;
-            }
-        }
-    }
-
     /// `[c(3), f(3), n(3), gap, count]` of particle `i` over its whole list, ascending: the
     /// per-particle form of the pair pass (the reference the tests hold the pair form to).
     #[cfg(test)]
@@ -173,8 +160,10 @@ impl PairCtx<'_> {
         for &j in lists.of(i) {
             self.add_contact(i, j as usize, &mut out, &mut approaching);
         }
-        Self::finish(&mut out, approaching);
-        out
+        let mut rec = [0.0f32; RECORD];
+        rec[..11].copy_from_slice(&out);
+        rec[11] = approaching;
+        finished(&rec)
     }
 
     /// Adds the contact of `i` with `j`, if any, to `out` (the one-sided form, kept as the

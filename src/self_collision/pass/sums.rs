@@ -28,6 +28,14 @@ pub fn corrections(rec: &Record) -> [f32; 3] {
     }
 }
 
+/// The sums `[c(3), f(3), n(3), gap, count]` of a record as the correction reads them, the
+/// corrections over the approaching contacts ([`corrections`]): the tests' view of a record.
+#[cfg(test)]
+pub(crate) fn finished(rec: &Record) -> [f32; 11] {
+    let c = corrections(rec);
+    std::array::from_fn(|k| if k < 3 { c[k] } else { rec[k] })
+}
+
 /// The twelve values of eight records as twelve lane vectors (value `c` of record `l` in
 /// lane `l` of vector `c`): two 8 x 8 transposes, of values 0..8 and 4..12. Each value moves
 /// as it is, so the lanes hold the records' bits.
